@@ -1,0 +1,207 @@
+//! Isosurface extraction: regularised marching tetrahedra (RMT) and its baselines.
+//!
+//! Pipeline of one extraction (see ARCHITECTURE.md for the picture):
+//! 1. **sampling**: evaluate the field at every point of the lattice ([`samples`]), in parallel;
+//! 2. **vertex pass**: find crossed lattice edges, give each crossing to its nearer end point and
+//!    number it ([`mt`]); with integrated clustering, group each point's nearby crossings into
+//!    clusters ([`cluster`]);
+//! 3. **geometry pass**: one or two triangles per crossed tetrahedron from the case table
+//!    ([`mt`]); clusters are committed one lattice colour at a time, each only after an exact
+//!    local check that keeps the mesh closed and manifold ([`merge`]); post-processing
+//!    (edge collapse, meshopt) runs here too;
+//! 4. **normals**.
+//!
+//! The [`Extractor`] keeps every buffer between calls, as a game would.
+//!
+//! ```
+//! use rmt_extract::{Extractor, ExtractSettings, Grid, Lattice, Clustering};
+//! use rmt_fields::Sphere;
+//! use rmt_mesh::Mesh;
+//!
+//! let settings = ExtractSettings::new(Grid::cube(16, 1.0), Lattice::BodyCentred, Clustering::Integrated);
+//! let mut extractor = Extractor::new();
+//! let mut mesh = Mesh::default();
+//! let stats = extractor.extract(&Sphere::new(glam::Vec3::ZERO, 0.8), &settings, &mut mesh).unwrap();
+//! assert_eq!(stats.triangles, mesh.triangle_count());
+//! assert!(stats.clusters_committed > 0);
+//! ```
+//!
+//! Orientation convention: triangles are counter-clockwise seen from the side of increasing
+//! field value, so their right-hand normals point outward for a signed distance field.
+
+pub mod cluster;
+pub mod collapse;
+pub mod lattice;
+pub mod mc;
+pub mod measure;
+pub mod merge;
+pub mod mt;
+pub mod samples;
+pub mod settings;
+pub mod stats;
+
+pub use measure::{measure, Measurement};
+pub use samples::Samples;
+pub use settings::{Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode};
+pub use stats::Stats;
+
+use rmt_fields::ScalarField;
+use rmt_mesh::Mesh;
+
+/// Why an extraction could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ExtractError {
+    /// Bad grid dimensions or bounds.
+    #[error("invalid grid: {0}")]
+    InvalidGrid(String),
+    /// Bad settings other than the grid.
+    #[error("invalid settings: {0}")]
+    InvalidSettings(String),
+    /// The lattice would not fit in memory.
+    #[error("grid of {cells:?} cells is too large: its lattice would exceed {limit} sample points")]
+    TooLarge {
+        /// The requested cells per axis.
+        cells: [usize; 3],
+        /// The sample point limit.
+        limit: usize,
+    },
+    /// The field returned NaN or infinity.
+    #[error("the field is not finite at ({x}, {y}, {z}): got {value}")]
+    NonFiniteSample {
+        /// Position of the first bad sample (x).
+        x: f32,
+        /// Position of the first bad sample (y).
+        y: f32,
+        /// Position of the first bad sample (z).
+        z: f32,
+        /// The value returned.
+        value: f32,
+    },
+    /// The requested combination is not available (e.g. a clustering mode for marching cubes).
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+    /// The worker thread pool could not be created.
+    #[error("could not start {threads} worker threads: {message}")]
+    ThreadPool {
+        /// Requested threads.
+        threads: usize,
+        /// The error from rayon.
+        message: String,
+    },
+}
+
+/// A reusable extractor: keeps its sample array, per-point tables and scratch buffers between
+/// calls so that re-meshing allocates nothing once the sizes have been seen.
+#[derive(Default)]
+pub struct Extractor {
+    pub(crate) samples: Samples,
+    pub(crate) mt: mt::MtBuffers,
+    pub(crate) merge: merge::MergeBuffers,
+    pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>)>,
+}
+
+impl Extractor {
+    /// An extractor with empty buffers.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The thread pool for `threads` workers, built once and kept.
+    pub(crate) fn pool(&mut self, threads: usize) -> Result<std::sync::Arc<rayon::ThreadPool>, ExtractError> {
+        if let Some((_, p)) = self.pools.iter().find(|(n, _)| *n == threads) {
+            return Ok(p.clone());
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| ExtractError::ThreadPool { threads, message: e.to_string() })?;
+        let pool = std::sync::Arc::new(pool);
+        self.pools.push((threads, pool.clone()));
+        Ok(pool)
+    }
+
+    /// Samples `field` and extracts its surface into `mesh` (cleared first; its allocations are
+    /// reused). Returns the counters and stage timings.
+    pub fn extract(&mut self, field: &dyn ScalarField, settings: &ExtractSettings, mesh: &mut Mesh) -> Result<Stats, ExtractError> {
+        let start = std::time::Instant::now();
+        settings.check()?;
+        let mut stats = Stats::default();
+        let pool = self.pool(settings.threads)?;
+        self.samples.sample(field, settings, &pool, &mut stats)?;
+        self.mesh_samples(Some(field), settings, mesh, &mut stats)?;
+        stats.t_total_s = start.elapsed().as_secs_f64();
+        Ok(stats)
+    }
+
+    /// Extracts from values already in [`Extractor::samples_mut`] (laid out for `settings`, see
+    /// [`Samples::prepare`]), without sampling: for benchmarks that exclude sampling and for
+    /// edited volumes. Gradient normals need a field, so they are skipped here.
+    pub fn extract_presampled(&mut self, settings: &ExtractSettings, mesh: &mut Mesh) -> Result<Stats, ExtractError> {
+        let start = std::time::Instant::now();
+        settings.check()?;
+        let mut stats = Stats::default();
+        self.samples.check_layout(settings)?;
+        stats.sample_points = self.samples.point_count();
+        stats.bytes_lattice = self.samples.bytes();
+        self.mesh_samples(None, settings, mesh, &mut stats)?;
+        stats.t_total_s = start.elapsed().as_secs_f64();
+        Ok(stats)
+    }
+
+    /// The sample array (to fill it yourself before [`Extractor::extract_presampled`]).
+    pub fn samples_mut(&mut self) -> &mut Samples {
+        &mut self.samples
+    }
+
+    /// The sample array of the last extraction.
+    pub fn samples(&self) -> &Samples {
+        &self.samples
+    }
+
+    fn mesh_samples(&mut self, field: Option<&dyn ScalarField>, settings: &ExtractSettings, mesh: &mut Mesh, stats: &mut Stats) -> Result<(), ExtractError> {
+        let pool = self.pool(settings.threads)?;
+        mesh.clear();
+        match settings.method {
+            settings::Method::Mc => {
+                if settings.clustering != Clustering::None {
+                    return Err(ExtractError::Unsupported(format!(
+                        "marching cubes takes clustering none, got {}",
+                        settings.clustering.name()
+                    )));
+                }
+                mc::extract(&self.samples, settings, &pool, mesh, stats);
+            }
+            settings::Method::Mt => {
+                mt::extract(&self.samples, settings, &pool, &mut self.mt, &mut self.merge, mesh, stats)?;
+            }
+        }
+        let t = std::time::Instant::now();
+        match (settings.normals, field) {
+            (NormalMode::Skip, _) => mesh.normals.clear(),
+            (NormalMode::Gradient, Some(f)) => gradient_normals(f, settings, mesh),
+            _ => mesh.compute_area_weighted_normals(),
+        }
+        stats.t_normals_s = t.elapsed().as_secs_f64();
+        stats.vertices = mesh.vertex_count();
+        stats.triangles = mesh.triangle_count();
+        let (bv, bi) = mesh.buffer_bytes();
+        stats.bytes_vertices = bv;
+        stats.bytes_indices = bi;
+        Ok(())
+    }
+}
+
+/// Normals from central differences of the field (step h / 4), pointing toward increasing f.
+fn gradient_normals(field: &dyn ScalarField, settings: &ExtractSettings, mesh: &mut Mesh) {
+    let e = settings.grid.h() * 0.25;
+    mesh.normals.clear();
+    for p in &mesh.positions {
+        let p = glam::Vec3::from(*p);
+        let g = glam::Vec3::new(
+            field.sample(p + glam::Vec3::X * e) - field.sample(p - glam::Vec3::X * e),
+            field.sample(p + glam::Vec3::Y * e) - field.sample(p - glam::Vec3::Y * e),
+            field.sample(p + glam::Vec3::Z * e) - field.sample(p - glam::Vec3::Z * e),
+        );
+        mesh.normals.push(g.normalize_or_zero().to_array());
+    }
+}

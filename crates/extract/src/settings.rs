@@ -1,0 +1,202 @@
+//! What to extract and how: grid, lattice, method, clustering, threads.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::ExtractError;
+
+/// The sampling lattice of marching tetrahedra.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Lattice {
+    /// Body-centred (BCDL): cube corners and cube centres, 12 tetrahedra per cube.
+    #[serde(rename = "bcdl")]
+    BodyCentred,
+    /// Simple cubic, each cube cut into 6 tetrahedra along its main diagonal (Kuhn).
+    Simple,
+}
+
+impl Lattice {
+    /// Short name used on the command line and in CSV files (`bcdl`, `simple`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Lattice::BodyCentred => "bcdl",
+            Lattice::Simple => "simple",
+        }
+    }
+}
+
+/// How crossings are merged into fewer vertices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Clustering {
+    /// Plain marching tetrahedra: one vertex per crossed edge, shared between tetrahedra.
+    None,
+    /// RMT clustering in the vertex pass, each cluster committed only after an exact local check
+    /// that keeps the mesh closed, manifold and of unchanged topology.
+    Integrated,
+    /// The dissertation's rules without the exact check (for comparison; may break the mesh).
+    IntegratedUnchecked,
+    /// Plain MT followed by edge collapse of short edges (link condition, no normal flips).
+    Postprocessed,
+    /// Plain MT followed by the meshoptimizer simplifier (QEM) with an error bound tied to h.
+    Meshopt,
+}
+
+impl Clustering {
+    /// Short name used on the command line and in CSV files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Clustering::None => "none",
+            Clustering::Integrated => "integrated",
+            Clustering::IntegratedUnchecked => "integrated-unchecked",
+            Clustering::Postprocessed => "postprocessed",
+            Clustering::Meshopt => "meshopt",
+        }
+    }
+}
+
+/// The extraction algorithm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Marching tetrahedra on [`ExtractSettings::lattice`] (regularised when clustering is on).
+    Mt,
+    /// Marching cubes on the plain cubic grid (lattice ignored).
+    Mc,
+}
+
+/// How vertex normals are computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NormalMode {
+    /// Normalised area-weighted mean of the incident face normals (the dissertation's choice).
+    #[default]
+    AreaWeighted,
+    /// Central differences of the field at each vertex (costs 6 samples per vertex).
+    Gradient,
+    /// No normals.
+    Skip,
+}
+
+/// The sampled box: `cells[a]` cubes along axis `a` between `min` and `max`.
+///
+/// Cube edges may differ per axis (`spacing()`); the lattices place sample points at cube
+/// corners (both lattices) and cube centres (body-centred).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Grid {
+    /// Cells (cubes) per axis, each >= 1.
+    pub cells: [usize; 3],
+    /// Lower corner of the box in world coordinates.
+    pub min: Vec3,
+    /// Upper corner of the box in world coordinates.
+    pub max: Vec3,
+}
+
+/// Refuse lattices with more sample points than this (about 16 GiB of f32 samples, before the
+/// per-point working arrays): a clear error instead of an allocation failure.
+pub const MAX_SAMPLE_POINTS: usize = 1 << 32;
+
+impl Grid {
+    /// `cells` cubes per axis in the box `[min, max]`.
+    pub fn new(cells: [usize; 3], min: Vec3, max: Vec3) -> Self {
+        Self { cells, min, max }
+    }
+
+    /// `n` cubes per axis in the cube `[-half, half]^3`.
+    pub fn cube(n: usize, half: f32) -> Self {
+        Self::new([n; 3], Vec3::splat(-half), Vec3::splat(half))
+    }
+
+    /// Cube edge length per axis.
+    pub fn spacing(&self) -> Vec3 {
+        (self.max - self.min) / Vec3::new(self.cells[0] as f32, self.cells[1] as f32, self.cells[2] as f32)
+    }
+
+    /// The mean cube edge length: the "h" in which thresholds and fidelity are expressed.
+    pub fn h(&self) -> f32 {
+        let s = self.spacing();
+        (s.x + s.y + s.z) / 3.0
+    }
+
+    /// Number of cubes.
+    pub fn cell_count(&self) -> usize {
+        self.cells.iter().product()
+    }
+
+    /// Checks sizes and bounds: cells >= 1, finite bounds, min < max on every axis, and a sample
+    /// count the machine could hold.
+    pub fn check(&self) -> Result<(), ExtractError> {
+        if self.cells.iter().any(|&c| c == 0) {
+            return Err(ExtractError::InvalidGrid(format!("every axis needs at least one cell, got {:?}", self.cells)));
+        }
+        if !(self.min.is_finite() && self.max.is_finite()) {
+            return Err(ExtractError::InvalidGrid(format!("bounds must be finite, got {} .. {}", self.min, self.max)));
+        }
+        if self.min.cmpge(self.max).any() {
+            return Err(ExtractError::InvalidGrid(format!("bounds need min < max on every axis, got {} .. {}", self.min, self.max)));
+        }
+        let points = self.cells.iter().try_fold(1usize, |acc, &c| acc.checked_mul(c.checked_add(3)?));
+        match points {
+            Some(p) if p.saturating_mul(2) <= MAX_SAMPLE_POINTS => Ok(()),
+            _ => Err(ExtractError::TooLarge { cells: self.cells, limit: MAX_SAMPLE_POINTS }),
+        }
+    }
+}
+
+/// Everything that decides one extraction.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ExtractSettings {
+    /// The sampled box and its resolution.
+    pub grid: Grid,
+    /// Marching tetrahedra or marching cubes.
+    pub method: Method,
+    /// The tetrahedral lattice (ignored by marching cubes).
+    pub lattice: Lattice,
+    /// Vertex merging.
+    pub clustering: Clustering,
+    /// Edge collapse merges edges shorter than this many grid spacings (post-processed mode);
+    /// the meshopt mode uses it as its error bound, in grid spacings.
+    pub collapse_threshold: f32,
+    /// The isovalue T; inside is f < T, f = T counts as outside.
+    pub iso: f32,
+    /// Worker threads for the parallel passes; 1 runs everything on the calling thread.
+    pub threads: usize,
+    /// How vertex normals are computed.
+    pub normals: NormalMode,
+}
+
+impl ExtractSettings {
+    /// Marching tetrahedra on `lattice` with `clustering`, one thread, iso 0, area-weighted
+    /// normals, collapse threshold 0.5 h.
+    pub fn new(grid: Grid, lattice: Lattice, clustering: Clustering) -> Self {
+        Self {
+            grid,
+            method: Method::Mt,
+            lattice,
+            clustering,
+            collapse_threshold: 0.5,
+            iso: 0.0,
+            threads: 1,
+            normals: NormalMode::AreaWeighted,
+        }
+    }
+
+    /// Checks the settings before any work: grid, threads, threshold, iso.
+    pub fn check(&self) -> Result<(), ExtractError> {
+        self.grid.check()?;
+        if self.threads == 0 || self.threads > 1024 {
+            return Err(ExtractError::InvalidSettings(format!("threads must be 1..=1024, got {}", self.threads)));
+        }
+        if !self.iso.is_finite() {
+            return Err(ExtractError::InvalidSettings(format!("iso must be finite, got {}", self.iso)));
+        }
+        if !(self.collapse_threshold.is_finite() && self.collapse_threshold >= 0.0) {
+            return Err(ExtractError::InvalidSettings(format!(
+                "collapse threshold must be finite and >= 0, got {}",
+                self.collapse_threshold
+            )));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,69 @@
+//! Scalar fields: the functions f(x, y, z) whose level set T = 0 the extractors turn into meshes.
+//!
+//! Convention for the whole workspace: **inside is f < 0**, the surface is f = 0, and f grows
+//! outward, as for a signed distance. Extracted triangles face toward increasing f.
+//!
+//! Every field is a [`ScalarField`]: `Send + Sync`, sampled one point at a time or in batches
+//! (override [`ScalarField::sample_batch`] where a field can do better than a loop). Fields that
+//! know the distance to their own surface say so through [`ScalarField::surface_distance`], which
+//! the extractors use to measure fidelity.
+//!
+//! ```
+//! use rmt_fields::{ScalarField, Sphere};
+//! use glam::Vec3;
+//! let s = Sphere::new(Vec3::ZERO, 1.0);
+//! assert!(s.sample(Vec3::ZERO) < 0.0);
+//! assert!((s.sample(Vec3::new(2.0, 0.0, 0.0)) - 1.0).abs() < 1e-6);
+//! ```
+
+mod analytic;
+mod asteroid;
+
+pub use analytic::{FnField, Gyroid, Sphere, Torus};
+pub use asteroid::{Asteroid, AsteroidParams};
+
+use glam::Vec3;
+
+/// A scalar field sampled by the extractors. Inside is `f < 0`.
+pub trait ScalarField: Send + Sync {
+    /// The field's value at `p` (world coordinates).
+    fn sample(&self, p: Vec3) -> f32;
+
+    /// Samples many points at once: `out[i] = sample(points[i])`. Override when a field can
+    /// vectorise or share work between points.
+    fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
+        for (o, &p) in out.iter_mut().zip(points) {
+            *o = self.sample(p);
+        }
+    }
+
+    /// Unsigned distance from `p` to the field's true surface, when the field knows it (used to
+    /// measure extraction fidelity); `None` otherwise.
+    fn surface_distance(&self, _p: Vec3) -> Option<f32> {
+        None
+    }
+}
+
+impl<F: ScalarField + ?Sized> ScalarField for &F {
+    fn sample(&self, p: Vec3) -> f32 {
+        (**self).sample(p)
+    }
+    fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
+        (**self).sample_batch(points, out)
+    }
+    fn surface_distance(&self, p: Vec3) -> Option<f32> {
+        (**self).surface_distance(p)
+    }
+}
+
+impl<F: ScalarField + ?Sized> ScalarField for Box<F> {
+    fn sample(&self, p: Vec3) -> f32 {
+        (**self).sample(p)
+    }
+    fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
+        (**self).sample_batch(points, out)
+    }
+    fn surface_distance(&self, p: Vec3) -> Option<f32> {
+        (**self).surface_distance(p)
+    }
+}

@@ -1,0 +1,1 @@
+//! PLY and OBJ input and output (being written).

@@ -1,0 +1,107 @@
+//! Indexed triangle meshes and what we measure on them.
+//!
+//! This crate owns the output type of every extractor in the workspace, [`Mesh`], and the checks
+//! that decide whether a mesh is fit for a game: [`validate`] (closed, manifold, consistently
+//! oriented, no duplicate or zero-area triangles, Euler characteristic, components) and
+//! [`quality`] (radius ratio, minimum angle, area statistics). It also reads and writes meshes
+//! ([`io`]: binary and ASCII PLY, OBJ; OBJ input through `tobj`).
+//!
+//! It knows nothing about scalar fields or lattices: the extractor tells [`validate`] which points
+//! lie on the sampled domain's boundary through a closure.
+//!
+//! ```
+//! use rmt_mesh::Mesh;
+//! // A tetrahedron with outward-facing triangles.
+//! let mesh = Mesh::from_triangles(
+//!     vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+//!     vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
+//! );
+//! assert_eq!(mesh.triangle_count(), 4);
+//! ```
+
+pub mod io;
+pub mod quality;
+pub mod validate;
+
+pub use quality::{quality, QualityReport};
+pub use validate::{validate, ValidationReport};
+
+use serde::{Deserialize, Serialize};
+
+/// An indexed triangle mesh.
+///
+/// Triangles are counter-clockwise when seen from the side their normal points to (right-hand
+/// rule); for extracted surfaces that is the side of increasing field value (outward for a signed
+/// distance field).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Mesh {
+    /// Vertex positions in world coordinates.
+    pub positions: Vec<[f32; 3]>,
+    /// Per-vertex unit normals; empty when not computed, else one per position.
+    pub normals: Vec<[f32; 3]>,
+    /// Three indices into `positions` per triangle.
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    /// A mesh from positions and a flat index list (no normals).
+    pub fn from_triangles(positions: Vec<[f32; 3]>, indices: Vec<u32>) -> Self {
+        Self { positions, normals: Vec::new(), indices }
+    }
+
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Empties the mesh but keeps its allocations (for reuse across extractions).
+    pub fn clear(&mut self) {
+        self.positions.clear();
+        self.normals.clear();
+        self.indices.clear();
+    }
+
+    /// Iterator over triangles as index triples.
+    pub fn triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
+        self.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]])
+    }
+
+    /// Total surface area.
+    pub fn area(&self) -> f64 {
+        self.triangles()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| glam::DVec3::from(self.positions[i as usize].map(f64::from)));
+                (b - a).cross(c - a).length() * 0.5
+            })
+            .sum()
+    }
+
+    /// Bytes held by the vertex buffer (positions and normals) and the index buffer.
+    pub fn buffer_bytes(&self) -> (usize, usize) {
+        (
+            (self.positions.len() + self.normals.len()) * std::mem::size_of::<[f32; 3]>(),
+            self.indices.len() * std::mem::size_of::<u32>(),
+        )
+    }
+
+    /// Per-vertex normals as the normalised area-weighted sum of the incident face normals
+    /// (the dissertation's choice). Vertices with no triangle get a zero normal.
+    pub fn compute_area_weighted_normals(&mut self) {
+        let mut acc = vec![glam::Vec3::ZERO; self.positions.len()];
+        for t in self.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| glam::Vec3::from(self.positions[i as usize]));
+            // The cross product's length is twice the area: weighting by area for free.
+            let n = (b - a).cross(c - a);
+            for &i in t {
+                acc[i as usize] += n;
+            }
+        }
+        self.normals.clear();
+        self.normals.extend(acc.into_iter().map(|n| n.normalize_or_zero().to_array()));
+    }
+}

@@ -1,0 +1,1 @@
+//! Sample objects by name (in progress: owned by the runner work).
