@@ -1,4 +1,375 @@
-//! Vertex merging with an exact local check (in progress).
-/// Scratch buffers for merging.
+//! Merging vertices of a triangle mesh without breaking it: the exact local check.
+//!
+//! Merging a connected set K of vertices into one new vertex v replaces the region R (the
+//! triangles touching K) by a fan around v. The result is still a closed 2-manifold of the same
+//! topology, with consistent orientation, exactly when
+//!
+//! 1. R is a disc: its Euler characteristic V - E + F is 1, every inner edge has two triangles
+//!    traversed in opposite directions, and its boundary edges form one simple cycle that avoids K;
+//! 2. the triangles with exactly one vertex in K, with that vertex replaced by v, are the cone over
+//!    that boundary cycle: each one's far edge is a boundary edge of R, each boundary edge is used
+//!    once (so no two new triangles coincide and every link edge has two triangles);
+//! 3. (geometry) no new triangle flips against the triangle it replaces or becomes (near) flat.
+//!
+//! Triangles with two or more vertices in K collapse and are dropped. This is the link condition of
+//! edge contraction applied to the whole cluster at once (`rmt-spec.md`, "When merging keeps the
+//! surface a manifold"). Both integrated clustering and edge collapse use it.
+//!
+//! ```text
+//!      u-----w            u-----w
+//!     / \ K / \          / \   / \
+//!    x---k1-k2-y   =>   x---- v ---y     (K = {k1, k2} merged into v)
+//!     \ /   \ /          \   / \ /
+//!      s-----t            s-----t
+//! ```
+
+/// Marks "no vertex" in member chains.
+const NONE: u32 = u32::MAX;
+
+/// Why a merge was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reject {
+    /// The region around K is not a disc (or K touches its boundary, e.g. the box).
+    NotADisc,
+    /// The new fan would duplicate triangles or leave a link edge without two triangles.
+    NotACone,
+    /// A new triangle would flip or become flat.
+    Flip,
+}
+
+/// A triangle mesh prepared for merges, with buffers kept between extractions.
 #[derive(Default)]
-pub struct MergeBuffers {}
+pub struct MergeBuffers {
+    tris: Vec<[u32; 3]>,
+    alive: Vec<bool>,
+    /// Incident triangles of each original vertex (CSR): `inc[inc_start[v]..inc_start[v + 1]]`.
+    inc_start: Vec<u32>,
+    inc: Vec<u32>,
+    /// Members of a merged vertex: a chain from the vertex through `next_member`.
+    next_member: Vec<u32>,
+    /// The vertex an original vertex has been merged into (itself if none).
+    rep: Vec<u32>,
+    // Scratch of one check.
+    region: Vec<u32>,
+    edges: Vec<(u32, u32)>,
+    verts: Vec<u32>,
+    boundary: Vec<(u32, u32)>,
+    used: Vec<bool>,
+}
+
+impl MergeBuffers {
+    /// Loads `vertex_count` vertices and the triangles `indices` (three per triangle).
+    pub fn load(&mut self, vertex_count: usize, indices: &[u32]) {
+        self.tris.clear();
+        self.tris.extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+        self.alive.clear();
+        self.alive.resize(self.tris.len(), true);
+        self.inc_start.clear();
+        self.inc_start.resize(vertex_count + 1, 0);
+        for &v in indices {
+            self.inc_start[v as usize + 1] += 1;
+        }
+        for i in 0..vertex_count {
+            self.inc_start[i + 1] += self.inc_start[i];
+        }
+        self.inc.clear();
+        self.inc.resize(indices.len(), 0);
+        let mut fill: Vec<u32> = self.inc_start[..vertex_count].to_vec();
+        for (t, tri) in self.tris.iter().enumerate() {
+            for &v in tri {
+                self.inc[fill[v as usize] as usize] = t as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        self.next_member.clear();
+        self.next_member.resize(vertex_count, NONE);
+        self.rep.clear();
+        self.rep.extend(0..vertex_count as u32);
+    }
+
+    /// Bytes held by the adjacency structures.
+    pub fn bytes(&self) -> usize {
+        self.tris.len() * 12 + self.alive.len() + (self.inc_start.len() + self.inc.len() + self.next_member.len() + self.rep.len()) * 4
+    }
+
+    /// The vertex that original vertex `v` now belongs to.
+    pub fn rep(&self, v: u32) -> u32 {
+        self.rep[v as usize]
+    }
+
+    /// Whether triangle `t` (original numbering) still exists.
+    pub fn is_alive(&self, t: usize) -> bool {
+        self.alive[t]
+    }
+
+    /// Current vertices of triangle `t`.
+    pub fn triangle(&self, t: usize) -> [u32; 3] {
+        self.tris[t]
+    }
+
+    /// Collects the live triangles touching any vertex of `k` into `self.region`, sorted.
+    fn collect_region(&mut self, k: &[u32]) {
+        self.region.clear();
+        for &c in k {
+            let mut m = c;
+            while m != NONE {
+                let (a, b) = (self.inc_start[m as usize] as usize, self.inc_start[m as usize + 1] as usize);
+                for &t in &self.inc[a..b] {
+                    if self.alive[t as usize] {
+                        self.region.push(t);
+                    }
+                }
+                m = self.next_member[m as usize];
+            }
+        }
+        self.region.sort_unstable();
+        self.region.dedup();
+    }
+
+    /// Merges the current vertices `k` (at least two, connected through mesh edges) into `k[0]`,
+    /// placed at `new_pos`. With `check`, refuses merges that would break the mesh (see the module
+    /// doc) and leaves everything unchanged; without it, merges anyway (the dissertation's
+    /// behaviour). Returns the number of triangles dropped.
+    pub fn merge(&mut self, positions: &mut [[f32; 3]], k: &[u32], new_pos: [f32; 3], check: bool) -> Result<usize, Reject> {
+        self.collect_region(k);
+        if check {
+            self.check(positions, k, new_pos)?;
+        }
+        let v = k[0];
+        positions[v as usize] = new_pos;
+        let mut dropped = 0;
+        for &t in &self.region {
+            let tri = &mut self.tris[t as usize];
+            let mut inside = 0;
+            for x in tri.iter_mut() {
+                if k.contains(x) {
+                    *x = v;
+                    inside += 1;
+                }
+            }
+            if inside >= 2 {
+                self.alive[t as usize] = false;
+                dropped += 1;
+            }
+        }
+        // Chain every member of k[1..] behind v.
+        let mut tail = v;
+        while self.next_member[tail as usize] != NONE {
+            tail = self.next_member[tail as usize];
+        }
+        for &c in &k[1..] {
+            self.next_member[tail as usize] = c;
+            let mut m = c;
+            while m != NONE {
+                self.rep[m as usize] = v;
+                tail = m;
+                m = self.next_member[m as usize];
+            }
+        }
+        Ok(dropped)
+    }
+
+    fn check(&mut self, positions: &[[f32; 3]], k: &[u32], new_pos: [f32; 3]) -> Result<(), Reject> {
+        // Directed edges and vertices of R.
+        self.edges.clear();
+        self.verts.clear();
+        for &t in &self.region {
+            let tri = self.tris[t as usize];
+            for e in 0..3 {
+                self.edges.push((tri[e], tri[(e + 1) % 3]));
+                self.verts.push(tri[e]);
+            }
+        }
+        self.edges.sort_unstable();
+        if self.edges.windows(2).any(|w| w[0] == w[1]) {
+            // Two triangles traverse one edge the same way: already broken, do not touch.
+            return Err(Reject::NotADisc);
+        }
+        self.verts.sort_unstable();
+        self.verts.dedup();
+        self.boundary.clear();
+        for &(a, b) in &self.edges {
+            if self.edges.binary_search(&(b, a)).is_err() {
+                self.boundary.push((a, b));
+            }
+        }
+        let d = self.edges.len() as i64;
+        let b = self.boundary.len() as i64;
+        let euler = self.verts.len() as i64 - (d + b) / 2 + self.region.len() as i64;
+        if euler != 1 || b < 3 {
+            return Err(Reject::NotADisc);
+        }
+        // The boundary must be one simple cycle avoiding K: each vertex starts exactly one
+        // boundary edge, and walking from the first edge visits all of them.
+        if self.boundary.iter().any(|(a, b)| k.contains(a) || k.contains(b)) {
+            return Err(Reject::NotADisc);
+        }
+        // `boundary` is sorted by start vertex (it was filtered from sorted `edges`).
+        if self.boundary.windows(2).any(|w| w[0].0 == w[1].0) {
+            return Err(Reject::NotADisc);
+        }
+        let start = self.boundary[0];
+        let mut cur = start;
+        let mut steps = 1;
+        loop {
+            let next = match self.boundary.binary_search_by_key(&cur.1, |e| e.0) {
+                Ok(i) => self.boundary[i],
+                Err(_) => return Err(Reject::NotADisc),
+            };
+            if next == start {
+                break;
+            }
+            steps += 1;
+            if steps > self.boundary.len() {
+                return Err(Reject::NotADisc);
+            }
+            cur = next;
+        }
+        if steps != self.boundary.len() {
+            return Err(Reject::NotADisc);
+        }
+        // The surviving triangles must be exactly the cone over the boundary cycle.
+        self.used.clear();
+        self.used.resize(self.boundary.len(), false);
+        let mut cone = 0;
+        let p = glam::Vec3::from(new_pos);
+        for &t in &self.region {
+            let tri = self.tris[t as usize];
+            let inside = tri.iter().filter(|x| k.contains(x)).count();
+            if inside != 1 {
+                continue;
+            }
+            let r = tri.iter().position(|x| k.contains(x)).unwrap_or(0);
+            let (x, u, w) = (tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]);
+            let i = self.boundary.binary_search(&(u, w)).map_err(|_| Reject::NotACone)?;
+            if std::mem::replace(&mut self.used[i], true) {
+                return Err(Reject::NotACone);
+            }
+            cone += 1;
+            // Geometry: the new triangle keeps the old one's facing and is not flat.
+            let [pu, pw, px] = [u, w, x].map(|i| glam::Vec3::from(positions[i as usize]));
+            let old = (pu - px).cross(pw - px);
+            let new = (pu - p).cross(pw - p);
+            let longest = (pu - p).length_squared().max((pw - p).length_squared()).max((pw - pu).length_squared());
+            if old.dot(new) <= 0.0 || new.length() <= 1e-6 * longest {
+                return Err(Reject::Flip);
+            }
+        }
+        if cone != self.boundary.len() {
+            return Err(Reject::NotACone);
+        }
+        Ok(())
+    }
+
+    /// Writes the merged mesh: live triangles in their original order, vertices that live
+    /// triangles use, renumbered in increasing old order. Returns the number of vertices.
+    pub fn finish(&self, positions: &mut Vec<[f32; 3]>, indices: &mut Vec<u32>) -> usize {
+        let mut new_id = vec![NONE; positions.len()];
+        for (t, tri) in self.tris.iter().enumerate() {
+            if self.alive[t] {
+                for &v in tri {
+                    new_id[v as usize] = 0;
+                }
+            }
+        }
+        let mut next = 0u32;
+        let mut write = 0;
+        for v in 0..positions.len() {
+            if new_id[v] != NONE {
+                new_id[v] = next;
+                positions[write] = positions[v];
+                write += 1;
+                next += 1;
+            }
+        }
+        positions.truncate(write);
+        indices.clear();
+        for (t, tri) in self.tris.iter().enumerate() {
+            if self.alive[t] {
+                indices.extend(tri.iter().map(|&v| new_id[v as usize]));
+            }
+        }
+        write
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An octahedron: 6 vertices, 8 outward triangles.
+    fn octahedron() -> (Vec<[f32; 3]>, Vec<u32>) {
+        let p = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+        let idx = vec![0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+        (p, idx)
+    }
+
+    #[test]
+    fn merging_an_edge_of_a_tetrahedron_is_refused() {
+        // The result would be two triangles back to back: the region is the whole closed
+        // surface, not a disc.
+        let mut p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let idx = vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3];
+        let mut m = MergeBuffers::default();
+        m.load(p.len(), &idx);
+        let before = p.clone();
+        assert_eq!(m.merge(&mut p, &[0, 1], [0.5, 0.0, 0.0], true), Err(Reject::NotADisc));
+        assert_eq!(p, before, "a refused merge changes nothing");
+    }
+
+    #[test]
+    fn merging_an_edge_of_an_octahedron_passes_the_link_condition() {
+        // link(0) and link(2) share exactly the edge's two opposite vertices: a valid collapse
+        // to a 5-vertex sphere.
+        let (mut p, idx) = octahedron();
+        let mut m = MergeBuffers::default();
+        m.load(p.len(), &idx);
+        assert_eq!(m.merge(&mut p, &[0, 2], [0.5, 0.5, 0.0], true), Ok(2));
+        let mut out_i = Vec::new();
+        let v = m.finish(&mut p, &mut out_i);
+        assert_eq!((v, out_i.len() / 3), (5, 6));
+    }
+
+    #[test]
+    fn merging_on_a_fine_sphere_keeps_it_closed() {
+        // Subdivide the octahedron once (each triangle into 4), then merge an edge.
+        let (p0, idx0) = octahedron();
+        let mut p = p0.clone();
+        let mut idx = Vec::new();
+        let mut mid = std::collections::HashMap::new();
+        let mut midpoint = |a: u32, b: u32, p: &mut Vec<[f32; 3]>| -> u32 {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let (x, y) = (glam::Vec3::from(p[a as usize]), glam::Vec3::from(p[b as usize]));
+                p.push(((x + y) * 0.5).normalize().to_array());
+                (p.len() - 1) as u32
+            })
+        };
+        for t in idx0.chunks_exact(3) {
+            let (a, b, c) = (t[0], t[1], t[2]);
+            let (ab, bc, ca) = (midpoint(a, b, &mut p), midpoint(b, c, &mut p), midpoint(c, a, &mut p));
+            idx.extend([a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca]);
+        }
+        let mut m = MergeBuffers::default();
+        m.load(p.len(), &idx);
+        // Vertex 0 = (1,0,0) and the midpoint toward (0,1,0).
+        let k = [0u32, 6];
+        let pos = ((glam::Vec3::from(p[0]) + glam::Vec3::from(p[6])) * 0.5).to_array();
+        assert_eq!(m.merge(&mut p, &k, pos, true), Ok(2));
+        let mut out_p = p.clone();
+        let mut out_i = Vec::new();
+        let v = m.finish(&mut out_p, &mut out_i);
+        assert_eq!(v, p.len() - 1);
+        assert_eq!(out_i.len() / 3, idx.len() / 3 - 2);
+        // Euler: V - E + F = 2 with E = 3F/2 on a closed surface.
+        let f = out_i.len() / 3;
+        assert_eq!(v as i64 - (3 * f / 2) as i64 + f as i64, 2);
+    }
+
+    #[test]
+    fn an_unchecked_merge_goes_through_even_when_it_breaks_the_mesh() {
+        let (mut p, idx) = octahedron();
+        let mut m = MergeBuffers::default();
+        m.load(p.len(), &idx);
+        assert_eq!(m.merge(&mut p, &[0, 2], [0.5, 0.5, 0.0], false), Ok(2));
+    }
+}

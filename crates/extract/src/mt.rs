@@ -1,12 +1,584 @@
-//! Marching tetrahedra: vertex pass and geometry pass (in progress).
-use crate::{merge::MergeBuffers, ExtractError, ExtractSettings, Samples, Stats};
+//! Marching tetrahedra on both lattices: the vertex pass, the geometry pass, and the commit of
+//! clusters.
+//!
+//! **Vertex pass** (parallel over storage planes): for each sample point C and each of its
+//! neighbours S, the edge C-S is crossed when C and S lie on opposite sides of the threshold T
+//! (inside is f < T). The crossing belongs to the nearer end (|f - T| smaller; on a tie, the inside
+//! end), so every crossing has exactly one owner and its vertex id does not depend on processing
+//! order: ids are numbered by owner (storage order), then by neighbour index. A point's owned
+//! crossings are 14 flag bits (`owned`), and `base` holds the id of its first one:
+//! `id(C, d) = base[C] + popcount(owned[C] & ((1 << d) - 1))`. With clustering, the pass also
+//! proposes clusters ([`crate::cluster`]).
+//!
+//! **Geometry pass** (parallel over z-layers): every tetrahedron whose corners disagree gives one
+//! or two triangles from the case table; layers are concatenated in order, so the output is the
+//! same for any thread count. Cubes (or body-centred faces) whose sample points all agree are
+//! skipped before any tetrahedron is looked at.
+//!
+//! **Commit** (clustering): clusters are merged one lattice colour at a time, each only after the
+//! exact check of [`crate::merge`] (integrated) or without it (integrated-unchecked).
+//!
+//! Border rule: a point clusters only when all 14 of its neighbours are regular lattice points
+//! (inside the box, no ghost centres). Crossings on the box faces therefore never move, and the
+//! mesh stays closed wherever the surface stays inside the box.
+
+use rayon::prelude::*;
 use rmt_mesh::Mesh;
+
+use crate::cluster::{self, Candidate, ProposalCounts, FULL};
+use crate::lattice::{self, LatticeTables, Offset};
+use crate::merge::MergeBuffers;
+use crate::{Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
 
 /// Per-point working arrays kept between extractions.
 #[derive(Default)]
-pub struct MtBuffers {}
+pub struct MtBuffers {
+    /// Owned crossing flags per storage slot.
+    owned: Vec<u16>,
+    /// Id of the first owned crossing per storage slot (meaningful where `owned != 0`).
+    base: Vec<u32>,
+    /// Cluster candidates, in storage order.
+    candidates: Vec<Candidate>,
+    /// Triangles of the geometry pass, as crossing ids.
+    triangles: Vec<u32>,
+}
 
-/// Extracts the surface of `samples` (in progress).
-pub fn extract(_s: &Samples, _settings: &ExtractSettings, _pool: &rayon::ThreadPool, _b: &mut MtBuffers, _m: &mut MergeBuffers, _mesh: &mut Mesh, _stats: &mut Stats) -> Result<(), ExtractError> {
-    Err(ExtractError::Unsupported("marching tetrahedra is being written".into()))
+/// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
+const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+
+/// Case table: for the corners inside (bit i: f(v_i) < T), a directed cycle of crossed edges whose
+/// right-hand normal points toward increasing f for a positively oriented tetrahedron. Length 3
+/// (triangle) or 4 (quad, split along its shorter diagonal); `u8::MAX` pads. Checked against
+/// geometry by `case_table_orients_triangles_along_the_gradient`.
+const CASES: [[u8; 4]; 16] = {
+    const X: u8 = u8::MAX;
+    [
+        [X, X, X, X],
+        [0, 1, 2, X],
+        [0, 4, 3, X],
+        [1, 2, 4, 3],
+        [1, 3, 5, X],
+        [0, 3, 5, 2],
+        [0, 4, 5, 1],
+        [2, 4, 5, X],
+        [2, 5, 4, X],
+        [0, 1, 5, 4],
+        [0, 2, 5, 3],
+        [1, 5, 3, X],
+        [1, 3, 4, 2],
+        [0, 3, 4, X],
+        [0, 2, 1, X],
+        [X, X, X, X],
+    ]
+};
+
+/// Whether the end with value `f` (inside iff `f < iso`) owns the crossing shared with `g`.
+#[inline(always)]
+fn owns(f: f32, g: f32, iso: f32) -> bool {
+    let (df, dg) = ((f - iso).abs(), (g - iso).abs());
+    df < dg || (df == dg && f < iso)
+}
+
+/// A tetrahedron with storage-index deltas from a reference point and edge directions.
+#[derive(Clone, Copy, Debug)]
+struct TetTemplate {
+    delta: [isize; 4],
+    /// `dir[i][j]`: neighbour index of corner j seen from corner i.
+    dir: [[u8; 4]; 4],
+}
+
+/// The lattice in storage terms: neighbour deltas per parity and tetrahedron templates.
+struct Layout<'a> {
+    s: &'a Samples,
+    lattice: Lattice,
+    t: &'static LatticeTables,
+    /// Storage-index delta of neighbour d, for even (`[0]`) and odd (`[1]`) points.
+    delta: [[isize; 14]; 2],
+    tets: Vec<TetTemplate>,
+}
+
+impl<'a> Layout<'a> {
+    fn new(s: &'a Samples, lattice: Lattice) -> Self {
+        let t = LatticeTables::get(lattice);
+        let idx = |p: Offset| -> isize {
+            match lattice {
+                Lattice::BodyCentred => s.bcdl_index(p) as isize,
+                Lattice::Simple => s.simple_index(p[0] as usize, p[1] as usize, p[2] as usize) as isize,
+            }
+        };
+        // Reference points far enough from the border for every offset to stay in storage.
+        let refs: [Offset; 2] = match lattice {
+            Lattice::BodyCentred => [[2, 2, 2], [3, 3, 3]],
+            Lattice::Simple => [[1, 1, 1], [1, 1, 1]],
+        };
+        let mut delta = [[0isize; 14]; 2];
+        for (par, r) in refs.iter().enumerate() {
+            for (d, o) in t.offsets.iter().enumerate() {
+                delta[par][d] = idx(add(*r, *o)) - idx(*r);
+            }
+        }
+        // Templates: body-centred relative to the centre A below a face (odd point); simple
+        // relative to the cube's corner 0.
+        let r = refs[1];
+        let tets = t
+            .tetrahedra
+            .iter()
+            .map(|tet| {
+                let mut tpl = TetTemplate { delta: [0; 4], dir: [[0; 4]; 4] };
+                for i in 0..4 {
+                    tpl.delta[i] = idx(add(r, tet[i])) - idx(r);
+                    for j in 0..4 {
+                        if i != j {
+                            let o = [tet[j][0] - tet[i][0], tet[j][1] - tet[i][1], tet[j][2] - tet[i][2]];
+                            tpl.dir[i][j] = t.direction(o).map_or(u8::MAX, |d| d as u8);
+                        }
+                    }
+                }
+                tpl
+            })
+            .collect();
+        Self { s, lattice, t, delta, tets }
+    }
+
+    /// Lattice coordinates of storage slot (sx, sy) of plane z, and whether the point exists.
+    #[inline]
+    fn point(&self, sx: usize, sy: usize, z: usize) -> (Offset, bool) {
+        match self.lattice {
+            Lattice::Simple => ([sx as i32, sy as i32, z as i32], true),
+            Lattice::BodyCentred => {
+                let zz = z as i32 - 1;
+                let odd = zz & 1;
+                let p = [2 * sx as i32 - odd, 2 * sy as i32 - odd, zz];
+                (p, self.s.bcdl_exists(p))
+            }
+        }
+    }
+
+    fn position(&self, p: Offset) -> glam::Vec3 {
+        match self.lattice {
+            Lattice::BodyCentred => self.s.bcdl_position(p),
+            Lattice::Simple => self.s.simple_position(p[0] as usize, p[1] as usize, p[2] as usize),
+        }
+    }
+
+    /// Largest lattice coordinate per axis.
+    fn max_coord(&self, a: usize) -> i32 {
+        match self.lattice {
+            Lattice::BodyCentred => 2 * self.s.cells[a] as i32,
+            Lattice::Simple => self.s.cells[a] as i32,
+        }
+    }
+
+    /// Whether all 14 neighbours of `p` are regular lattice points (no border, no ghosts).
+    #[inline]
+    fn is_regular(&self, p: Offset) -> bool {
+        let margin = match self.lattice {
+            Lattice::BodyCentred => 2 + (p[0] & 1),
+            Lattice::Simple => 1,
+        };
+        (0..3).all(|a| p[a] >= margin && p[a] <= self.max_coord(a) - margin)
+    }
+
+    /// Neighbour bits of the lattice edges at `p` that belong to some tetrahedron.
+    fn valid_neighbours(&self, p: Offset) -> u16 {
+        if self.is_regular(p) {
+            return FULL;
+        }
+        let mut mask = 0;
+        for (d, o) in self.t.offsets.iter().enumerate() {
+            let q = add(p, *o);
+            let ok = match self.lattice {
+                Lattice::Simple => (0..3).all(|a| q[a] >= 0 && q[a] <= self.max_coord(a)),
+                // Ghost centres connect to real points only.
+                Lattice::BodyCentred => self.s.bcdl_exists(q) && !(self.is_ghost(p) && self.is_ghost(q)),
+            };
+            if ok {
+                mask |= 1 << d;
+            }
+        }
+        mask
+    }
+
+    fn is_ghost(&self, p: Offset) -> bool {
+        (0..3).any(|a| p[a] < 0 || p[a] > self.max_coord(a))
+    }
+}
+
+fn add(a: Offset, b: Offset) -> Offset {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// Counters of one plane of the vertex pass.
+#[derive(Default, Clone, Copy)]
+struct PlaneCounts {
+    crossings: usize,
+    edges: usize,
+    proposals: ProposalCounts,
+}
+
+/// Extracts the surface of `samples` with marching tetrahedra (and clustering) into `mesh`.
+pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::ThreadPool, buf: &mut MtBuffers, merge: &mut MergeBuffers, mesh: &mut Mesh, stats: &mut Stats) -> Result<(), ExtractError> {
+    let lattice = settings.lattice;
+    let layout = Layout::new(samples, lattice);
+    let iso = settings.iso;
+    let clustering = settings.clustering;
+    let propose = matches!(clustering, Clustering::Integrated | Clustering::IntegratedUnchecked);
+
+    // Allocation: per-slot tables sized to the sample array.
+    let t = std::time::Instant::now();
+    let slots = samples.values.len();
+    buf.owned.resize(slots, 0);
+    buf.base.resize(slots, 0);
+    buf.candidates.clear();
+    buf.triangles.clear();
+    stats.t_allocation_s += t.elapsed().as_secs_f64();
+
+    // Vertex pass, step 1: owned crossings and proposals per plane.
+    let t = std::time::Instant::now();
+    let plane = samples.dims[0] * samples.dims[1];
+    let per_plane: Vec<(PlaneCounts, Vec<Candidate>)> = pool.install(|| {
+        buf.owned
+            .par_chunks_mut(plane)
+            .enumerate()
+            .map(|(z, owned)| vertex_plane(&layout, z, iso, propose, clustering == Clustering::Integrated, owned))
+            .collect()
+    });
+    let mut starts = Vec::with_capacity(per_plane.len() + 1);
+    let mut total = 0usize;
+    let mut proposals = ProposalCounts::default();
+    for (c, cands) in &per_plane {
+        starts.push(total);
+        total += c.crossings;
+        stats.edges += c.edges;
+        proposals.add(c.proposals);
+        buf.candidates.extend_from_slice(cands);
+    }
+    stats.edges /= 2;
+    stats.crossings = total;
+    if total > u32::MAX as usize - 1 {
+        return Err(ExtractError::TooLarge { cells: samples.cells, limit: u32::MAX as usize });
+    }
+    // Step 2: number the crossings and place them.
+    mesh.positions.resize(total, [0.0; 3]);
+    {
+        let mut rest: &mut [[f32; 3]] = &mut mesh.positions;
+        let mut chunks = Vec::with_capacity(per_plane.len());
+        for (c, _) in &per_plane {
+            let (head, tail) = rest.split_at_mut(c.crossings);
+            chunks.push(head);
+            rest = tail;
+        }
+        let owned = &buf.owned;
+        pool.install(|| {
+            buf.base.par_chunks_mut(plane).zip(chunks.into_par_iter()).enumerate().for_each(|(z, (base, out))| {
+                number_plane(&layout, z, iso, &owned[z * plane..(z + 1) * plane], starts[z] as u32, base, out);
+            })
+        });
+    }
+    stats.t_vertex_s += t.elapsed().as_secs_f64();
+
+    // Geometry pass.
+    let t = std::time::Instant::now();
+    let layers = match lattice {
+        Lattice::BodyCentred => samples.cells[2] + 1,
+        Lattice::Simple => samples.cells[2],
+    };
+    let (owned, base, positions) = (&buf.owned, &buf.base, &mesh.positions);
+    let results: Vec<(Vec<u32>, usize)> = pool.install(|| {
+        (0..layers)
+            .into_par_iter()
+            .map(|k| {
+                let mut out = Vec::new();
+                let processed = geometry_layer(&layout, k, iso, owned, base, positions, &mut out);
+                (out, processed)
+            })
+            .collect()
+    });
+    for (tris, processed) in &results {
+        buf.triangles.extend_from_slice(tris);
+        stats.tetrahedra_processed += processed;
+    }
+    let [nx, ny, nz] = samples.cells;
+    stats.tetrahedra_total = match lattice {
+        Lattice::BodyCentred => 4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1)),
+        Lattice::Simple => 6 * nx * ny * nz,
+    };
+    stats.t_geometry_s += t.elapsed().as_secs_f64();
+
+    // Clustering: commit one colour at a time (counted in the vertex pass, where the dissertation
+    // does its merging).
+    stats.clusters_proposed = proposals.proposed;
+    stats.clusters_rejected_prefilter = proposals.rejected;
+    if propose {
+        let t = std::time::Instant::now();
+        let check = clustering == Clustering::Integrated;
+        merge.load(total, &buf.triangles);
+        let colours = lattice::colour_count(lattice);
+        let mut k = Vec::with_capacity(14);
+        for colour in 0..colours {
+            for c in buf.candidates.iter().filter(|c| c.colour as usize == colour) {
+                k.clear();
+                let o = buf.owned[c.slot as usize];
+                let b = buf.base[c.slot as usize];
+                let mut bits = c.island;
+                let mut sum = glam::Vec3::ZERO;
+                while bits != 0 {
+                    let d = bits.trailing_zeros();
+                    bits &= bits - 1;
+                    let id = b + (o & ((1u16 << d) - 1)).count_ones();
+                    k.push(id);
+                    sum += glam::Vec3::from(mesh.positions[id as usize]);
+                }
+                let centre = (sum / k.len() as f32).to_array();
+                match merge.merge(&mut mesh.positions, &k, centre, check) {
+                    Ok(dropped) => {
+                        stats.clusters_committed += 1;
+                        stats.discarded += dropped;
+                    }
+                    Err(_) => stats.clusters_rejected_check += 1,
+                }
+            }
+        }
+        merge.finish(&mut mesh.positions, &mut mesh.indices);
+        stats.t_vertex_s += t.elapsed().as_secs_f64();
+    } else {
+        std::mem::swap(&mut mesh.indices, &mut buf.triangles);
+    }
+    stats.clusters_rejected = stats.clusters_rejected_prefilter + stats.clusters_rejected_check;
+
+    // Post-processing counts in the geometry pass, as in the dissertation.
+    if clustering == Clustering::Postprocessed {
+        let t = std::time::Instant::now();
+        let h = settings.grid.h();
+        let (collapses, dropped) = crate::collapse::collapse_short_edges(merge, mesh, settings.collapse_threshold * h);
+        stats.collapses = collapses;
+        stats.discarded += dropped;
+        stats.t_geometry_s += t.elapsed().as_secs_f64();
+    } else if clustering == Clustering::Meshopt {
+        return Err(ExtractError::Unsupported("meshopt simplification is not wired in yet".into()));
+    }
+
+    stats.bytes_edges = (buf.owned.len() * 2 + buf.base.len() * 4) + buf.candidates.len() * std::mem::size_of::<Candidate>() + if propose { merge.bytes() } else { 0 };
+    Ok(())
+}
+
+/// Vertex pass over one storage plane: owned crossings, counts, cluster proposals.
+fn vertex_plane(l: &Layout, z: usize, iso: f32, propose: bool, pinch_rule: bool, owned: &mut [u16]) -> (PlaneCounts, Vec<Candidate>) {
+    let v = &l.s.values;
+    let [dx, dy, _] = l.s.dims;
+    let mut counts = PlaneCounts::default();
+    let mut cands = Vec::new();
+    for sy in 0..dy {
+        for sx in 0..dx {
+            let local = sy * dx + sx;
+            let (p, exists) = l.point(sx, sy, z);
+            if !exists {
+                owned[local] = 0;
+                continue;
+            }
+            let i = z * dx * dy + local;
+            let f = v[i];
+            let inside = f < iso;
+            let valid = l.valid_neighbours(p);
+            let delta = &l.delta[(p[0] & 1) as usize];
+            let (mut own, mut crossed) = (0u16, 0u16);
+            let mut bits = valid;
+            while bits != 0 {
+                let d = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let g = v[(i as isize + delta[d]) as usize];
+                if (g < iso) != inside {
+                    crossed |= 1 << d;
+                    if owns(f, g, iso) {
+                        own |= 1 << d;
+                    }
+                }
+            }
+            owned[local] = own;
+            counts.crossings += own.count_ones() as usize;
+            counts.edges += valid.count_ones() as usize;
+            if propose && own.count_ones() >= 2 && valid == FULL && l.is_regular(p) {
+                let colour = lattice::colour(l.lattice, p) as u8;
+                counts.proposals.add(cluster::propose(l.t, i as u32, colour, own, crossed, pinch_rule, &mut cands));
+            }
+        }
+    }
+    (counts, cands)
+}
+
+/// Numbers the crossings of one plane from `start` and writes their positions.
+fn number_plane(l: &Layout, z: usize, iso: f32, owned: &[u16], start: u32, base: &mut [u32], out: &mut [[f32; 3]]) {
+    let v = &l.s.values;
+    let [dx, dy, _] = l.s.dims;
+    let mut next = start;
+    let mut w = 0;
+    for sy in 0..dy {
+        for sx in 0..dx {
+            let local = sy * dx + sx;
+            let own = owned[local];
+            if own == 0 {
+                continue;
+            }
+            base[local] = next;
+            next += own.count_ones();
+            let (p, _) = l.point(sx, sy, z);
+            let i = z * dx * dy + local;
+            let f = v[i];
+            let pp = l.position(p);
+            let mut bits = own;
+            while bits != 0 {
+                let d = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let q = add(p, l.t.offsets[d]);
+                let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
+                let t = (iso - f) / (g - f);
+                out[w] = pp.lerp(l.position(q), t).to_array();
+                w += 1;
+            }
+        }
+    }
+}
+
+/// Geometry pass over one z-layer; returns the tetrahedra processed.
+fn geometry_layer(l: &Layout, k: usize, iso: f32, owned: &[u16], base: &[u32], positions: &[[f32; 3]], out: &mut Vec<u32>) -> usize {
+    let v = &l.s.values;
+    let [nx, ny, nz] = l.s.cells;
+    let mut processed = 0;
+    let mut tet = |anchor: usize, tpl: &TetTemplate, out: &mut Vec<u32>| {
+        let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
+        let val = idx.map(|i| v[i]);
+        let case = (val[0] < iso) as usize | ((val[1] < iso) as usize) << 1 | ((val[2] < iso) as usize) << 2 | ((val[3] < iso) as usize) << 3;
+        if case == 0 || case == 15 {
+            return;
+        }
+        processed += 1;
+        let cycle = &CASES[case];
+        let n = if cycle[3] == u8::MAX { 3 } else { 4 };
+        let mut ids = [0u32; 4];
+        for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
+            let (a, b) = TET_EDGES[e as usize];
+            let (o, d) = if owns(val[a], val[b], iso) { (idx[a], tpl.dir[a][b]) } else { (idx[b], tpl.dir[b][a]) };
+            *slot = base[o] + (owned[o] & ((1u16 << d) - 1)).count_ones();
+        }
+        if n == 3 {
+            out.extend_from_slice(&ids[..3]);
+        } else {
+            let p = |i: u32| glam::Vec3::from(positions[i as usize]);
+            if p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3])) {
+                out.extend_from_slice(&[ids[0], ids[1], ids[2], ids[0], ids[2], ids[3]]);
+            } else {
+                out.extend_from_slice(&[ids[1], ids[2], ids[3], ids[1], ids[3], ids[0]]);
+            }
+        }
+    };
+    match l.lattice {
+        Lattice::Simple => {
+            let s = l.s;
+            for j in 0..ny {
+                for i in 0..nx {
+                    let c = s.simple_index(i, j, k);
+                    let (sx, sy) = (s.dims[0], s.dims[0] * s.dims[1]);
+                    let corners = [c, c + 1, c + sx, c + sx + 1, c + sy, c + sy + 1, c + sy + sx, c + sy + sx + 1];
+                    let inside = corners.iter().filter(|&&i| v[i] < iso).count();
+                    if inside == 0 || inside == 8 {
+                        continue;
+                    }
+                    for tpl in &l.tets {
+                        tet(c, tpl, out);
+                    }
+                }
+            }
+        }
+        Lattice::BodyCentred => {
+            let k = k as i32;
+            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y.
+            let mut face = |a: Offset, axis: usize, out: &mut Vec<u32>| {
+                let anchor = l.s.bcdl_index(a);
+                let tpls = &l.tets[4 * axis..4 * axis + 4];
+                // The 6 points of the face's 4 tetrahedra: A, B and the 4 face corners.
+                let first = v[anchor] < iso;
+                let uniform = tpls.iter().all(|t| t.delta[1..].iter().all(|&d| (v[(anchor as isize + d) as usize] < iso) == first));
+                if uniform {
+                    return;
+                }
+                for tpl in tpls {
+                    tet(anchor, tpl, out);
+                }
+            };
+            for j in 0..ny as i32 {
+                for i in 0..nx as i32 {
+                    face([2 * i + 1, 2 * j + 1, 2 * k - 1], 2, out);
+                }
+            }
+            if (k as usize) < nz {
+                for j in 0..ny as i32 {
+                    for f in 0..=nx as i32 {
+                        face([2 * f - 1, 2 * j + 1, 2 * k + 1], 0, out);
+                    }
+                }
+                for f in 0..=ny as i32 {
+                    for i in 0..nx as i32 {
+                        face([2 * i + 1, 2 * f - 1, 2 * k + 1], 1, out);
+                    }
+                }
+            }
+        }
+    }
+    processed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tiny deterministic generator for the table test (no dependency needed).
+    fn lcg(state: &mut u64) -> f32 {
+        *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((*state >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    }
+
+    #[test]
+    fn case_table_orients_triangles_along_the_gradient() {
+        let mut s = 12345u64;
+        let mut checked = 0;
+        for _ in 0..2000 {
+            let mut p: [glam::Vec3; 4] = [0; 4].map(|_| glam::Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)));
+            let vol = (p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]));
+            if vol.abs() < 1e-3 {
+                continue;
+            }
+            if vol < 0.0 {
+                p.swap(2, 3);
+            }
+            let grad = glam::Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s));
+            let off = lcg(&mut s) * 0.5;
+            let f: Vec<f32> = p.iter().map(|q| q.dot(grad) + off).collect();
+            let case = (0..4).filter(|&i| f[i] < 0.0).fold(0, |c, i| c | 1 << i);
+            if case == 0 || case == 15 {
+                continue;
+            }
+            let cycle = &CASES[case];
+            let n = if cycle[3] == u8::MAX { 3 } else { 4 };
+            let pts: Vec<glam::Vec3> = cycle[..n]
+                .iter()
+                .map(|&e| {
+                    let (a, b) = TET_EDGES[e as usize];
+                    // Each edge of the cycle must really be crossed.
+                    assert_ne!(f[a] < 0.0, f[b] < 0.0, "case {case} edge {e} not crossed");
+                    p[a].lerp(p[b], f[a] / (f[a] - f[b]))
+                })
+                .collect();
+            for tri in [[0, 1, 2], [0, 2, 3]].iter().take(n - 2) {
+                let nrm = (pts[tri[1]] - pts[tri[0]]).cross(pts[tri[2]] - pts[tri[0]]);
+                if nrm.length() > 1e-6 {
+                    assert!(nrm.dot(grad) > 0.0, "case {case} faces against the gradient");
+                    checked += 1;
+                }
+            }
+            // Every crossed edge of the tetrahedron appears in the cycle.
+            let crossed = TET_EDGES.iter().filter(|(a, b)| (f[*a] < 0.0) != (f[*b] < 0.0)).count();
+            assert_eq!(crossed, n, "case {case}");
+        }
+        assert!(checked > 1000);
+    }
 }

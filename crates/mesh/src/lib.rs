@@ -1,13 +1,13 @@
 //! Indexed triangle meshes and what we measure on them.
 //!
 //! This crate owns the output type of every extractor in the workspace, [`Mesh`], and the checks
-//! that decide whether a mesh is fit for a game: [`validate`] (closed, manifold, consistently
+//! that decide whether a mesh is fit for a game: [`validate()`] (closed, manifold, consistently
 //! oriented, no duplicate or zero-area triangles, Euler characteristic, components) and
-//! [`quality`] (radius ratio, minimum angle, area statistics). It also reads and writes meshes
+//! [`quality()`] (radius ratio, minimum angle, area statistics). It also reads and writes meshes
 //! ([`io`]: binary and ASCII PLY, OBJ; OBJ input through `tobj`).
 //!
-//! It knows nothing about scalar fields or lattices: the extractor tells [`validate`] which points
-//! lie on the sampled domain's boundary through a closure.
+//! It knows nothing about scalar fields or lattices: the extractor tells [`validate()`] which
+//! points lie on the sampled domain's boundary through a closure.
 //!
 //! ```
 //! use rmt_mesh::Mesh;
@@ -23,6 +23,7 @@ pub mod io;
 pub mod quality;
 pub mod validate;
 
+pub use io::MeshIoError;
 pub use quality::{quality, QualityReport};
 pub use validate::{validate, ValidationReport};
 
@@ -46,7 +47,11 @@ pub struct Mesh {
 impl Mesh {
     /// A mesh from positions and a flat index list (no normals).
     pub fn from_triangles(positions: Vec<[f32; 3]>, indices: Vec<u32>) -> Self {
-        Self { positions, normals: Vec::new(), indices }
+        Self {
+            positions,
+            normals: Vec::new(),
+            indices,
+        }
     }
 
     /// Number of vertices.
@@ -75,7 +80,8 @@ impl Mesh {
     pub fn area(&self) -> f64 {
         self.triangles()
             .map(|t| {
-                let [a, b, c] = t.map(|i| glam::DVec3::from(self.positions[i as usize].map(f64::from)));
+                let [a, b, c] =
+                    t.map(|i| glam::DVec3::from(self.positions[i as usize].map(f64::from)));
                 (b - a).cross(c - a).length() * 0.5
             })
             .sum()
@@ -94,7 +100,8 @@ impl Mesh {
     pub fn compute_area_weighted_normals(&mut self) {
         let mut acc = vec![glam::Vec3::ZERO; self.positions.len()];
         for t in self.indices.chunks_exact(3) {
-            let [a, b, c] = [t[0], t[1], t[2]].map(|i| glam::Vec3::from(self.positions[i as usize]));
+            let [a, b, c] =
+                [t[0], t[1], t[2]].map(|i| glam::Vec3::from(self.positions[i as usize]));
             // The cross product's length is twice the area: weighting by area for free.
             let n = (b - a).cross(c - a);
             for &i in t {
@@ -102,6 +109,7 @@ impl Mesh {
             }
         }
         self.normals.clear();
-        self.normals.extend(acc.into_iter().map(|n| n.normalize_or_zero().to_array()));
+        self.normals
+            .extend(acc.into_iter().map(|n| n.normalize_or_zero().to_array()));
     }
 }

