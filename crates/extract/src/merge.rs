@@ -233,6 +233,12 @@ impl MergeBuffers {
         self.used.resize(self.boundary.len(), false);
         let mut cone = 0;
         let p = glam::Vec3::from(new_pos);
+        // Facing of the whole region, for triangles that were flat before the merge.
+        let mut region_normal = glam::Vec3::ZERO;
+        for &t in &self.region {
+            let [a, b, c] = self.tris[t as usize].map(|i| glam::Vec3::from(positions[i as usize]));
+            region_normal += (b - a).cross(c - a);
+        }
         for &t in &self.region {
             let tri = self.tris[t as usize];
             let inside = tri.iter().filter(|x| k.contains(x)).count();
@@ -248,9 +254,13 @@ impl MergeBuffers {
             cone += 1;
             // Geometry: the new triangle keeps the old one's facing and is not flat.
             let [pu, pw, px] = [u, w, x].map(|i| glam::Vec3::from(positions[i as usize]));
-            let old = (pu - px).cross(pw - px);
+            let mut old = (pu - px).cross(pw - px);
             let new = (pu - p).cross(pw - p);
             let longest = (pu - p).length_squared().max((pw - p).length_squared()).max((pw - pu).length_squared());
+            let old_longest = (pu - px).length_squared().max((pw - px).length_squared()).max((pw - pu).length_squared());
+            if old.length() <= 1e-6 * old_longest {
+                old = region_normal;
+            }
             if old.dot(new) <= 0.0 || new.length() <= 1e-6 * longest {
                 return Err(Reject::Flip);
             }

@@ -43,6 +43,9 @@ pub struct MtBuffers {
     triangles: Vec<u32>,
 }
 
+/// Edges shorter than this many grid spacings are welded after clustering (coincident crossings).
+const WELD: f32 = 1e-4;
+
 /// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
 const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
@@ -340,6 +343,14 @@ pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::Thre
             }
         }
         merge.finish(&mut mesh.positions, &mut mesh.indices);
+        if check {
+            // Surfaces through sample points leave crossings on top of each other where a
+            // cluster could not take them (near the box, or refused): weld those, under the same
+            // check, so no flat triangle is left inside the box.
+            let (welds, dropped) = crate::collapse::collapse_short_edges(merge, mesh, WELD * settings.grid.h());
+            stats.collapses += welds;
+            stats.discarded += dropped;
+        }
         stats.t_vertex_s += t.elapsed().as_secs_f64();
     } else {
         std::mem::swap(&mut mesh.indices, &mut buf.triangles);

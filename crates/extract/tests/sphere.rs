@@ -109,3 +109,57 @@ fn gyroid_topology_matches_between_lattices_and_modes() {
         }
     }
 }
+
+#[test]
+fn output_is_byte_identical_for_any_thread_count() {
+    let field = rmt_fields::Asteroid::new(Vec3::ZERO, rmt_fields::AsteroidParams::default());
+    for lattice in LATTICES {
+        for clustering in [Clustering::None, Clustering::Integrated, Clustering::IntegratedUnchecked, Clustering::Postprocessed] {
+            let mut meshes = Vec::new();
+            for threads in [1, 2, 8] {
+                let mut settings = rmt_extract::ExtractSettings::new(Grid::cube(40, 1.0), lattice, clustering);
+                settings.threads = threads;
+                let (mesh, stats, _) = run_settings(&field, &settings);
+                assert!(stats.triangles > 1000);
+                meshes.push(mesh);
+            }
+            assert!(meshes.windows(2).all(|w| w[0] == w[1]), "{lattice:?} {clustering:?}: output depends on threads");
+        }
+    }
+}
+
+#[test]
+fn a_reused_extractor_gives_the_same_mesh_as_a_fresh_one() {
+    let sphere = Sphere::new(Vec3::ZERO, 0.7);
+    let asteroid = rmt_fields::Asteroid::new(Vec3::ZERO, rmt_fields::AsteroidParams::default());
+    let mut reused = rmt_extract::Extractor::new();
+    for (field, n) in [(&sphere as &dyn ScalarField, 30), (&asteroid, 24), (&sphere, 18)] {
+        for lattice in LATTICES {
+            let settings = rmt_extract::ExtractSettings::new(Grid::cube(n, 1.0), lattice, Clustering::Integrated);
+            let mut a = rmt_mesh::Mesh::default();
+            let mut b = rmt_mesh::Mesh::default();
+            reused.extract(field, &settings, &mut a).expect("extracts");
+            rmt_extract::Extractor::new().extract(field, &settings, &mut b).expect("extracts");
+            assert_eq!(a, b);
+        }
+    }
+}
+
+#[test]
+fn bad_settings_and_non_finite_fields_are_errors_not_panics() {
+    let mut mesh = rmt_mesh::Mesh::default();
+    let mut ex = rmt_extract::Extractor::new();
+    let sphere = Sphere::new(Vec3::ZERO, 0.5);
+    let zero = rmt_extract::ExtractSettings::new(Grid::new([0, 4, 4], Vec3::splat(-1.0), Vec3::splat(1.0)), LATTICES[0], Clustering::None);
+    assert!(ex.extract(&sphere, &zero, &mut mesh).is_err());
+    let flipped = rmt_extract::ExtractSettings::new(Grid::new([4; 3], Vec3::splat(1.0), Vec3::splat(-1.0)), LATTICES[0], Clustering::None);
+    assert!(ex.extract(&sphere, &flipped, &mut mesh).is_err());
+    let huge = rmt_extract::ExtractSettings::new(Grid::cube(100_000, 1.0), LATTICES[0], Clustering::None);
+    assert!(matches!(ex.extract(&sphere, &huge, &mut mesh), Err(rmt_extract::ExtractError::TooLarge { .. })));
+    let nan = rmt_fields::FnField(|p: Vec3| if p.x > 0.5 { f32::NAN } else { p.length() - 0.5 });
+    for lattice in LATTICES {
+        let s = rmt_extract::ExtractSettings::new(Grid::cube(8, 1.0), lattice, Clustering::Integrated);
+        let err = ex.extract(&nan, &s, &mut mesh).expect_err("NaN is refused");
+        assert!(err.to_string().contains("not finite"), "{err}");
+    }
+}
