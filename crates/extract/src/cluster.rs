@@ -3,8 +3,9 @@
 //! A crossing is *nearby* for the sample point C when it lies closer to C than to the other end of
 //! its edge; C owns exactly its nearby crossings, so every crossing has one owner. The nearby
 //! crossings of C are grouped by the link graph (two crossings are joined when their far ends are
-//! themselves neighbours: the two edges bound one tetrahedron face). Each group ("island") of two
-//! or more crossings is a proposed cluster. The mask rules below are a cheap pre-filter; clusters
+//! themselves neighbours: the two edges bound one tetrahedron face). The islands are taken over all
+//! of C's crossed edges, each island being one sheet of surface near C; the nearby crossings of one
+//! sheet, when there are two or more, are a proposed cluster. The mask rules below are a cheap pre-filter; clusters
 //! that pass it are committed later only if the exact local check in [`crate::merge`] accepts them.
 
 use crate::lattice::LatticeTables;
@@ -41,13 +42,15 @@ impl ProposalCounts {
     }
 }
 
-/// Proposes the clusters of one point with all 14 neighbours present.
+/// Proposes the clusters of one point.
 ///
-/// `owned`: the point's nearby crossings; `crossed`: all its crossed edges (the neighbours on the
-/// other side of the threshold). `pinch_rule` adds the rule of `rmt-spec.md` that the
+/// `valid`: the neighbours whose edges exist (all 14 except on the box faces); `owned`: the
+/// point's nearby crossings; `crossed`: all its crossed edges (the neighbours on the other side of
+/// the threshold). `pinch_rule` adds the rule of `rmt-spec.md` that the
 /// dissertation did not have (a link edge AB with A, B crossed but outside the cluster and both
 /// of its shared neighbours inside the cluster would leave back-to-back triangles).
-pub fn propose(t: &LatticeTables, slot: u32, colour: u8, owned: u16, crossed: u16, pinch_rule: bool, out: &mut Vec<Candidate>) -> ProposalCounts {
+#[allow(clippy::too_many_arguments)]
+pub fn propose(t: &LatticeTables, slot: u32, colour: u8, valid: u16, owned: u16, crossed: u16, pinch_rule: bool, out: &mut Vec<Candidate>) -> ProposalCounts {
     let mut counts = ProposalCounts::default();
     if owned.count_ones() < 2 {
         return counts;
@@ -56,8 +59,13 @@ pub fn propose(t: &LatticeTables, slot: u32, colour: u8, owned: u16, crossed: u1
     let too_many = owned.count_ones() > 10;
     // Loops: if the neighbours whose edges are not nearby crossings fall apart into several
     // islands, merging would collapse a tube or a loop through the point.
-    let loops = t.islands(FULL & !owned).nth(1).is_some();
-    for island in t.islands(owned) {
+    let loops = t.islands(valid & !owned).nth(1).is_some();
+    // One cluster per sheet of surface passing the point: the crossed edges fall into islands
+    // of the link graph (each island is one sheet), and the point's nearby crossings of one sheet
+    // become one vertex. (Splitting by the nearby crossings alone would cut a sheet wherever the
+    // crossing joining two of them belongs to the neighbour, leaving many lone vertices.)
+    for sheet in t.islands(crossed) {
+        let island = sheet & owned;
         if island.count_ones() < 2 {
             continue;
         }
@@ -103,7 +111,7 @@ mod tests {
         // +x (0) with its adjacent diagonals 6 and 7; and -x (1) alone.
         let owned = (1 << 0) | (1 << 6) | (1 << 7) | (1 << 1);
         let mut out = Vec::new();
-        let c = propose(t, 5, 3, owned, owned, true, &mut out);
+        let c = propose(t, 5, 3, FULL, owned, owned, true, &mut out);
         assert_eq!(c.proposed, 1);
         assert_eq!(out.len() + c.rejected, 1);
     }
@@ -113,7 +121,7 @@ mod tests {
         let t = LatticeTables::get(Lattice::Simple);
         let owned = 0x07FF; // 11 crossings
         let mut out = Vec::new();
-        let c = propose(t, 0, 0, owned, owned, false, &mut out);
+        let c = propose(t, 0, 0, FULL, owned, owned, false, &mut out);
         assert!(out.is_empty());
         assert_eq!(c.rejected, c.proposed);
         assert!(c.proposed >= 1);
@@ -126,7 +134,7 @@ mod tests {
         let t = LatticeTables::get(Lattice::BodyCentred);
         let owned = 0x3FC0;
         let mut out = Vec::new();
-        let c = propose(t, 0, 0, owned, owned, false, &mut out);
+        let c = propose(t, 0, 0, FULL, owned, owned, false, &mut out);
         assert_eq!(c.proposed, 1);
         assert_eq!(c.rejected, 1);
         assert!(out.is_empty());
@@ -143,9 +151,9 @@ mod tests {
         assert!(t.is_connected(island));
         let crossed = island | (1 << 0) | (1 << 6);
         let mut out = Vec::new();
-        let with_rule = propose(t, 0, 0, island, crossed, true, &mut out);
+        let with_rule = propose(t, 0, 0, FULL, island, crossed, true, &mut out);
         assert_eq!(with_rule.rejected, 1);
-        let without = propose(t, 0, 0, island, crossed, false, &mut out);
+        let without = propose(t, 0, 0, FULL, island, crossed, false, &mut out);
         assert_eq!(without.rejected, 0);
         assert_eq!(out.len(), 1);
     }

@@ -18,9 +18,12 @@
 //! **Commit** (clustering): clusters are merged one lattice colour at a time, each only after the
 //! exact check of [`crate::merge`] (integrated) or without it (integrated-unchecked).
 //!
-//! Border rule: a point clusters only when all 14 of its neighbours are regular lattice points
-//! (inside the box, no ghost centres). Crossings on the box faces therefore never move, and the
-//! mesh stays closed wherever the surface stays inside the box.
+//! Border rule: points on the box faces (whose lattice edges are cut by the box) cluster too, with
+//! the missing neighbours counted as neither crossed nor uncrossed. A crossing that lies on the box
+//! face is a vertex of the mesh boundary, and the exact check refuses every cluster whose region
+//! reaches the mesh boundary through a merged vertex, so crossings on the box faces never move and
+//! the mesh stays closed wherever the surface stays inside the box. (The unchecked mode has no such
+//! guarantee; that is its point.)
 
 use rayon::prelude::*;
 use rmt_mesh::Mesh;
@@ -408,9 +411,9 @@ fn vertex_plane(l: &Layout, z: usize, iso: f32, propose: bool, pinch_rule: bool,
             owned[local] = own;
             counts.crossings += own.count_ones() as usize;
             counts.edges += valid.count_ones() as usize;
-            if propose && own.count_ones() >= 2 && valid == FULL && l.is_regular(p) {
+            if propose && own.count_ones() >= 2 {
                 let colour = lattice::colour(l.lattice, p) as u8;
-                counts.proposals.add(cluster::propose(l.t, i as u32, colour, own, crossed, pinch_rule, &mut cands));
+                counts.proposals.add(cluster::propose(l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands));
             }
         }
     }

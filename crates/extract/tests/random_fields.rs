@@ -73,7 +73,7 @@ fn field(n: usize) -> impl Strategy<Value = RandomField> {
         (vec3(0.3), 0.2f32..0.7, (0.3 * h)..(1.5 * h)).prop_map(|(c, r, t)| Family::Shell(c, r, t)),
         (vec3(0.2), 0.3f32..0.6, (0.3 * h)..(1.5 * h)).prop_map(|(c, r, t)| Family::Tube(c, r, t)),
     ];
-    (family, prop_oneof![3 => Just(0.0f32), 1 => (0.02f32..0.2)]).prop_map(|(family, quantum)| RandomField { family, quantum })
+    (family, prop_oneof![3 => Just(0.0f32), 1 => 0.02f32..0.2]).prop_map(|(family, quantum)| RandomField { family, quantum })
 }
 
 fn lattice() -> impl Strategy<Value = Lattice> {
