@@ -9,7 +9,12 @@ fn main() {
     let r = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1.0);
     let field = Sphere::new(glam::Vec3::ZERO, r);
     for lattice in [Lattice::BodyCentred, Lattice::Simple] {
-        for clustering in [Clustering::None, Clustering::Integrated, Clustering::IntegratedUnchecked, Clustering::Postprocessed] {
+        for clustering in [
+            Clustering::None,
+            Clustering::Integrated,
+            Clustering::IntegratedUnchecked,
+            Clustering::Postprocessed,
+        ] {
             let settings = ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);
             let mut mesh = Mesh::default();
             match Extractor::new().extract(&field, &settings, &mut mesh) {

@@ -19,10 +19,18 @@ fn main() {
     let asteroid = Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default());
     println!("| object | lattice | clustering | vertices | triangles | reduction | AR mean | AR p99 | fidelity mean/max (h) | sampling ms | vertex ms | geometry ms | normals ms | total ms | committed/proposed |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for (name, field) in [("sphere", &sphere as &dyn ScalarField), ("asteroid", &asteroid)] {
+    for (name, field) in [
+        ("sphere", &sphere as &dyn ScalarField),
+        ("asteroid", &asteroid),
+    ] {
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             let mut base = 0;
-            for clustering in [Clustering::None, Clustering::Integrated, Clustering::IntegratedUnchecked, Clustering::Postprocessed] {
+            for clustering in [
+                Clustering::None,
+                Clustering::Integrated,
+                Clustering::IntegratedUnchecked,
+                Clustering::Postprocessed,
+            ] {
                 let mut settings = ExtractSettings::new(Grid::cube(50, 1.0), lattice, clustering);
                 settings.threads = threads;
                 let mut ex = Extractor::new();

@@ -50,7 +50,16 @@ impl ProposalCounts {
 /// dissertation did not have (a link edge AB with A, B crossed but outside the cluster and both
 /// of its shared neighbours inside the cluster would leave back-to-back triangles).
 #[allow(clippy::too_many_arguments)]
-pub fn propose(t: &LatticeTables, slot: u32, colour: u8, valid: u16, owned: u16, crossed: u16, pinch_rule: bool, out: &mut Vec<Candidate>) -> ProposalCounts {
+pub fn propose(
+    t: &LatticeTables,
+    slot: u32,
+    colour: u8,
+    valid: u16,
+    owned: u16,
+    crossed: u16,
+    pinch_rule: bool,
+    out: &mut Vec<Candidate>,
+) -> ProposalCounts {
     let mut counts = ProposalCounts::default();
     if owned.count_ones() < 2 {
         return counts;
@@ -74,7 +83,11 @@ pub fn propose(t: &LatticeTables, slot: u32, colour: u8, valid: u16, owned: u16,
             counts.rejected += 1;
             continue;
         }
-        out.push(Candidate { slot, island, colour });
+        out.push(Candidate {
+            slot,
+            island,
+            colour,
+        });
     }
     counts
 }

@@ -10,7 +10,11 @@ use crate::merge::MergeBuffers;
 
 /// Collapses edges of `mesh` shorter than `max_len`, in order of increasing initial length (ties by
 /// vertex ids, so the result is deterministic). Returns (collapses done, triangles dropped).
-pub fn collapse_short_edges(merge: &mut MergeBuffers, mesh: &mut Mesh, max_len: f32) -> (usize, usize) {
+pub fn collapse_short_edges(
+    merge: &mut MergeBuffers,
+    mesh: &mut Mesh,
+    max_len: f32,
+) -> (usize, usize) {
     merge.load(mesh.positions.len(), &mesh.indices);
     let max2 = max_len * max_len;
     let pos = |p: &[[f32; 3]], i: u32| glam::Vec3::from(p[i as usize]);

@@ -44,8 +44,12 @@ impl LatticeTables {
         static BCDL: OnceLock<LatticeTables> = OnceLock::new();
         static SIMPLE: OnceLock<LatticeTables> = OnceLock::new();
         match lattice {
-            Lattice::BodyCentred => BCDL.get_or_init(|| Self::derive(bcdl_offsets(), bcdl_tetrahedra())),
-            Lattice::Simple => SIMPLE.get_or_init(|| Self::derive(simple_offsets(), simple_tetrahedra())),
+            Lattice::BodyCentred => {
+                BCDL.get_or_init(|| Self::derive(bcdl_offsets(), bcdl_tetrahedra()))
+            }
+            Lattice::Simple => {
+                SIMPLE.get_or_init(|| Self::derive(simple_offsets(), simple_tetrahedra()))
+            }
         }
     }
 
@@ -61,7 +65,12 @@ impl LatticeTables {
             }
             reverse[i] = index_of(neg(offsets[i])).map_or(u8::MAX, |r| r as u8);
         }
-        Self { offsets, link_masks, reverse, tetrahedra }
+        Self {
+            offsets,
+            link_masks,
+            reverse,
+            tetrahedra,
+        }
     }
 
     /// The neighbour index of offset `o`, if it is one.
@@ -126,7 +135,15 @@ fn bcdl_offsets() -> [Offset; 14] {
 /// Simple-cubic neighbours, in pairs `(v, -v)`; the tests check that this is exactly the set of
 /// edges of the Kuhn tetrahedra at a point.
 fn simple_offsets() -> [Offset; 14] {
-    const HALF: [Offset; 7] = [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, 0, 1], [0, 1, 1], [1, 1, 1]];
+    const HALF: [Offset; 7] = [
+        [1, 0, 0],
+        [0, 1, 0],
+        [0, 0, 1],
+        [1, 1, 0],
+        [1, 0, 1],
+        [0, 1, 1],
+        [1, 1, 1],
+    ];
     let mut o = [[0; 3]; 14];
     for (i, v) in HALF.iter().enumerate() {
         o[2 * i] = *v;
@@ -161,7 +178,14 @@ fn bcdl_tetrahedra() -> Vec<[Offset; 4]> {
 
 /// Kuhn's 6 tetrahedra of the unit cube, corner `n = x + 2y + 4z`, all around the diagonal 0-7.
 fn simple_tetrahedra() -> Vec<[Offset; 4]> {
-    const CORNERS: [[usize; 4]; 6] = [[0, 1, 3, 7], [0, 3, 2, 7], [0, 2, 6, 7], [0, 6, 4, 7], [0, 4, 5, 7], [0, 5, 1, 7]];
+    const CORNERS: [[usize; 4]; 6] = [
+        [0, 1, 3, 7],
+        [0, 3, 2, 7],
+        [0, 2, 6, 7],
+        [0, 6, 4, 7],
+        [0, 4, 5, 7],
+        [0, 5, 1, 7],
+    ];
     let corner = |n: usize| [(n & 1) as i32, ((n >> 1) & 1) as i32, ((n >> 2) & 1) as i32];
     CORNERS.iter().map(|c| c.map(corner)).collect()
 }
@@ -180,7 +204,8 @@ pub fn det(t: &[Offset; 4]) -> i64 {
     let u = sub(b, a).map(i64::from);
     let v = sub(c, a).map(i64::from);
     let w = sub(d, a).map(i64::from);
-    u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])
+    u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
+        + u[2] * (v[0] * w[1] - v[1] * w[0])
 }
 
 /// The colour of a lattice point: no two neighbours share one, so clusters at points of one colour
@@ -188,7 +213,12 @@ pub fn det(t: &[Offset; 4]) -> i64 {
 #[inline]
 pub fn colour(lattice: Lattice, p: Offset) -> usize {
     match lattice {
-        Lattice::BodyCentred => ((p[0] & 1) as usize) * 8 + ((p[0] >> 1) & 1) as usize + 2 * ((p[1] >> 1) & 1) as usize + 4 * ((p[2] >> 1) & 1) as usize,
+        Lattice::BodyCentred => {
+            ((p[0] & 1) as usize) * 8
+                + ((p[0] >> 1) & 1) as usize
+                + 2 * ((p[1] >> 1) & 1) as usize
+                + 4 * ((p[2] >> 1) & 1) as usize
+        }
         Lattice::Simple => (p[0] & 1) as usize + 2 * (p[1] & 1) as usize + 4 * (p[2] & 1) as usize,
     }
 }
@@ -206,8 +236,14 @@ mod tests {
     use super::*;
     use std::collections::HashMap;
 
-    const BCDL_MASKS: [u16; 14] = [0x03C0, 0x3C00, 0x0CC0, 0x3300, 0x1540, 0x2A80, 0x0595, 0x0A65, 0x1259, 0x21A9, 0x1856, 0x24A6, 0x251A, 0x1A2A];
-    const SIMPLE_MASKS: [u16; 14] = [0x1968, 0x2694, 0x1662, 0x2991, 0x158A, 0x2A45, 0x1025, 0x201A, 0x1019, 0x2026, 0x1016, 0x2029, 0x0555, 0x0AAA];
+    const BCDL_MASKS: [u16; 14] = [
+        0x03C0, 0x3C00, 0x0CC0, 0x3300, 0x1540, 0x2A80, 0x0595, 0x0A65, 0x1259, 0x21A9, 0x1856,
+        0x24A6, 0x251A, 0x1A2A,
+    ];
+    const SIMPLE_MASKS: [u16; 14] = [
+        0x1968, 0x2694, 0x1662, 0x2991, 0x158A, 0x2A45, 0x1025, 0x201A, 0x1019, 0x2026, 0x1016,
+        0x2029, 0x0555, 0x0AAA,
+    ];
 
     fn both() -> [(Lattice, &'static LatticeTables); 2] {
         [Lattice::BodyCentred, Lattice::Simple].map(|l| (l, LatticeTables::get(l)))
@@ -215,7 +251,10 @@ mod tests {
 
     #[test]
     fn link_masks_match_the_spec() {
-        assert_eq!(LatticeTables::get(Lattice::BodyCentred).link_masks, BCDL_MASKS);
+        assert_eq!(
+            LatticeTables::get(Lattice::BodyCentred).link_masks,
+            BCDL_MASKS
+        );
         assert_eq!(LatticeTables::get(Lattice::Simple).link_masks, SIMPLE_MASKS);
     }
 
@@ -309,7 +348,14 @@ mod tests {
                 Lattice::BodyCentred => 4,
                 Lattice::Simple => 1,
             };
-            assert_eq!(t.tetrahedra.len(), if lattice == Lattice::BodyCentred { 12 } else { 6 });
+            assert_eq!(
+                t.tetrahedra.len(),
+                if lattice == Lattice::BodyCentred {
+                    12
+                } else {
+                    6
+                }
+            );
             for tet in &t.tetrahedra {
                 assert_eq!(det(tet), want, "{lattice:?} {tet:?}");
             }
@@ -333,13 +379,18 @@ mod tests {
                     key.sort();
                     // Parity of the permutation from f to sorted order gives the orientation sign.
                     let perm = f.map(|v| key.iter().position(|&k| k == v).unwrap_or(0));
-                    let inversions = (perm[0] > perm[1]) as i32 + (perm[0] > perm[2]) as i32 + (perm[1] > perm[2]) as i32;
+                    let inversions = (perm[0] > perm[1]) as i32
+                        + (perm[0] > perm[2]) as i32
+                        + (perm[1] > perm[2]) as i32;
                     *faces.entry(key).or_default() += if inversions % 2 == 0 { 1 } else { -1 };
                 }
                 for i in 0..4 {
                     for j in 0..4 {
                         if i != j {
-                            assert!(t.direction(sub(tet[j], tet[i])).is_some(), "{lattice:?}: tetrahedron edge is not a neighbour offset");
+                            assert!(
+                                t.direction(sub(tet[j], tet[i])).is_some(),
+                                "{lattice:?}: tetrahedron edge is not a neighbour offset"
+                            );
                         }
                     }
                 }
@@ -354,7 +405,10 @@ mod tests {
             for (key, sum) in &faces {
                 if key.iter().all(interior) {
                     interior_faces += 1;
-                    assert_eq!(*sum, 0, "{lattice:?}: interior face {key:?} not paired oppositely");
+                    assert_eq!(
+                        *sum, 0,
+                        "{lattice:?}: interior face {key:?} not paired oppositely"
+                    );
                 } else {
                     assert!(sum.abs() <= 1);
                 }
@@ -377,7 +431,10 @@ mod tests {
                 }
             }
         }
-        let offsets: std::collections::BTreeSet<_> = LatticeTables::get(Lattice::Simple).offsets.into_iter().collect();
+        let offsets: std::collections::BTreeSet<_> = LatticeTables::get(Lattice::Simple)
+            .offsets
+            .into_iter()
+            .collect();
         assert_eq!(edges, offsets);
     }
 
@@ -397,7 +454,10 @@ mod tests {
                     }
                 }
             }
-            let offsets: std::collections::BTreeSet<_> = LatticeTables::get(Lattice::BodyCentred).offsets.into_iter().collect();
+            let offsets: std::collections::BTreeSet<_> = LatticeTables::get(Lattice::BodyCentred)
+                .offsets
+                .into_iter()
+                .collect();
             assert_eq!(edges, offsets);
             assert_eq!(count, 24, "each point lies in 24 tetrahedra");
         }
@@ -410,7 +470,11 @@ mod tests {
                 if lattice == Lattice::Simple || (p[0] & 1 == p[1] & 1 && p[1] & 1 == p[2] & 1) {
                     for o in t.offsets {
                         let q = [p[0] + o[0], p[1] + o[1], p[2] + o[2]];
-                        assert_ne!(colour(lattice, p), colour(lattice, q), "{lattice:?} {p:?} {q:?}");
+                        assert_ne!(
+                            colour(lattice, p),
+                            colour(lattice, q),
+                            "{lattice:?} {p:?} {q:?}"
+                        );
                         assert!(colour(lattice, q) < colour_count(lattice));
                     }
                 }

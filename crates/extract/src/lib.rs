@@ -58,7 +58,9 @@ pub enum ExtractError {
     #[error("invalid settings: {0}")]
     InvalidSettings(String),
     /// The lattice would not fit in memory.
-    #[error("grid of {cells:?} cells is too large: its lattice would exceed {limit} sample points")]
+    #[error(
+        "grid of {cells:?} cells is too large: its lattice would exceed {limit} sample points"
+    )]
     TooLarge {
         /// The requested cells per axis.
         cells: [usize; 3],
@@ -107,14 +109,20 @@ impl Extractor {
     }
 
     /// The thread pool for `threads` workers, built once and kept.
-    pub(crate) fn pool(&mut self, threads: usize) -> Result<std::sync::Arc<rayon::ThreadPool>, ExtractError> {
+    pub(crate) fn pool(
+        &mut self,
+        threads: usize,
+    ) -> Result<std::sync::Arc<rayon::ThreadPool>, ExtractError> {
         if let Some((_, p)) = self.pools.iter().find(|(n, _)| *n == threads) {
             return Ok(p.clone());
         }
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
-            .map_err(|e| ExtractError::ThreadPool { threads, message: e.to_string() })?;
+            .map_err(|e| ExtractError::ThreadPool {
+                threads,
+                message: e.to_string(),
+            })?;
         let pool = std::sync::Arc::new(pool);
         self.pools.push((threads, pool.clone()));
         Ok(pool)
@@ -122,7 +130,12 @@ impl Extractor {
 
     /// Samples `field` and extracts its surface into `mesh` (cleared first; its allocations are
     /// reused). Returns the counters and stage timings.
-    pub fn extract(&mut self, field: &dyn ScalarField, settings: &ExtractSettings, mesh: &mut Mesh) -> Result<Stats, ExtractError> {
+    pub fn extract(
+        &mut self,
+        field: &dyn ScalarField,
+        settings: &ExtractSettings,
+        mesh: &mut Mesh,
+    ) -> Result<Stats, ExtractError> {
         let start = std::time::Instant::now();
         settings.check()?;
         let mut stats = Stats::default();
@@ -136,7 +149,11 @@ impl Extractor {
     /// Extracts from values already in [`Extractor::samples_mut`] (laid out for `settings`, see
     /// [`Samples::prepare`]), without sampling: for benchmarks that exclude sampling and for
     /// edited volumes. Gradient normals need a field, so they are skipped here.
-    pub fn extract_presampled(&mut self, settings: &ExtractSettings, mesh: &mut Mesh) -> Result<Stats, ExtractError> {
+    pub fn extract_presampled(
+        &mut self,
+        settings: &ExtractSettings,
+        mesh: &mut Mesh,
+    ) -> Result<Stats, ExtractError> {
         let start = std::time::Instant::now();
         settings.check()?;
         let mut stats = Stats::default();
@@ -158,7 +175,13 @@ impl Extractor {
         &self.samples
     }
 
-    fn mesh_samples(&mut self, field: Option<&dyn ScalarField>, settings: &ExtractSettings, mesh: &mut Mesh, stats: &mut Stats) -> Result<(), ExtractError> {
+    fn mesh_samples(
+        &mut self,
+        field: Option<&dyn ScalarField>,
+        settings: &ExtractSettings,
+        mesh: &mut Mesh,
+        stats: &mut Stats,
+    ) -> Result<(), ExtractError> {
         let pool = self.pool(settings.threads)?;
         mesh.clear();
         match settings.method {
@@ -172,7 +195,15 @@ impl Extractor {
                 mc::extract(&self.samples, settings, &pool, mesh, stats);
             }
             settings::Method::Mt => {
-                mt::extract(&self.samples, settings, &pool, &mut self.mt, &mut self.merge, mesh, stats)?;
+                mt::extract(
+                    &self.samples,
+                    settings,
+                    &pool,
+                    &mut self.mt,
+                    &mut self.merge,
+                    mesh,
+                    stats,
+                )?;
             }
         }
         let t = std::time::Instant::now();

@@ -32,13 +32,19 @@ pub fn on_box_boundary(grid: &Grid, p: [f32; 3]) -> bool {
     let eps = grid.h() * 1e-5;
     let p = Vec3::from(p);
     let inside = p.cmpge(grid.min - eps).all() && p.cmple(grid.max + eps).all();
-    let on_face = (p - grid.min).abs().min_element() <= eps || (grid.max - p).abs().min_element() <= eps;
+    let on_face =
+        (p - grid.min).abs().min_element() <= eps || (grid.max - p).abs().min_element() <= eps;
     inside && on_face
 }
 
 /// Validates and measures `mesh`, extracted with `settings`; `field` gives fidelity when it knows
 /// its surface distance.
-pub fn measure(mesh: &Mesh, stats: &Stats, field: Option<&dyn ScalarField>, settings: &ExtractSettings) -> Measurement {
+pub fn measure(
+    mesh: &Mesh,
+    stats: &Stats,
+    field: Option<&dyn ScalarField>,
+    settings: &ExtractSettings,
+) -> Measurement {
     let grid = settings.grid;
     let validation = validate(mesh, &|p| on_box_boundary(&grid, p));
     let quality = quality(mesh);
@@ -46,7 +52,13 @@ pub fn measure(mesh: &Mesh, stats: &Stats, field: Option<&dyn ScalarField>, sett
         Some((mean, max)) => (Some(mean), Some(max)),
         None => (None, None),
     };
-    Measurement { stats: stats.clone(), validation, quality, fidelity_mean_h, fidelity_max_h }
+    Measurement {
+        stats: stats.clone(),
+        validation,
+        quality,
+        fidelity_mean_h,
+        fidelity_max_h,
+    }
 }
 
 /// Mean and max vertex distance to the field's surface in units of `h`.

@@ -37,6 +37,16 @@ pub enum Reject {
     Flip,
 }
 
+/// Working memory of one check; one per thread when checks run in parallel.
+#[derive(Default)]
+pub struct Scratch {
+    region: Vec<u32>,
+    edges: Vec<(u32, u32)>,
+    verts: Vec<u32>,
+    boundary: Vec<(u32, u32)>,
+    used: Vec<bool>,
+}
+
 /// A triangle mesh prepared for merges, with buffers kept between extractions.
 #[derive(Default)]
 pub struct MergeBuffers {
@@ -49,19 +59,15 @@ pub struct MergeBuffers {
     next_member: Vec<u32>,
     /// The vertex an original vertex has been merged into (itself if none).
     rep: Vec<u32>,
-    // Scratch of one check.
-    region: Vec<u32>,
-    edges: Vec<(u32, u32)>,
-    verts: Vec<u32>,
-    boundary: Vec<(u32, u32)>,
-    used: Vec<bool>,
+    scratch: Scratch,
 }
 
 impl MergeBuffers {
     /// Loads `vertex_count` vertices and the triangles `indices` (three per triangle).
     pub fn load(&mut self, vertex_count: usize, indices: &[u32]) {
         self.tris.clear();
-        self.tris.extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+        self.tris
+            .extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
         self.alive.clear();
         self.alive.resize(self.tris.len(), true);
         self.inc_start.clear();
@@ -89,7 +95,9 @@ impl MergeBuffers {
 
     /// Bytes held by the adjacency structures.
     pub fn bytes(&self) -> usize {
-        self.tris.len() * 12 + self.alive.len() + (self.inc_start.len() + self.inc.len() + self.next_member.len() + self.rep.len()) * 4
+        self.tris.len() * 12
+            + self.alive.len()
+            + (self.inc_start.len() + self.inc.len() + self.next_member.len() + self.rep.len()) * 4
     }
 
     /// The vertex that original vertex `v` now belongs to.
@@ -107,23 +115,19 @@ impl MergeBuffers {
         self.tris[t]
     }
 
-    /// Collects the live triangles touching any vertex of `k` into `self.region`, sorted.
-    fn collect_region(&mut self, k: &[u32]) {
-        self.region.clear();
+    /// Collects the live triangles touching any vertex of `k` into `region`, sorted.
+    fn collect_region(&self, k: &[u32], region: &mut Vec<u32>) {
+        region.clear();
         for &c in k {
             let mut m = c;
             while m != NONE {
                 let (a, b) = (self.inc_start[m as usize] as usize, self.inc_start[m as usize + 1] as usize);
-                for &t in &self.inc[a..b] {
-                    if self.alive[t as usize] {
-                        self.region.push(t);
-                    }
-                }
+                region.extend(self.inc[a..b].iter().filter(|&&t| self.alive[t as usize]));
                 m = self.next_member[m as usize];
             }
         }
-        self.region.sort_unstable();
-        self.region.dedup();
+        region.sort_unstable();
+        region.dedup();
     }
 
     /// Merges the current vertices `k` (at least two, connected through mesh edges) into `k[0]`,
@@ -131,14 +135,28 @@ impl MergeBuffers {
     /// doc) and leaves everything unchanged; without it, merges anyway (the dissertation's
     /// behaviour). Returns the number of triangles dropped.
     pub fn merge(&mut self, positions: &mut [[f32; 3]], k: &[u32], new_pos: [f32; 3], check: bool) -> Result<usize, Reject> {
-        self.collect_region(k);
-        if check {
-            self.check(positions, k, new_pos)?;
-        }
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let result = if check { self.check(&mut scratch, positions, k, new_pos) } else { Ok(()) };
+        let result = result.map(|()| self.apply(positions, k, new_pos, &mut scratch.region));
+        self.scratch = scratch;
+        result
+    }
+
+    /// The exact check alone. It only reads, so clusters that share no triangle can be checked in
+    /// parallel, each with its own `scratch`.
+    pub fn check(&self, scratch: &mut Scratch, positions: &[[f32; 3]], k: &[u32], new_pos: [f32; 3]) -> Result<(), Reject> {
+        self.collect_region(k, &mut scratch.region);
+        self.check_region(scratch, positions, k, new_pos)
+    }
+
+    /// Merges `k` into `k[0]` at `new_pos` without checking; returns the triangles dropped.
+    /// `region` is working memory.
+    pub fn apply(&mut self, positions: &mut [[f32; 3]], k: &[u32], new_pos: [f32; 3], region: &mut Vec<u32>) -> usize {
+        self.collect_region(k, region);
         let v = k[0];
         positions[v as usize] = new_pos;
         let mut dropped = 0;
-        for &t in &self.region {
+        for &t in region.iter() {
             let tri = &mut self.tris[t as usize];
             let mut inside = 0;
             for x in tri.iter_mut() {
@@ -166,80 +184,84 @@ impl MergeBuffers {
                 m = self.next_member[m as usize];
             }
         }
-        Ok(dropped)
+        dropped
     }
 
-    fn check(&mut self, positions: &[[f32; 3]], k: &[u32], new_pos: [f32; 3]) -> Result<(), Reject> {
+    fn check_region(&self, sc: &mut Scratch, positions: &[[f32; 3]], k: &[u32], new_pos: [f32; 3]) -> Result<(), Reject> {
         // Directed edges and vertices of R.
-        self.edges.clear();
-        self.verts.clear();
-        for &t in &self.region {
+        sc.edges.clear();
+        sc.verts.clear();
+        for &t in &sc.region {
             let tri = self.tris[t as usize];
             for e in 0..3 {
-                self.edges.push((tri[e], tri[(e + 1) % 3]));
-                self.verts.push(tri[e]);
+                sc.edges.push((tri[e], tri[(e + 1) % 3]));
+                sc.verts.push(tri[e]);
             }
         }
-        self.edges.sort_unstable();
-        if self.edges.windows(2).any(|w| w[0] == w[1]) {
+        sc.edges.sort_unstable();
+        if sc.edges.windows(2).any(|w| w[0] == w[1]) {
             // Two triangles traverse one edge the same way: already broken, do not touch.
             return Err(Reject::NotADisc);
         }
-        self.verts.sort_unstable();
-        self.verts.dedup();
-        self.boundary.clear();
-        for &(a, b) in &self.edges {
-            if self.edges.binary_search(&(b, a)).is_err() {
-                self.boundary.push((a, b));
+        sc.verts.sort_unstable();
+        sc.verts.dedup();
+        sc.boundary.clear();
+        for &(a, b) in &sc.edges {
+            if sc.edges.binary_search(&(b, a)).is_err() {
+                sc.boundary.push((a, b));
             }
         }
-        let d = self.edges.len() as i64;
-        let b = self.boundary.len() as i64;
-        let euler = self.verts.len() as i64 - (d + b) / 2 + self.region.len() as i64;
+        let d = sc.edges.len() as i64;
+        let b = sc.boundary.len() as i64;
+        let euler = sc.verts.len() as i64 - (d + b) / 2 + sc.region.len() as i64;
         if euler != 1 || b < 3 {
             return Err(Reject::NotADisc);
         }
         // The boundary must be one simple cycle avoiding K: each vertex starts exactly one
         // boundary edge, and walking from the first edge visits all of them.
-        if self.boundary.iter().any(|(a, b)| k.contains(a) || k.contains(b)) {
+        if sc
+            .boundary
+            .iter()
+            .any(|(a, b)| k.contains(a) || k.contains(b))
+        {
             return Err(Reject::NotADisc);
         }
         // `boundary` is sorted by start vertex (it was filtered from sorted `edges`).
-        if self.boundary.windows(2).any(|w| w[0].0 == w[1].0) {
+        if sc.boundary.windows(2).any(|w| w[0].0 == w[1].0) {
             return Err(Reject::NotADisc);
         }
-        let start = self.boundary[0];
+        let start = sc.boundary[0];
         let mut cur = start;
         let mut steps = 1;
         loop {
-            let next = match self.boundary.binary_search_by_key(&cur.1, |e| e.0) {
-                Ok(i) => self.boundary[i],
+            let next = match sc.boundary.binary_search_by_key(&cur.1, |e| e.0) {
+                Ok(i) => sc.boundary[i],
                 Err(_) => return Err(Reject::NotADisc),
             };
             if next == start {
                 break;
             }
             steps += 1;
-            if steps > self.boundary.len() {
+            if steps > sc.boundary.len() {
                 return Err(Reject::NotADisc);
             }
             cur = next;
         }
-        if steps != self.boundary.len() {
+        if steps != sc.boundary.len() {
             return Err(Reject::NotADisc);
         }
         // The surviving triangles must be exactly the cone over the boundary cycle.
-        self.used.clear();
-        self.used.resize(self.boundary.len(), false);
+        sc.used.clear();
+        sc.used.resize(sc.boundary.len(), false);
         let mut cone = 0;
         let p = glam::Vec3::from(new_pos);
         // Facing of the whole region, for triangles that were flat before the merge.
         let mut region_normal = glam::Vec3::ZERO;
-        for &t in &self.region {
+        for &t in &sc.region {
             let [a, b, c] = self.tris[t as usize].map(|i| glam::Vec3::from(positions[i as usize]));
             region_normal += (b - a).cross(c - a);
         }
-        for &t in &self.region {
+        for &t in &sc.region {
             let tri = self.tris[t as usize];
             let inside = tri.iter().filter(|x| k.contains(x)).count();
             if inside != 1 {
@@ -247,8 +269,11 @@ impl MergeBuffers {
             }
             let r = tri.iter().position(|x| k.contains(x)).unwrap_or(0);
             let (x, u, w) = (tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]);
-            let i = self.boundary.binary_search(&(u, w)).map_err(|_| Reject::NotACone)?;
-            if std::mem::replace(&mut self.used[i], true) {
+            let i = sc
+                .boundary
+                .binary_search(&(u, w))
+                .map_err(|_| Reject::NotACone)?;
+            if std::mem::replace(&mut sc.used[i], true) {
                 return Err(Reject::NotACone);
             }
             cone += 1;
@@ -256,8 +281,14 @@ impl MergeBuffers {
             let [pu, pw, px] = [u, w, x].map(|i| glam::Vec3::from(positions[i as usize]));
             let mut old = (pu - px).cross(pw - px);
             let new = (pu - p).cross(pw - p);
-            let longest = (pu - p).length_squared().max((pw - p).length_squared()).max((pw - pu).length_squared());
-            let old_longest = (pu - px).length_squared().max((pw - px).length_squared()).max((pw - pu).length_squared());
+            let longest = (pu - p)
+                .length_squared()
+                .max((pw - p).length_squared())
+                .max((pw - pu).length_squared());
+            let old_longest = (pu - px)
+                .length_squared()
+                .max((pw - px).length_squared())
+                .max((pw - pu).length_squared());
             if old.length() <= 1e-6 * old_longest {
                 old = region_normal;
             }
@@ -265,7 +296,7 @@ impl MergeBuffers {
                 return Err(Reject::Flip);
             }
         }
-        if cone != self.boundary.len() {
+        if cone != sc.boundary.len() {
             return Err(Reject::NotACone);
         }
         Ok(())
@@ -309,8 +340,17 @@ mod tests {
 
     /// An octahedron: 6 vertices, 8 outward triangles.
     fn octahedron() -> (Vec<[f32; 3]>, Vec<u32>) {
-        let p = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
-        let idx = vec![0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+        let p = vec![
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let idx = vec![
+            0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5,
+        ];
         (p, idx)
     }
 
@@ -318,12 +358,20 @@ mod tests {
     fn merging_an_edge_of_a_tetrahedron_is_refused() {
         // The result would be two triangles back to back: the region is the whole closed
         // surface, not a disc.
-        let mut p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let mut p = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
         let idx = vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3];
         let mut m = MergeBuffers::default();
         m.load(p.len(), &idx);
         let before = p.clone();
-        assert_eq!(m.merge(&mut p, &[0, 1], [0.5, 0.0, 0.0], true), Err(Reject::NotADisc));
+        assert_eq!(
+            m.merge(&mut p, &[0, 1], [0.5, 0.0, 0.0], true),
+            Err(Reject::NotADisc)
+        );
         assert_eq!(p, before, "a refused merge changes nothing");
     }
 
@@ -349,14 +397,21 @@ mod tests {
         let mut mid = std::collections::HashMap::new();
         let mut midpoint = |a: u32, b: u32, p: &mut Vec<[f32; 3]>| -> u32 {
             *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let (x, y) = (glam::Vec3::from(p[a as usize]), glam::Vec3::from(p[b as usize]));
+                let (x, y) = (
+                    glam::Vec3::from(p[a as usize]),
+                    glam::Vec3::from(p[b as usize]),
+                );
                 p.push(((x + y) * 0.5).normalize().to_array());
                 (p.len() - 1) as u32
             })
         };
         for t in idx0.chunks_exact(3) {
             let (a, b, c) = (t[0], t[1], t[2]);
-            let (ab, bc, ca) = (midpoint(a, b, &mut p), midpoint(b, c, &mut p), midpoint(c, a, &mut p));
+            let (ab, bc, ca) = (
+                midpoint(a, b, &mut p),
+                midpoint(b, c, &mut p),
+                midpoint(c, a, &mut p),
+            );
             idx.extend([a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca]);
         }
         let mut m = MergeBuffers::default();

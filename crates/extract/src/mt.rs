@@ -109,7 +109,9 @@ impl<'a> Layout<'a> {
         let idx = |p: Offset| -> isize {
             match lattice {
                 Lattice::BodyCentred => s.bcdl_index(p) as isize,
-                Lattice::Simple => s.simple_index(p[0] as usize, p[1] as usize, p[2] as usize) as isize,
+                Lattice::Simple => {
+                    s.simple_index(p[0] as usize, p[1] as usize, p[2] as usize) as isize
+                }
             }
         };
         // Reference points far enough from the border for every offset to stay in storage.
@@ -130,12 +132,19 @@ impl<'a> Layout<'a> {
             .tetrahedra
             .iter()
             .map(|tet| {
-                let mut tpl = TetTemplate { delta: [0; 4], dir: [[0; 4]; 4] };
+                let mut tpl = TetTemplate {
+                    delta: [0; 4],
+                    dir: [[0; 4]; 4],
+                };
                 for i in 0..4 {
                     tpl.delta[i] = idx(add(r, tet[i])) - idx(r);
                     for j in 0..4 {
                         if i != j {
-                            let o = [tet[j][0] - tet[i][0], tet[j][1] - tet[i][1], tet[j][2] - tet[i][2]];
+                            let o = [
+                                tet[j][0] - tet[i][0],
+                                tet[j][1] - tet[i][1],
+                                tet[j][2] - tet[i][2],
+                            ];
                             tpl.dir[i][j] = t.direction(o).map_or(u8::MAX, |d| d as u8);
                         }
                     }
@@ -143,7 +152,13 @@ impl<'a> Layout<'a> {
                 tpl
             })
             .collect();
-        Self { s, lattice, t, delta, tets }
+        Self {
+            s,
+            lattice,
+            t,
+            delta,
+            tets,
+        }
     }
 
     /// Lattice coordinates of storage slot (sx, sy) of plane z, and whether the point exists.
@@ -163,7 +178,9 @@ impl<'a> Layout<'a> {
     fn position(&self, p: Offset) -> glam::Vec3 {
         match self.lattice {
             Lattice::BodyCentred => self.s.bcdl_position(p),
-            Lattice::Simple => self.s.simple_position(p[0] as usize, p[1] as usize, p[2] as usize),
+            Lattice::Simple => self
+                .s
+                .simple_position(p[0] as usize, p[1] as usize, p[2] as usize),
         }
     }
 
@@ -196,7 +213,9 @@ impl<'a> Layout<'a> {
             let ok = match self.lattice {
                 Lattice::Simple => (0..3).all(|a| q[a] >= 0 && q[a] <= self.max_coord(a)),
                 // Ghost centres connect to real points only.
-                Lattice::BodyCentred => self.s.bcdl_exists(q) && !(self.is_ghost(p) && self.is_ghost(q)),
+                Lattice::BodyCentred => {
+                    self.s.bcdl_exists(q) && !(self.is_ghost(p) && self.is_ghost(q))
+                }
             };
             if ok {
                 mask |= 1 << d;
@@ -223,12 +242,23 @@ struct PlaneCounts {
 }
 
 /// Extracts the surface of `samples` with marching tetrahedra (and clustering) into `mesh`.
-pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::ThreadPool, buf: &mut MtBuffers, merge: &mut MergeBuffers, mesh: &mut Mesh, stats: &mut Stats) -> Result<(), ExtractError> {
+pub fn extract(
+    samples: &Samples,
+    settings: &ExtractSettings,
+    pool: &rayon::ThreadPool,
+    buf: &mut MtBuffers,
+    merge: &mut MergeBuffers,
+    mesh: &mut Mesh,
+    stats: &mut Stats,
+) -> Result<(), ExtractError> {
     let lattice = settings.lattice;
     let layout = Layout::new(samples, lattice);
     let iso = settings.iso;
     let clustering = settings.clustering;
-    let propose = matches!(clustering, Clustering::Integrated | Clustering::IntegratedUnchecked);
+    let propose = matches!(
+        clustering,
+        Clustering::Integrated | Clustering::IntegratedUnchecked
+    );
 
     // Allocation: per-slot tables sized to the sample array.
     let t = std::time::Instant::now();
@@ -246,7 +276,16 @@ pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::Thre
         buf.owned
             .par_chunks_mut(plane)
             .enumerate()
-            .map(|(z, owned)| vertex_plane(&layout, z, iso, propose, clustering == Clustering::Integrated, owned))
+            .map(|(z, owned)| {
+                vertex_plane(
+                    &layout,
+                    z,
+                    iso,
+                    propose,
+                    clustering == Clustering::Integrated,
+                    owned,
+                )
+            })
             .collect()
     });
     let mut starts = Vec::with_capacity(per_plane.len() + 1);
@@ -262,7 +301,10 @@ pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::Thre
     stats.edges /= 2;
     stats.crossings = total;
     if total > u32::MAX as usize - 1 {
-        return Err(ExtractError::TooLarge { cells: samples.cells, limit: u32::MAX as usize });
+        return Err(ExtractError::TooLarge {
+            cells: samples.cells,
+            limit: u32::MAX as usize,
+        });
     }
     // Step 2: number the crossings and place them.
     mesh.positions.resize(total, [0.0; 3]);
@@ -276,9 +318,21 @@ pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::Thre
         }
         let owned = &buf.owned;
         pool.install(|| {
-            buf.base.par_chunks_mut(plane).zip(chunks.into_par_iter()).enumerate().for_each(|(z, (base, out))| {
-                number_plane(&layout, z, iso, &owned[z * plane..(z + 1) * plane], starts[z] as u32, base, out);
-            })
+            buf.base
+                .par_chunks_mut(plane)
+                .zip(chunks.into_par_iter())
+                .enumerate()
+                .for_each(|(z, (base, out))| {
+                    number_plane(
+                        &layout,
+                        z,
+                        iso,
+                        &owned[z * plane..(z + 1) * plane],
+                        starts[z] as u32,
+                        base,
+                        out,
+                    );
+                })
         });
     }
     stats.t_vertex_s += t.elapsed().as_secs_f64();
@@ -319,29 +373,50 @@ pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::Thre
         let t = std::time::Instant::now();
         let check = clustering == Clustering::Integrated;
         merge.load(total, &buf.triangles);
-        let colours = lattice::colour_count(lattice);
+        // Clusters grouped by colour, storage order inside a colour.
+        buf.candidates.sort_by_key(|c| c.colour);
+        let (owned, base) = (&buf.owned, &buf.base);
+        let members = |c: &Candidate, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
+            k.clear();
+            let (o, b) = (owned[c.slot as usize], base[c.slot as usize]);
+            let mut bits = c.island;
+            let mut sum = glam::Vec3::ZERO;
+            while bits != 0 {
+                let d = bits.trailing_zeros();
+                bits &= bits - 1;
+                let id = b + (o & ((1u16 << d) - 1)).count_ones();
+                k.push(id);
+                sum += glam::Vec3::from(positions[id as usize]);
+            }
+            (sum / k.len() as f32).to_array()
+        };
         let mut k = Vec::with_capacity(14);
-        for colour in 0..colours {
-            for c in buf.candidates.iter().filter(|c| c.colour as usize == colour) {
-                k.clear();
-                let o = buf.owned[c.slot as usize];
-                let b = buf.base[c.slot as usize];
-                let mut bits = c.island;
-                let mut sum = glam::Vec3::ZERO;
-                while bits != 0 {
-                    let d = bits.trailing_zeros();
-                    bits &= bits - 1;
-                    let id = b + (o & ((1u16 << d) - 1)).count_ones();
-                    k.push(id);
-                    sum += glam::Vec3::from(mesh.positions[id as usize]);
-                }
-                let centre = (sum / k.len() as f32).to_array();
-                match merge.merge(&mut mesh.positions, &k, centre, check) {
-                    Ok(dropped) => {
-                        stats.clusters_committed += 1;
-                        stats.discarded += dropped;
-                    }
-                    Err(_) => stats.clusters_rejected_check += 1,
+        let mut region = Vec::new();
+        let mut accepted = Vec::new();
+        for group in buf.candidates.chunk_by(|a, b| a.colour == b.colour) {
+            // Clusters of one colour share no tetrahedron, hence no triangle: check them in
+            // parallel against the mesh as the earlier colours left it, then apply in order.
+            let positions = &mesh.positions;
+            let merge_ref = &*merge;
+            pool.install(|| {
+                group
+                    .par_iter()
+                    .map_init(
+                        || (crate::merge::Scratch::default(), Vec::with_capacity(14)),
+                        |(scratch, k), c| {
+                            let centre = members(c, positions, k);
+                            !check || merge_ref.check(scratch, positions, k, centre).is_ok()
+                        },
+                    )
+                    .collect_into_vec(&mut accepted)
+            });
+            for (c, &ok) in group.iter().zip(&accepted) {
+                if ok {
+                    let centre = members(c, &mesh.positions, &mut k);
+                    stats.discarded += merge.apply(&mut mesh.positions, &k, centre, &mut region);
+                    stats.clusters_committed += 1;
+                } else {
+                    stats.clusters_rejected_check += 1;
                 }
             }
         }
@@ -350,7 +425,8 @@ pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::Thre
             // Surfaces through sample points leave crossings on top of each other where a
             // cluster could not take them (near the box, or refused): weld those, under the same
             // check, so no flat triangle is left inside the box.
-            let (welds, dropped) = crate::collapse::collapse_short_edges(merge, mesh, WELD * settings.grid.h());
+            let (welds, dropped) =
+                crate::collapse::collapse_short_edges(merge, mesh, WELD * settings.grid.h());
             stats.collapses += welds;
             stats.discarded += dropped;
         }
@@ -364,20 +440,32 @@ pub fn extract(samples: &Samples, settings: &ExtractSettings, pool: &rayon::Thre
     if clustering == Clustering::Postprocessed {
         let t = std::time::Instant::now();
         let h = settings.grid.h();
-        let (collapses, dropped) = crate::collapse::collapse_short_edges(merge, mesh, settings.collapse_threshold * h);
+        let (collapses, dropped) =
+            crate::collapse::collapse_short_edges(merge, mesh, settings.collapse_threshold * h);
         stats.collapses = collapses;
         stats.discarded += dropped;
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     } else if clustering == Clustering::Meshopt {
-        return Err(ExtractError::Unsupported("meshopt simplification is not wired in yet".into()));
+        return Err(ExtractError::Unsupported(
+            "meshopt simplification is not wired in yet".into(),
+        ));
     }
 
-    stats.bytes_edges = (buf.owned.len() * 2 + buf.base.len() * 4) + buf.candidates.len() * std::mem::size_of::<Candidate>() + if propose { merge.bytes() } else { 0 };
+    stats.bytes_edges = (buf.owned.len() * 2 + buf.base.len() * 4)
+        + buf.candidates.len() * std::mem::size_of::<Candidate>()
+        + if propose { merge.bytes() } else { 0 };
     Ok(())
 }
 
 /// Vertex pass over one storage plane: owned crossings, counts, cluster proposals.
-fn vertex_plane(l: &Layout, z: usize, iso: f32, propose: bool, pinch_rule: bool, owned: &mut [u16]) -> (PlaneCounts, Vec<Candidate>) {
+fn vertex_plane(
+    l: &Layout,
+    z: usize,
+    iso: f32,
+    propose: bool,
+    pinch_rule: bool,
+    owned: &mut [u16],
+) -> (PlaneCounts, Vec<Candidate>) {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
     let mut counts = PlaneCounts::default();
@@ -413,7 +501,9 @@ fn vertex_plane(l: &Layout, z: usize, iso: f32, propose: bool, pinch_rule: bool,
             counts.edges += valid.count_ones() as usize;
             if propose && own.count_ones() >= 2 {
                 let colour = lattice::colour(l.lattice, p) as u8;
-                counts.proposals.add(cluster::propose(l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands));
+                counts.proposals.add(cluster::propose(
+                    l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands,
+                ));
             }
         }
     }
@@ -421,7 +511,15 @@ fn vertex_plane(l: &Layout, z: usize, iso: f32, propose: bool, pinch_rule: bool,
 }
 
 /// Numbers the crossings of one plane from `start` and writes their positions.
-fn number_plane(l: &Layout, z: usize, iso: f32, owned: &[u16], start: u32, base: &mut [u32], out: &mut [[f32; 3]]) {
+fn number_plane(
+    l: &Layout,
+    z: usize,
+    iso: f32,
+    owned: &[u16],
+    start: u32,
+    base: &mut [u32],
+    out: &mut [[f32; 3]],
+) {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
     let mut next = start;
@@ -454,14 +552,25 @@ fn number_plane(l: &Layout, z: usize, iso: f32, owned: &[u16], start: u32, base:
 }
 
 /// Geometry pass over one z-layer; returns the tetrahedra processed.
-fn geometry_layer(l: &Layout, k: usize, iso: f32, owned: &[u16], base: &[u32], positions: &[[f32; 3]], out: &mut Vec<u32>) -> usize {
+fn geometry_layer(
+    l: &Layout,
+    k: usize,
+    iso: f32,
+    owned: &[u16],
+    base: &[u32],
+    positions: &[[f32; 3]],
+    out: &mut Vec<u32>,
+) -> usize {
     let v = &l.s.values;
     let [nx, ny, nz] = l.s.cells;
     let mut processed = 0;
     let mut tet = |anchor: usize, tpl: &TetTemplate, out: &mut Vec<u32>| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
-        let case = (val[0] < iso) as usize | ((val[1] < iso) as usize) << 1 | ((val[2] < iso) as usize) << 2 | ((val[3] < iso) as usize) << 3;
+        let case = (val[0] < iso) as usize
+            | ((val[1] < iso) as usize) << 1
+            | ((val[2] < iso) as usize) << 2
+            | ((val[3] < iso) as usize) << 3;
         if case == 0 || case == 15 {
             return;
         }
@@ -471,7 +580,11 @@ fn geometry_layer(l: &Layout, k: usize, iso: f32, owned: &[u16], base: &[u32], p
         let mut ids = [0u32; 4];
         for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
             let (a, b) = TET_EDGES[e as usize];
-            let (o, d) = if owns(val[a], val[b], iso) { (idx[a], tpl.dir[a][b]) } else { (idx[b], tpl.dir[b][a]) };
+            let (o, d) = if owns(val[a], val[b], iso) {
+                (idx[a], tpl.dir[a][b])
+            } else {
+                (idx[b], tpl.dir[b][a])
+            };
             *slot = base[o] + (owned[o] & ((1u16 << d) - 1)).count_ones();
         }
         if n == 3 {
@@ -492,7 +605,16 @@ fn geometry_layer(l: &Layout, k: usize, iso: f32, owned: &[u16], base: &[u32], p
                 for i in 0..nx {
                     let c = s.simple_index(i, j, k);
                     let (sx, sy) = (s.dims[0], s.dims[0] * s.dims[1]);
-                    let corners = [c, c + 1, c + sx, c + sx + 1, c + sy, c + sy + 1, c + sy + sx, c + sy + sx + 1];
+                    let corners = [
+                        c,
+                        c + 1,
+                        c + sx,
+                        c + sx + 1,
+                        c + sy,
+                        c + sy + 1,
+                        c + sy + sx,
+                        c + sy + sx + 1,
+                    ];
                     let inside = corners.iter().filter(|&&i| v[i] < iso).count();
                     if inside == 0 || inside == 8 {
                         continue;
@@ -511,7 +633,11 @@ fn geometry_layer(l: &Layout, k: usize, iso: f32, owned: &[u16], base: &[u32], p
                 let tpls = &l.tets[4 * axis..4 * axis + 4];
                 // The 6 points of the face's 4 tetrahedra: A, B and the 4 face corners.
                 let first = v[anchor] < iso;
-                let uniform = tpls.iter().all(|t| t.delta[1..].iter().all(|&d| (v[(anchor as isize + d) as usize] < iso) == first));
+                let uniform = tpls.iter().all(|t| {
+                    t.delta[1..]
+                        .iter()
+                        .all(|&d| (v[(anchor as isize + d) as usize] < iso) == first)
+                });
                 if uniform {
                     return;
                 }
@@ -547,7 +673,9 @@ mod tests {
 
     /// A tiny deterministic generator for the table test (no dependency needed).
     fn lcg(state: &mut u64) -> f32 {
-        *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((*state >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
     }
 
@@ -556,7 +684,8 @@ mod tests {
         let mut s = 12345u64;
         let mut checked = 0;
         for _ in 0..2000 {
-            let mut p: [glam::Vec3; 4] = [0; 4].map(|_| glam::Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)));
+            let mut p: [glam::Vec3; 4] =
+                [0; 4].map(|_| glam::Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)));
             let vol = (p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]));
             if vol.abs() < 1e-3 {
                 continue;
@@ -585,12 +714,18 @@ mod tests {
             for tri in [[0, 1, 2], [0, 2, 3]].iter().take(n - 2) {
                 let nrm = (pts[tri[1]] - pts[tri[0]]).cross(pts[tri[2]] - pts[tri[0]]);
                 if nrm.length() > 1e-6 {
-                    assert!(nrm.dot(grad) > 0.0, "case {case} faces against the gradient");
+                    assert!(
+                        nrm.dot(grad) > 0.0,
+                        "case {case} faces against the gradient"
+                    );
                     checked += 1;
                 }
             }
             // Every crossed edge of the tetrahedron appears in the cycle.
-            let crossed = TET_EDGES.iter().filter(|(a, b)| (f[*a] < 0.0) != (f[*b] < 0.0)).count();
+            let crossed = TET_EDGES
+                .iter()
+                .filter(|(a, b)| (f[*a] < 0.0) != (f[*b] < 0.0))
+                .count();
             assert_eq!(crossed, n, "case {case}");
         }
         assert!(checked > 1000);

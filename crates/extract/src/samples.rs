@@ -71,9 +71,13 @@ impl Samples {
     /// Errors unless the layout matches `settings` (for pre-sampled extraction).
     pub fn check_layout(&self, settings: &ExtractSettings) -> Result<(), ExtractError> {
         let lattice = sampled_lattice(settings);
-        if self.lattice != Some(lattice) || self.cells != settings.grid.cells || self.values.len() != self.dims.iter().product::<usize>() {
+        if self.lattice != Some(lattice)
+            || self.cells != settings.grid.cells
+            || self.values.len() != self.dims.iter().product::<usize>()
+        {
             return Err(ExtractError::InvalidSettings(
-                "the sample array was prepared for other settings; call Samples::prepare first".into(),
+                "the sample array was prepared for other settings; call Samples::prepare first"
+                    .into(),
             ));
         }
         Ok(())
@@ -86,7 +90,9 @@ impl Samples {
             None => 0,
             Some(Lattice::Simple) => (nx + 1) * (ny + 1) * (nz + 1),
             // corners + inner centres + one layer of ghost centres on each face.
-            Some(Lattice::BodyCentred) => (nx + 1) * (ny + 1) * (nz + 1) + nx * ny * nz + 2 * (nx * ny + ny * nz + nz * nx),
+            Some(Lattice::BodyCentred) => {
+                (nx + 1) * (ny + 1) * (nz + 1) + nx * ny * nz + 2 * (nx * ny + ny * nz + nz * nx)
+            }
         }
     }
 
@@ -119,12 +125,12 @@ impl Samples {
             return false;
         }
         let mut outside = 0;
-        for a in 0..3 {
-            let n2 = 2 * self.cells[a] as i32;
-            if p[a] < -1 || p[a] > n2 + 1 {
+        for (&c, &cells) in p.iter().zip(&self.cells) {
+            let n2 = 2 * cells as i32;
+            if c < -1 || c > n2 + 1 {
                 return false;
             }
-            if p[a] < 0 || p[a] > n2 {
+            if c < 0 || c > n2 {
                 outside += 1;
             }
         }
@@ -147,7 +153,13 @@ impl Samples {
 
     /// Samples `field` at every point for `settings`, on `pool`'s threads, one z-plane per task.
     /// Fails on the first non-finite value (the lowest storage index, whatever the thread count).
-    pub fn sample(&mut self, field: &dyn ScalarField, settings: &ExtractSettings, pool: &rayon::ThreadPool, stats: &mut Stats) -> Result<(), ExtractError> {
+    pub fn sample(
+        &mut self,
+        field: &dyn ScalarField,
+        settings: &ExtractSettings,
+        pool: &rayon::ThreadPool,
+        stats: &mut Stats,
+    ) -> Result<(), ExtractError> {
         let t = std::time::Instant::now();
         self.prepare(settings);
         stats.t_allocation_s += t.elapsed().as_secs_f64();
@@ -159,7 +171,9 @@ impl Samples {
             values
                 .par_chunks_mut(plane)
                 .enumerate()
-                .map_init(Vec::new, |points: &mut Vec<Vec3>, (z, out)| this.sample_plane(field, z, out, points))
+                .map_init(Vec::new, |points: &mut Vec<Vec3>, (z, out)| {
+                    this.sample_plane(field, z, out, points)
+                })
                 .find_first(|r| r.is_some())
                 .flatten()
         });
@@ -168,13 +182,24 @@ impl Samples {
         stats.sample_points = self.point_count();
         stats.bytes_lattice = self.bytes();
         match bad {
-            Some((p, value)) => Err(ExtractError::NonFiniteSample { x: p.x, y: p.y, z: p.z, value }),
+            Some((p, value)) => Err(ExtractError::NonFiniteSample {
+                x: p.x,
+                y: p.y,
+                z: p.z,
+                value,
+            }),
             None => Ok(()),
         }
     }
 
     /// Fills one storage plane; returns the first non-finite sample.
-    fn sample_plane(&self, field: &dyn ScalarField, z: usize, out: &mut [f32], points: &mut Vec<Vec3>) -> Option<(Vec3, f32)> {
+    fn sample_plane(
+        &self,
+        field: &dyn ScalarField,
+        z: usize,
+        out: &mut [f32],
+        points: &mut Vec<Vec3>,
+    ) -> Option<(Vec3, f32)> {
         points.clear();
         let [dx, dy, _] = self.dims;
         // Slots that hold a real point, in storage order.
@@ -205,7 +230,11 @@ impl Samples {
         }
         if slots.is_empty() && !matches!(self.lattice, Some(Lattice::BodyCentred)) {
             field.sample_batch(points, out);
-            return out.iter().zip(points.iter()).find(|(v, _)| !v.is_finite()).map(|(v, p)| (*p, *v));
+            return out
+                .iter()
+                .zip(points.iter())
+                .find(|(v, _)| !v.is_finite())
+                .map(|(v, p)| (*p, *v));
         }
         let mut vals = vec![0.0f32; points.len()];
         field.sample_batch(points, &mut vals);

@@ -110,7 +110,12 @@ impl Grid {
 
     /// Cube edge length per axis.
     pub fn spacing(&self) -> Vec3 {
-        (self.max - self.min) / Vec3::new(self.cells[0] as f32, self.cells[1] as f32, self.cells[2] as f32)
+        (self.max - self.min)
+            / Vec3::new(
+                self.cells[0] as f32,
+                self.cells[1] as f32,
+                self.cells[2] as f32,
+            )
     }
 
     /// The mean cube edge length: the "h" in which thresholds and fidelity are expressed.
@@ -127,19 +132,34 @@ impl Grid {
     /// Checks sizes and bounds: cells >= 1, finite bounds, min < max on every axis, and a sample
     /// count the machine could hold.
     pub fn check(&self) -> Result<(), ExtractError> {
-        if self.cells.iter().any(|&c| c == 0) {
-            return Err(ExtractError::InvalidGrid(format!("every axis needs at least one cell, got {:?}", self.cells)));
+        if self.cells.contains(&0) {
+            return Err(ExtractError::InvalidGrid(format!(
+                "every axis needs at least one cell, got {:?}",
+                self.cells
+            )));
         }
         if !(self.min.is_finite() && self.max.is_finite()) {
-            return Err(ExtractError::InvalidGrid(format!("bounds must be finite, got {} .. {}", self.min, self.max)));
+            return Err(ExtractError::InvalidGrid(format!(
+                "bounds must be finite, got {} .. {}",
+                self.min, self.max
+            )));
         }
         if self.min.cmpge(self.max).any() {
-            return Err(ExtractError::InvalidGrid(format!("bounds need min < max on every axis, got {} .. {}", self.min, self.max)));
+            return Err(ExtractError::InvalidGrid(format!(
+                "bounds need min < max on every axis, got {} .. {}",
+                self.min, self.max
+            )));
         }
-        let points = self.cells.iter().try_fold(1usize, |acc, &c| acc.checked_mul(c.checked_add(3)?));
+        let points = self
+            .cells
+            .iter()
+            .try_fold(1usize, |acc, &c| acc.checked_mul(c.checked_add(3)?));
         match points {
             Some(p) if p.saturating_mul(2) <= MAX_SAMPLE_POINTS => Ok(()),
-            _ => Err(ExtractError::TooLarge { cells: self.cells, limit: MAX_SAMPLE_POINTS }),
+            _ => Err(ExtractError::TooLarge {
+                cells: self.cells,
+                limit: MAX_SAMPLE_POINTS,
+            }),
         }
     }
 }
@@ -186,10 +206,16 @@ impl ExtractSettings {
     pub fn check(&self) -> Result<(), ExtractError> {
         self.grid.check()?;
         if self.threads == 0 || self.threads > 1024 {
-            return Err(ExtractError::InvalidSettings(format!("threads must be 1..=1024, got {}", self.threads)));
+            return Err(ExtractError::InvalidSettings(format!(
+                "threads must be 1..=1024, got {}",
+                self.threads
+            )));
         }
         if !self.iso.is_finite() {
-            return Err(ExtractError::InvalidSettings(format!("iso must be finite, got {}", self.iso)));
+            return Err(ExtractError::InvalidSettings(format!(
+                "iso must be finite, got {}",
+                self.iso
+            )));
         }
         if !(self.collapse_threshold.is_finite() && self.collapse_threshold >= 0.0) {
             return Err(ExtractError::InvalidSettings(format!(
