@@ -376,10 +376,10 @@ pub fn extract(
         // Clusters grouped by colour, storage order inside a colour.
         buf.candidates.sort_by_key(|c| c.colour);
         let (owned, base) = (&buf.owned, &buf.base);
-        let members = |c: &Candidate, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
+        let members = |c: &Candidate, island: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
             k.clear();
             let (o, b) = (owned[c.slot as usize], base[c.slot as usize]);
-            let mut bits = c.island;
+            let mut bits = island;
             let mut sum = glam::Vec3::ZERO;
             while bits != 0 {
                 let d = bits.trailing_zeros();
@@ -404,19 +404,42 @@ pub fn extract(
                     .map_init(
                         || (crate::merge::Scratch::default(), Vec::with_capacity(14)),
                         |(scratch, k), c| {
-                            let centre = members(c, positions, k);
-                            !check || merge_ref.check(scratch, positions, k, centre).is_ok()
+                            let mut try_island = |island: u16| {
+                                let centre = members(c, island, positions, k);
+                                !check || merge_ref.check(scratch, positions, k, centre).is_ok()
+                            };
+                            if try_island(c.island) {
+                                return Some(c.island);
+                            }
+                            // Refused: try the cluster without one of its crossings, in bit
+                            // order, before giving up (keeps most of the merge where one
+                            // crossing is the trouble).
+                            if c.island.count_ones() > 2 {
+                                let mut bits = c.island;
+                                while bits != 0 {
+                                    let sub = c.island & !(bits & bits.wrapping_neg());
+                                    bits &= bits - 1;
+                                    if try_island(sub) {
+                                        return Some(sub);
+                                    }
+                                }
+                            }
+                            None
                         },
                     )
                     .collect_into_vec(&mut accepted)
             });
-            for (c, &ok) in group.iter().zip(&accepted) {
-                if ok {
-                    let centre = members(c, &mesh.positions, &mut k);
-                    stats.discarded += merge.apply(&mut mesh.positions, &k, centre, &mut region);
-                    stats.clusters_committed += 1;
-                } else {
-                    stats.clusters_rejected_check += 1;
+            for (c, island) in group.iter().zip(&accepted) {
+                match *island {
+                    Some(island) => {
+                        let centre = members(c, island, &mesh.positions, &mut k);
+                        stats.discarded += merge.apply(&mut mesh.positions, &k, centre, &mut region);
+                        stats.clusters_committed += 1;
+                        if island != c.island {
+                            stats.clusters_reduced += 1;
+                        }
+                    }
+                    None => stats.clusters_rejected_check += 1,
                 }
             }
         }

@@ -40,6 +40,8 @@ pub struct Stats {
     pub clusters_proposed: usize,
     /// Clusters merged into one vertex.
     pub clusters_committed: usize,
+    /// Committed clusters that the exact check accepted only without one of their crossings.
+    pub clusters_reduced: usize,
     /// Clusters refused by the mask rules (more than 10 crossings, loops, pinches).
     pub clusters_rejected_prefilter: usize,
     /// Clusters refused by the exact local check on the mesh.
