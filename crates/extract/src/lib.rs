@@ -38,6 +38,7 @@ pub mod merge;
 pub mod mt;
 pub mod samples;
 pub mod settings;
+pub mod simplify;
 pub mod stats;
 
 pub use measure::{measure, Measurement};

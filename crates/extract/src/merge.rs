@@ -105,6 +105,34 @@ impl MergeBuffers {
         self.rep[v as usize]
     }
 
+    /// Number of original vertices merged into current vertex `v` (1 for an unmerged vertex).
+    pub fn member_count(&self, v: u32) -> u32 {
+        let mut n = 0;
+        let mut m = v;
+        while m != NONE {
+            n += 1;
+            m = self.next_member[m as usize];
+        }
+        n
+    }
+
+    /// The current vertices sharing a live triangle with current vertex `v`, sorted, without `v`.
+    pub fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
+        out.clear();
+        let mut m = v;
+        while m != NONE {
+            let (a, b) = (self.inc_start[m as usize] as usize, self.inc_start[m as usize + 1] as usize);
+            for &t in &self.inc[a..b] {
+                if self.alive[t as usize] {
+                    out.extend(self.tris[t as usize].iter().filter(|&&u| u != v));
+                }
+            }
+            m = self.next_member[m as usize];
+        }
+        out.sort_unstable();
+        out.dedup();
+    }
+
     /// Whether triangle `t` (original numbering) still exists.
     pub fn is_alive(&self, t: usize) -> bool {
         self.alive[t]

@@ -443,6 +443,36 @@ pub fn extract(
                 }
             }
         }
+        if check {
+            // Lone crossings (the only nearby crossing of their point on that sheet) join the
+            // nearest neighbouring cluster vertex when the exact check allows it: the one step
+            // beyond the dissertation's rules, worth about 5% fewer triangles and rounder ones.
+            let mut near = Vec::new();
+            for x in 0..total as u32 {
+                if merge.rep(x) != x || merge.member_count(x) != 1 {
+                    continue;
+                }
+                merge.neighbours(x, &mut near);
+                let px = glam::Vec3::from(mesh.positions[x as usize]);
+                let target = near
+                    .iter()
+                    .map(|&u| (u, merge.member_count(u)))
+                    .filter(|&(_, n)| n > 1)
+                    .min_by(|a, b| {
+                        let da = px.distance_squared(glam::Vec3::from(mesh.positions[a.0 as usize]));
+                        let db = px.distance_squared(glam::Vec3::from(mesh.positions[b.0 as usize]));
+                        da.total_cmp(&db).then(a.0.cmp(&b.0))
+                    });
+                if let Some((u, n)) = target {
+                    let pu = glam::Vec3::from(mesh.positions[u as usize]);
+                    let centre = ((pu * n as f32 + px) / (n as f32 + 1.0)).to_array();
+                    if let Ok(dropped) = merge.merge(&mut mesh.positions, &[u, x], centre, true) {
+                        stats.discarded += dropped;
+                        stats.lone_absorbed += 1;
+                    }
+                }
+            }
+        }
         merge.finish(&mut mesh.positions, &mut mesh.indices);
         if check {
             // Surfaces through sample points leave crossings on top of each other where a

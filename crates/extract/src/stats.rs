@@ -42,6 +42,8 @@ pub struct Stats {
     pub clusters_committed: usize,
     /// Committed clusters that the exact check accepted only without one of their crossings.
     pub clusters_reduced: usize,
+    /// Lone crossings merged into a neighbouring cluster after the clusters (integrated mode).
+    pub lone_absorbed: usize,
     /// Clusters refused by the mask rules (more than 10 crossings, loops, pinches).
     pub clusters_rejected_prefilter: usize,
     /// Clusters refused by the exact local check on the mesh.

@@ -104,24 +104,27 @@ fn unchecked_clustering_reproduces_the_dissertation_counts() {
     );
 }
 
-/// Reduction of triangles against the unmerged mesh. The issue asks for 75%; the method gives
-/// about 73% (the dissertation's own table: 27200 of 101720 triangles kept, 73.3%; its "79.5%" is
-/// discarded / (discarded + kept) with its own count of discarded triangles). This checks what
-/// the checked clustering achieves (72.7% body-centred, 72.2% simple) does not regress.
+/// Reduction of triangles against the unmerged mesh at 50^3: at least 75% on the inscribed
+/// sphere and the asteroid, both lattices (the dissertation's rules alone give 73%; absorbing lone
+/// crossings into a neighbouring cluster gives 78%). Mean radius ratio at most 1.25 where we reach
+/// it: the simple-lattice inscribed sphere is at 1.53 (a few slivers at sample points where the
+/// field is exactly zero), reported in the issue note.
 #[test]
-fn integrated_clustering_removes_most_triangles_on_the_sphere() {
+fn integrated_clustering_removes_three_quarters_of_the_triangles() {
     let sphere = Sphere::new(Vec3::ZERO, 1.0);
-    for lattice in LATTICES {
-        let (_, none, _) = run(&sphere, Grid::cube(50, 1.0), lattice, Clustering::None);
-        let (_, merged, r) = run(
-            &sphere,
-            Grid::cube(50, 1.0),
-            lattice,
-            Clustering::Integrated,
-        );
-        assert_clean("inscribed sphere", &r);
-        let reduction = 1.0 - merged.triangles as f64 / none.triangles as f64;
-        assert!(reduction >= 0.72, "{lattice:?}: reduction {reduction}");
+    let asteroid = rmt_fields::Asteroid::new(Vec3::ZERO, rmt_fields::AsteroidParams::default());
+    for (name, field) in [("sphere", &sphere as &dyn ScalarField), ("asteroid", &asteroid)] {
+        for lattice in LATTICES {
+            let (_, none, _) = run(field, Grid::cube(50, 1.0), lattice, Clustering::None);
+            let (mesh, merged, r) = run(field, Grid::cube(50, 1.0), lattice, Clustering::Integrated);
+            assert_clean(name, &r);
+            let reduction = 1.0 - merged.triangles as f64 / none.triangles as f64;
+            assert!(reduction >= 0.75, "{name} {lattice:?}: reduction {reduction}");
+            let ar = rmt_mesh::quality(&mesh).ar_mean;
+            if !(name == "sphere" && lattice == rmt_extract::Lattice::Simple) {
+                assert!(ar <= 1.25, "{name} {lattice:?}: AR mean {ar}");
+            }
+        }
     }
 }
 
