@@ -30,6 +30,7 @@ fn main() {
                 Clustering::Integrated,
                 Clustering::IntegratedUnchecked,
                 Clustering::Postprocessed,
+                Clustering::Meshopt,
             ] {
                 let mut settings = ExtractSettings::new(Grid::cube(50, 1.0), lattice, clustering);
                 settings.threads = threads;

@@ -499,9 +499,9 @@ pub fn extract(
         stats.discarded += dropped;
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     } else if clustering == Clustering::Meshopt {
-        return Err(ExtractError::Unsupported(
-            "meshopt simplification is not wired in yet".into(),
-        ));
+        let t = std::time::Instant::now();
+        stats.discarded += crate::simplify::meshopt_simplify(mesh, settings.grid.h(), settings.collapse_threshold);
+        stats.t_geometry_s += t.elapsed().as_secs_f64();
     }
 
     stats.bytes_edges = (buf.owned.len() * 2 + buf.base.len() * 4)
