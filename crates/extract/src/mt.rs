@@ -49,6 +49,12 @@ pub struct MtBuffers {
 /// Edges shorter than this many grid spacings are welded after clustering (coincident crossings).
 const WELD: f32 = 1e-4;
 
+/// Bit 15 of a point's `owned` word: some edge of the point is crossed (owned or not). A cube or
+/// body-centred face whose anchor point has no crossed edge has all its points on one side.
+const HAS_CROSSING: u16 = 0x8000;
+/// The 14 neighbour bits of an `owned` word.
+const OWNED_BITS: u16 = 0x3FFF;
+
 /// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
 const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
@@ -307,6 +313,7 @@ pub fn extract(
         });
     }
     // Step 2: number the crossings and place them.
+    let near_points;
     mesh.positions.resize(total, [0.0; 3]);
     {
         let mut rest: &mut [[f32; 3]] = &mut mesh.positions;
@@ -317,22 +324,13 @@ pub fn extract(
             rest = tail;
         }
         let owned = &buf.owned;
-        pool.install(|| {
+        near_points = pool.install(|| {
             buf.base
                 .par_chunks_mut(plane)
                 .zip(chunks.into_par_iter())
                 .enumerate()
-                .for_each(|(z, (base, out))| {
-                    number_plane(
-                        &layout,
-                        z,
-                        iso,
-                        &owned[z * plane..(z + 1) * plane],
-                        starts[z] as u32,
-                        base,
-                        out,
-                    );
-                })
+                .map(|(z, (base, out))| number_plane(&layout, z, iso, &owned[z * plane..(z + 1) * plane], starts[z] as u32, base, out))
+                .sum::<usize>()
         });
     }
     stats.t_vertex_s += t.elapsed().as_secs_f64();
@@ -378,7 +376,7 @@ pub fn extract(
         let (owned, base) = (&buf.owned, &buf.base);
         let members = |c: &Candidate, island: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
             k.clear();
-            let (o, b) = (owned[c.slot as usize], base[c.slot as usize]);
+            let (o, b) = (owned[c.slot as usize] & OWNED_BITS, base[c.slot as usize]);
             let mut bits = island;
             let mut sum = glam::Vec3::ZERO;
             while bits != 0 {
@@ -474,7 +472,7 @@ pub fn extract(
             }
         }
         merge.finish(&mut mesh.positions, &mut mesh.indices);
-        if check {
+        if check && near_points > 0 {
             // Surfaces through sample points leave crossings on top of each other where a
             // cluster could not take them (near the box, or refused): weld those, under the same
             // check, so no flat triangle is left inside the box.
@@ -511,31 +509,49 @@ pub fn extract(
 }
 
 /// Vertex pass over one storage plane: owned crossings, counts, cluster proposals.
-fn vertex_plane(
-    l: &Layout,
-    z: usize,
-    iso: f32,
-    propose: bool,
-    pinch_rule: bool,
-    owned: &mut [u16],
-) -> (PlaneCounts, Vec<Candidate>) {
+fn vertex_plane(l: &Layout, z: usize, iso: f32, propose: bool, pinch_rule: bool, owned: &mut [u16]) -> (PlaneCounts, Vec<Candidate>) {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
     let mut counts = PlaneCounts::default();
     let mut cands = Vec::new();
     for sy in 0..dy {
+        // The run of points in this row whose 14 neighbours are all regular lattice points: no
+        // existence or border tests there.
+        let (p0, _) = l.point(0, sy, z);
+        let odd = (p0[2] & 1) as usize;
+        let (lo, hi) = match l.lattice {
+            Lattice::BodyCentred => (1 + odd, l.s.cells[0]),
+            Lattice::Simple => (1, l.s.cells[0]),
+        };
+        let row_regular = lo < hi && l.is_regular(l.point(lo, sy, z).0);
+        let (lo, hi) = if row_regular { (lo, hi) } else { (dx, dx) };
+        let row = z * dx * dy + sy * dx;
+        let delta = &l.delta[odd];
         for sx in 0..dx {
             let local = sy * dx + sx;
-            let (p, exists) = l.point(sx, sy, z);
-            if !exists {
-                owned[local] = 0;
-                continue;
-            }
-            let i = z * dx * dy + local;
+            let i = row + sx;
             let f = v[i];
             let inside = f < iso;
-            let valid = l.valid_neighbours(p);
-            let delta = &l.delta[(p[0] & 1) as usize];
+            let (p, valid) = if sx >= lo && sx < hi {
+                // Fast path: all 14 edges exist.
+                let mut crossed = 0u16;
+                for (d, &off) in delta.iter().enumerate() {
+                    crossed |= (((v[(i as isize + off) as usize] < iso) != inside) as u16) << d;
+                }
+                if crossed == 0 {
+                    owned[local] = 0;
+                    counts.edges += 14;
+                    continue;
+                }
+                (l.point(sx, sy, z).0, FULL)
+            } else {
+                let (p, exists) = l.point(sx, sy, z);
+                if !exists {
+                    owned[local] = 0;
+                    continue;
+                }
+                (p, l.valid_neighbours(p))
+            };
             let (mut own, mut crossed) = (0u16, 0u16);
             let mut bits = valid;
             while bits != 0 {
@@ -549,21 +565,20 @@ fn vertex_plane(
                     }
                 }
             }
-            owned[local] = own;
+            owned[local] = own | if crossed != 0 { HAS_CROSSING } else { 0 };
             counts.crossings += own.count_ones() as usize;
             counts.edges += valid.count_ones() as usize;
             if propose && own.count_ones() >= 2 {
                 let colour = lattice::colour(l.lattice, p) as u8;
-                counts.proposals.add(cluster::propose(
-                    l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands,
-                ));
+                counts.proposals.add(cluster::propose(l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands));
             }
         }
     }
     (counts, cands)
 }
 
-/// Numbers the crossings of one plane from `start` and writes their positions.
+/// Numbers the crossings of one plane from `start` and writes their positions. Returns how many
+/// crossings lie within `WELD` of their owner (surfaces through sample points).
 fn number_plane(
     l: &Layout,
     z: usize,
@@ -572,15 +587,16 @@ fn number_plane(
     start: u32,
     base: &mut [u32],
     out: &mut [[f32; 3]],
-) {
+) -> usize {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
     let mut next = start;
     let mut w = 0;
+    let mut near_points = 0;
     for sy in 0..dy {
         for sx in 0..dx {
             let local = sy * dx + sx;
-            let own = owned[local];
+            let own = owned[local] & OWNED_BITS;
             if own == 0 {
                 continue;
             }
@@ -597,11 +613,13 @@ fn number_plane(
                 let q = add(p, l.t.offsets[d]);
                 let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
                 let t = (iso - f) / (g - f);
+                near_points += (t < WELD) as usize;
                 out[w] = pp.lerp(l.position(q), t).to_array();
                 w += 1;
             }
         }
     }
+    near_points
 }
 
 /// Geometry pass over one z-layer; returns the tetrahedra processed.
@@ -657,19 +675,9 @@ fn geometry_layer(
             for j in 0..ny {
                 for i in 0..nx {
                     let c = s.simple_index(i, j, k);
-                    let (sx, sy) = (s.dims[0], s.dims[0] * s.dims[1]);
-                    let corners = [
-                        c,
-                        c + 1,
-                        c + sx,
-                        c + sx + 1,
-                        c + sy,
-                        c + sy + 1,
-                        c + sy + sx,
-                        c + sy + sx + 1,
-                    ];
-                    let inside = corners.iter().filter(|&&i| v[i] < iso).count();
-                    if inside == 0 || inside == 8 {
+                    // Corner 0 is a neighbour of the other 7: no crossed edge there, no
+                    // surface in this cube.
+                    if owned[c] & HAS_CROSSING == 0 {
                         continue;
                     }
                     for tpl in &l.tets {
@@ -684,14 +692,9 @@ fn geometry_layer(
             let mut face = |a: Offset, axis: usize, out: &mut Vec<u32>| {
                 let anchor = l.s.bcdl_index(a);
                 let tpls = &l.tets[4 * axis..4 * axis + 4];
-                // The 6 points of the face's 4 tetrahedra: A, B and the 4 face corners.
-                let first = v[anchor] < iso;
-                let uniform = tpls.iter().all(|t| {
-                    t.delta[1..]
-                        .iter()
-                        .all(|&d| (v[(anchor as isize + d) as usize] < iso) == first)
-                });
-                if uniform {
+                // B and the 4 face corners are neighbours of A: no crossed edge at A, no
+                // surface in the face's 4 tetrahedra.
+                if owned[anchor] & HAS_CROSSING == 0 {
                     return;
                 }
                 for tpl in tpls {
