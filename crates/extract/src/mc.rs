@@ -2,7 +2,7 @@
 //!
 //! Each cube's eight corners are classified inside (`f < iso`) or outside (`f >= iso`, so
 //! `f == iso` counts outside, as in marching tetrahedra); the 8 bits index the classic case
-//! tables of Lorensen and Cline as published by Bourke ([`EDGE_TABLE`], [`TRIANGLE_TABLE`]), and
+//! tables of Lorensen and Cline as published by Bourke (`EDGE_TABLE`, `TRIANGLE_TABLE`), and
 //! each crossed grid edge gets one vertex by linear interpolation, shared by the four cubes
 //! around the edge.
 //!
@@ -13,12 +13,18 @@
 //! on the face joins the inside corners exactly when `a * c > b * d` (`a`, `c` the values minus
 //! iso at the inside corners, `b`, `d` at the outside ones), a test that both cubes evaluate on
 //! the same four numbers and therefore answer alike. Its triangles come from a table generated
-//! per (case, face resolution) ([`CaseTables`]): the face cuts are chained into closed loops
+//! per (case, face resolution) (`CaseTables`): the face cuts are chained into closed loops
 //! around the cube and each loop is triangulated without any diagonal lying in a cube face, so
 //! the only edges two cubes share are the face cuts, each used once by either cube. The
 //! result is closed and edge-manifold wherever the surface stays inside the box. (The decider
 //! does not resolve the ambiguity inside a cube, e.g. the tunnel of case 4; that affects topology
 //! inside single cubes, not closure.)
+//!
+//! In 116 of the 520 (case, face resolution) pairs a loop crosses one face twice, and no
+//! triangulation of it avoids a diagonal in that face; such a loop is fanned around an extra
+//! vertex at the centroid of its vertices (as MC33 does for its interior cases). These rare
+//! centres are the only vertices not on grid edges; `Stats::crossings` counts grid-edge
+//! vertices only.
 //!
 //! Orientation: triangles are counter-clockwise seen from the side of increasing f.
 //!
@@ -29,8 +35,8 @@
 //!      /  |        /  |                   4: 4-5  5: 5-6  6: 6-7  7: 7-4   (top, z = 1)
 //!     4 ----4-----5   |                   8: 0-4  9: 1-5 10: 2-6 11: 3-7   (vertical)
 //!     |   3 ----2-|---2
-//!     8  /        9  /      y
-//!     | 3         | 1       |  z
+//!     8  /        9  /      z
+//!     | 3         | 1       |  y
 //!     |/          |/        | /
 //!     0 ----0-----1         |/___ x
 //! ```
@@ -50,7 +56,8 @@ use crate::{ExtractSettings, Samples, Stats};
 /// Extracts the `settings.iso` level set of the simple-lattice `samples` into `mesh` (appending
 /// to it; the caller clears it) with marching cubes, on `pool`'s threads, and fills the counters
 /// and timings of `stats`: `tetrahedra_total = 0`, `tetrahedra_processed` = cubes with a crossing,
-/// `edges` = grid edges, `crossings` = vertices.
+/// `edges` = grid edges, `crossings` = vertices on grid edges (all vertices but the rare loop
+/// centres), `bytes_edges` = the edge-to-vertex map, `t_vertex_s`, `t_geometry_s`.
 pub fn extract(
     samples: &Samples,
     settings: &ExtractSettings,

@@ -18,9 +18,15 @@
 
 mod analytic;
 mod asteroid;
+mod error;
+mod mesh_sdf;
+mod terrain;
 
 pub use analytic::{FnField, Gyroid, Sphere, Torus};
 pub use asteroid::{Asteroid, AsteroidParams};
+pub use error::{FieldError, MeshProblem, MeshSource};
+pub use mesh_sdf::MeshSdf;
+pub use terrain::{CaveParams, CaveTerrain, SvobodaParams, SvobodaTerrain};
 
 use glam::Vec3;
 

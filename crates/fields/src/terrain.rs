@@ -1,0 +1,288 @@
+//! Terrains: ground below, air above, so inside (f < 0) is the solid ground.
+//!
+//! - [`SvobodaTerrain`]: a 2D fractal Perlin height field extended along y,
+//!   `f = y - height(x, z)`; thresholding it at 0 gives a surface without overhangs (the
+//!   terrain of Svoboda's dissertation).
+//! - [`CaveTerrain`]: 3D fractal noise added to a base height, so the ground can fold over itself
+//!   (overhangs, arches, floating rocks), with tunnels carved where two independent noises are
+//!   both near zero (worm-like tubes along the curves where their zero sets meet).
+//!
+//! Neither is a signed distance, so neither reports a surface distance. Both surfaces leave the
+//! sampled box through its sides, where the extracted mesh is open by design.
+
+use crate::ScalarField;
+use glam::Vec3;
+use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
+
+/// Parameters of a [`SvobodaTerrain`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SvobodaParams {
+    /// Seed of the Perlin noise.
+    pub seed: u32,
+    /// Octaves of fractal Brownian motion (1 to 8 are sensible).
+    pub octaves: usize,
+    /// Horizontal frequency of the first octave, in cycles per world unit.
+    pub frequency: f64,
+    /// Height amplitude in world units (the noise lies roughly in [-1, 1]).
+    pub amplitude: f32,
+    /// Height of the ground where the noise is zero.
+    pub base: f32,
+}
+
+impl Default for SvobodaParams {
+    fn default() -> Self {
+        Self {
+            seed: 11,
+            octaves: 5,
+            frequency: 1.0,
+            amplitude: 0.45,
+            base: 0.0,
+        }
+    }
+}
+
+/// `f = y - (base + amplitude * fbm(x, z))`: a height field, solid below.
+pub struct SvobodaTerrain {
+    params: SvobodaParams,
+    fbm: Fbm<Perlin>,
+}
+
+impl SvobodaTerrain {
+    /// A terrain with `params`.
+    pub fn new(params: SvobodaParams) -> Self {
+        let fbm = Fbm::<Perlin>::new(params.seed)
+            .set_octaves(params.octaves.clamp(1, 32))
+            .set_frequency(params.frequency);
+        Self { params, fbm }
+    }
+
+    /// The parameters it was built with.
+    pub fn params(&self) -> &SvobodaParams {
+        &self.params
+    }
+
+    /// Ground height at `(x, z)`.
+    #[inline]
+    pub fn height(&self, x: f32, z: f32) -> f32 {
+        self.params.base + self.params.amplitude * self.fbm.get([f64::from(x), f64::from(z)]) as f32
+    }
+}
+
+impl ScalarField for SvobodaTerrain {
+    #[inline]
+    fn sample(&self, p: Vec3) -> f32 {
+        p.y - self.height(p.x, p.z)
+    }
+}
+
+/// Parameters of a [`CaveTerrain`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaveParams {
+    /// Seed of the terrain noise; the two cave noises use `seed + 1` and `seed + 2`.
+    pub seed: u32,
+    /// Octaves of the terrain's fractal Brownian motion.
+    pub octaves: usize,
+    /// Frequency of the terrain noise's first octave, in cycles per world unit.
+    pub frequency: f64,
+    /// Amplitude of the terrain noise in world units. Overhangs appear where it beats the
+    /// vertical slope of y, i.e. when `amplitude * frequency` is well above 1/(2 pi).
+    pub amplitude: f32,
+    /// Ground height where the noise is zero.
+    pub base: f32,
+    /// Frequency of the cave noises (higher: more, shorter tunnels).
+    pub cave_frequency: f64,
+    /// Tunnel radius in noise units (0 disables caves; 0.1 to 0.25 gives tunnels).
+    pub cave_radius: f32,
+    /// Caves are carved only below this height (world units), so the sky stays empty.
+    pub cave_ceiling: f32,
+}
+
+impl Default for CaveParams {
+    fn default() -> Self {
+        Self {
+            seed: 5,
+            octaves: 4,
+            frequency: 1.2,
+            amplitude: 0.5,
+            base: 0.0,
+            cave_frequency: 1.5,
+            cave_radius: 0.18,
+            cave_ceiling: 0.2,
+        }
+    }
+}
+
+/// 3D fractal-noise ground with overhangs, carved by tunnels:
+/// `f = max(y - base + amplitude * fbm(p), radius - sqrt(n1(p)^2 + n2(p)^2))` below the cave
+/// ceiling (`n1`, `n2` independent Perlin noises; the second term is negative inside a tunnel,
+/// so the max removes the tunnel from the ground).
+pub struct CaveTerrain {
+    params: CaveParams,
+    fbm: Fbm<Perlin>,
+    cave_a: Perlin,
+    cave_b: Perlin,
+}
+
+impl CaveTerrain {
+    /// A terrain with `params`.
+    pub fn new(params: CaveParams) -> Self {
+        let fbm = Fbm::<Perlin>::new(params.seed)
+            .set_octaves(params.octaves.clamp(1, 32))
+            .set_frequency(params.frequency);
+        Self {
+            params,
+            fbm,
+            cave_a: Perlin::new(params.seed.wrapping_add(1)),
+            cave_b: Perlin::new(params.seed.wrapping_add(2)),
+        }
+    }
+
+    /// The parameters it was built with.
+    pub fn params(&self) -> &CaveParams {
+        &self.params
+    }
+
+    /// The ground without caves (negative inside).
+    #[inline]
+    pub fn ground(&self, p: Vec3) -> f32 {
+        let q = [f64::from(p.x), f64::from(p.y), f64::from(p.z)];
+        p.y - self.params.base + self.params.amplitude * self.fbm.get(q) as f32
+    }
+
+    /// The tunnels' field: negative inside a tunnel (ignores the ceiling).
+    #[inline]
+    pub fn tunnels(&self, p: Vec3) -> f32 {
+        let k = self.params.cave_frequency;
+        let q = [f64::from(p.x) * k, f64::from(p.y) * k, f64::from(p.z) * k];
+        let (a, b) = (self.cave_a.get(q) as f32, self.cave_b.get(q) as f32);
+        (a * a + b * b).sqrt() - self.params.cave_radius
+    }
+}
+
+impl ScalarField for CaveTerrain {
+    #[inline]
+    fn sample(&self, p: Vec3) -> f32 {
+        let ground = self.ground(p);
+        if self.params.cave_radius <= 0.0 {
+            return ground;
+        }
+        // Blend the carving out above the ceiling, continuously, so no step appears there.
+        let fade = (p.y - self.params.cave_ceiling).max(0.0);
+        ground.max(-(self.tunnels(p) + fade))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lattice(n: usize) -> impl Iterator<Item = Vec3> {
+        (0..n * n * n).map(move |k| {
+            let (x, y, z) = (k % n, (k / n) % n, k / (n * n));
+            Vec3::new(x as f32, y as f32, z as f32) * (2.0 / (n - 1) as f32) - 1.0
+        })
+    }
+
+    #[test]
+    fn svoboda_terrain_is_a_height_field_solid_below() {
+        let t = SvobodaTerrain::new(SvobodaParams::default());
+        for p in lattice(9) {
+            let h = t.height(p.x, p.z);
+            assert!((t.sample(p) - (p.y - h)).abs() < 1e-6);
+            // Monotone along y: exactly one crossing per vertical line.
+            assert!(t.sample(p + Vec3::Y * 0.1) > t.sample(p));
+        }
+        let heights: Vec<f32> = lattice(9).map(|p| t.height(p.x, p.z)).collect();
+        let spread = heights.iter().cloned().fold(f32::NEG_INFINITY, f32::max)
+            - heights.iter().cloned().fold(f32::INFINITY, f32::min);
+        assert!(
+            spread > 0.1,
+            "the terrain should not be flat: spread {spread}"
+        );
+        assert!(
+            heights.iter().all(|h| h.abs() <= 0.45 * 2.0),
+            "heights within the amplitude"
+        );
+    }
+
+    #[test]
+    fn seeds_decide_the_terrain() {
+        let p = Vec3::new(0.33, 0.1, -0.41);
+        let a = SvobodaTerrain::new(SvobodaParams::default());
+        let b = SvobodaTerrain::new(SvobodaParams {
+            seed: 12,
+            ..Default::default()
+        });
+        assert_eq!(
+            a.sample(p),
+            SvobodaTerrain::new(SvobodaParams::default()).sample(p)
+        );
+        assert_ne!(a.sample(p), b.sample(p));
+        let c = CaveTerrain::new(CaveParams::default());
+        let d = CaveTerrain::new(CaveParams {
+            seed: 6,
+            ..Default::default()
+        });
+        assert_eq!(
+            c.sample(p),
+            CaveTerrain::new(CaveParams::default()).sample(p)
+        );
+        assert_ne!(c.sample(p), d.sample(p));
+    }
+
+    #[test]
+    fn cave_terrain_has_overhangs_and_tunnels() {
+        let t = CaveTerrain::new(CaveParams::default());
+        let n = 40;
+        // Overhangs: a vertical line that enters the ground more than once.
+        let mut overhangs = 0;
+        let mut carved = 0;
+        for i in 0..n {
+            for k in 0..n {
+                let (x, z) = (
+                    i as f32 / n as f32 * 2.0 - 1.0,
+                    k as f32 / n as f32 * 2.0 - 1.0,
+                );
+                let mut entries = 0;
+                let mut was_solid = false;
+                for j in (0..4 * n).rev() {
+                    let p = Vec3::new(x, j as f32 / (4 * n) as f32 * 2.0 - 1.0, z);
+                    let solid = t.sample(p) < 0.0;
+                    entries += usize::from(solid && !was_solid);
+                    was_solid = solid;
+                    carved += usize::from(t.ground(p) < 0.0 && !solid);
+                }
+                overhangs += usize::from(entries > 1);
+            }
+        }
+        assert!(overhangs > 0, "no vertical line meets the ground twice");
+        assert!(carved > 0, "no tunnel carved");
+        // Deep below is solid, high above is air, away from tunnels.
+        assert!(t.ground(Vec3::new(0.0, -5.0, 0.0)) < 0.0);
+        assert!(t.sample(Vec3::new(0.0, 5.0, 0.0)) > 0.0);
+        // Without caves, nothing is carved.
+        let plain = CaveTerrain::new(CaveParams {
+            cave_radius: 0.0,
+            ..Default::default()
+        });
+        assert!(lattice(8).all(|p| plain.sample(p) == plain.ground(p)));
+    }
+
+    #[test]
+    fn params_reject_unknown_keys_and_round_trip() {
+        let err = serde_json::from_str::<SvobodaParams>(
+            r#"{"seed": 1, "octaves": 2, "frequency": 1.0, "amplitude": 0.1, "base": 0.0, "bogus": 1}"#,
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("bogus"), "{err}");
+        let err = serde_json::from_str::<CaveParams>(r#"{"seed": 1, "caves": 2}"#).unwrap_err();
+        assert!(err.to_string().contains("caves"), "{err}");
+        let text = serde_json::to_string(&CaveParams::default()).unwrap();
+        assert_eq!(
+            serde_json::from_str::<CaveParams>(&text).unwrap(),
+            CaveParams::default()
+        );
+    }
+}
