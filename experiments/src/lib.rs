@@ -1,10 +1,28 @@
 //! The experiment runner as a library: the `experiments` binary only parses arguments and calls
 //! into these modules.
 //!
-//! - [`objects`]: the sample objects (sphere, asteroid, gyroid, torus, bunny, terrain) built from
-//!   names and parameters, shared by `extract` and manifests;
-//! - [`cmd_extract`]: one extraction, printed as JSON;
-//! - further subcommands (run, render, questionnaire, analyse, report) live in their own modules.
+//! - [`objects`]: the sample objects (sphere, asteroid, gyroid, torus, bunny) built from names and
+//!   parameters, shared by `extract` and manifests;
+//! - [`config`]: one extraction's full description and the names of its settings;
+//! - [`cmd_extract`]: one extraction, printed as a summary or JSON;
+//! - [`manifest`]: experiment manifests (TOML) expanded into configurations;
+//! - [`runner`]: runs a manifest's configurations N times into raw and summary CSV files,
+//!   crash-safe and resumable; [`provenance`] records where and how;
+//! - [`cmd_run`]: the `run` subcommand;
+//! - [`cmd_render`], [`cmd_questionnaire`]: turntable GIFs of a run's meshes and the questionnaire
+//!   built from them (`rmt-render`);
+//! - [`cmd_analyse`]: the questionnaire analysis (`rmt-analysis`);
+//! - [`bench`], [`cmd_bench`]: extraction speed against peer crates on pre-sampled values.
 
+pub mod bench;
+pub mod cmd_analyse;
+pub mod cmd_bench;
 pub mod cmd_extract;
+pub mod cmd_questionnaire;
+pub mod cmd_render;
+pub mod cmd_run;
+pub mod config;
+pub mod manifest;
 pub mod objects;
+pub mod provenance;
+pub mod runner;

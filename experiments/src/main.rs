@@ -4,7 +4,11 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "experiments", version, about = "Isosurface extraction experiments: extract, run manifests, render, analyse, report")]
+#[command(
+    name = "experiments",
+    version,
+    about = "Isosurface extraction experiments: extract, run manifests, render, analyse, report"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -14,11 +18,26 @@ struct Cli {
 enum Command {
     /// Extract one surface and print its statistics.
     Extract(experiments::cmd_extract::Args),
+    /// Run a manifest: every configuration N times, into raw and summary CSV files.
+    Run(experiments::cmd_run::Args),
+    /// Render a turntable GIF of every configuration of a run folder, under anonymous names.
+    Render(experiments::cmd_render::Args),
+    /// Build the side-by-side questionnaire from a rendered run folder.
+    Questionnaire(experiments::cmd_questionnaire::Args),
+    /// Analyse questionnaire responses: preference tables, tests, Bradley-Terry strengths.
+    Analyse(experiments::cmd_analyse::Args),
+    /// Benchmark extraction against peer crates (medians of interleaved repetitions).
+    Bench(experiments::cmd_bench::Args),
 }
 
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Extract(args) => experiments::cmd_extract::run(args),
+        Command::Run(args) => experiments::cmd_run::run(args),
+        Command::Render(args) => experiments::cmd_render::run(args),
+        Command::Questionnaire(args) => experiments::cmd_questionnaire::run(args),
+        Command::Analyse(args) => experiments::cmd_analyse::run(args),
+        Command::Bench(args) => experiments::cmd_bench::run(args),
     }
 }

@@ -16,7 +16,10 @@ fn main() {
     let threads: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
     let sphere = Sphere::new(glam::Vec3::ZERO, 0.8);
     let asteroid = Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default());
-    for (name, field) in [("sphere", &sphere as &dyn ScalarField), ("asteroid", &asteroid)] {
+    for (name, field) in [
+        ("sphere", &sphere as &dyn ScalarField),
+        ("asteroid", &asteroid),
+    ] {
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             for clustering in [Clustering::None, Clustering::Integrated] {
                 let mut s = ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);

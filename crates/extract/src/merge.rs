@@ -121,7 +121,10 @@ impl MergeBuffers {
         out.clear();
         let mut m = v;
         while m != NONE {
-            let (a, b) = (self.inc_start[m as usize] as usize, self.inc_start[m as usize + 1] as usize);
+            let (a, b) = (
+                self.inc_start[m as usize] as usize,
+                self.inc_start[m as usize + 1] as usize,
+            );
             for &t in &self.inc[a..b] {
                 if self.alive[t as usize] {
                     out.extend(self.tris[t as usize].iter().filter(|&&u| u != v));
@@ -149,7 +152,10 @@ impl MergeBuffers {
         for &c in k {
             let mut m = c;
             while m != NONE {
-                let (a, b) = (self.inc_start[m as usize] as usize, self.inc_start[m as usize + 1] as usize);
+                let (a, b) = (
+                    self.inc_start[m as usize] as usize,
+                    self.inc_start[m as usize + 1] as usize,
+                );
                 region.extend(self.inc[a..b].iter().filter(|&&t| self.alive[t as usize]));
                 m = self.next_member[m as usize];
             }
@@ -162,9 +168,19 @@ impl MergeBuffers {
     /// placed at `new_pos`. With `check`, refuses merges that would break the mesh (see the module
     /// doc) and leaves everything unchanged; without it, merges anyway (the dissertation's
     /// behaviour). Returns the number of triangles dropped.
-    pub fn merge(&mut self, positions: &mut [[f32; 3]], k: &[u32], new_pos: [f32; 3], check: bool) -> Result<usize, Reject> {
+    pub fn merge(
+        &mut self,
+        positions: &mut [[f32; 3]],
+        k: &[u32],
+        new_pos: [f32; 3],
+        check: bool,
+    ) -> Result<usize, Reject> {
         let mut scratch = std::mem::take(&mut self.scratch);
-        let result = if check { self.check(&mut scratch, positions, k, new_pos) } else { Ok(()) };
+        let result = if check {
+            self.check(&mut scratch, positions, k, new_pos)
+        } else {
+            Ok(())
+        };
         let result = result.map(|()| self.apply(positions, k, new_pos, &mut scratch.region));
         self.scratch = scratch;
         result
@@ -172,14 +188,26 @@ impl MergeBuffers {
 
     /// The exact check alone. It only reads, so clusters that share no triangle can be checked in
     /// parallel, each with its own `scratch`.
-    pub fn check(&self, scratch: &mut Scratch, positions: &[[f32; 3]], k: &[u32], new_pos: [f32; 3]) -> Result<(), Reject> {
+    pub fn check(
+        &self,
+        scratch: &mut Scratch,
+        positions: &[[f32; 3]],
+        k: &[u32],
+        new_pos: [f32; 3],
+    ) -> Result<(), Reject> {
         self.collect_region(k, &mut scratch.region);
         self.check_region(scratch, positions, k, new_pos)
     }
 
     /// Merges `k` into `k[0]` at `new_pos` without checking; returns the triangles dropped.
     /// `region` is working memory.
-    pub fn apply(&mut self, positions: &mut [[f32; 3]], k: &[u32], new_pos: [f32; 3], region: &mut Vec<u32>) -> usize {
+    pub fn apply(
+        &mut self,
+        positions: &mut [[f32; 3]],
+        k: &[u32],
+        new_pos: [f32; 3],
+        region: &mut Vec<u32>,
+    ) -> usize {
         self.collect_region(k, region);
         let v = k[0];
         positions[v as usize] = new_pos;
@@ -215,7 +243,13 @@ impl MergeBuffers {
         dropped
     }
 
-    fn check_region(&self, sc: &mut Scratch, positions: &[[f32; 3]], k: &[u32], new_pos: [f32; 3]) -> Result<(), Reject> {
+    fn check_region(
+        &self,
+        sc: &mut Scratch,
+        positions: &[[f32; 3]],
+        k: &[u32],
+        new_pos: [f32; 3],
+    ) -> Result<(), Reject> {
         // Directed edges and vertices of R.
         sc.edges.clear();
         sc.verts.clear();

@@ -329,7 +329,17 @@ pub fn extract(
                 .par_chunks_mut(plane)
                 .zip(chunks.into_par_iter())
                 .enumerate()
-                .map(|(z, (base, out))| number_plane(&layout, z, iso, &owned[z * plane..(z + 1) * plane], starts[z] as u32, base, out))
+                .map(|(z, (base, out))| {
+                    number_plane(
+                        &layout,
+                        z,
+                        iso,
+                        &owned[z * plane..(z + 1) * plane],
+                        starts[z] as u32,
+                        base,
+                        out,
+                    )
+                })
                 .sum::<usize>()
         });
     }
@@ -374,20 +384,21 @@ pub fn extract(
         // Clusters grouped by colour, storage order inside a colour.
         buf.candidates.sort_by_key(|c| c.colour);
         let (owned, base) = (&buf.owned, &buf.base);
-        let members = |c: &Candidate, island: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
-            k.clear();
-            let (o, b) = (owned[c.slot as usize] & OWNED_BITS, base[c.slot as usize]);
-            let mut bits = island;
-            let mut sum = glam::Vec3::ZERO;
-            while bits != 0 {
-                let d = bits.trailing_zeros();
-                bits &= bits - 1;
-                let id = b + (o & ((1u16 << d) - 1)).count_ones();
-                k.push(id);
-                sum += glam::Vec3::from(positions[id as usize]);
-            }
-            (sum / k.len() as f32).to_array()
-        };
+        let members =
+            |c: &Candidate, island: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
+                k.clear();
+                let (o, b) = (owned[c.slot as usize] & OWNED_BITS, base[c.slot as usize]);
+                let mut bits = island;
+                let mut sum = glam::Vec3::ZERO;
+                while bits != 0 {
+                    let d = bits.trailing_zeros();
+                    bits &= bits - 1;
+                    let id = b + (o & ((1u16 << d) - 1)).count_ones();
+                    k.push(id);
+                    sum += glam::Vec3::from(positions[id as usize]);
+                }
+                (sum / k.len() as f32).to_array()
+            };
         let mut k = Vec::with_capacity(14);
         let mut region = Vec::new();
         let mut accepted = Vec::new();
@@ -431,7 +442,8 @@ pub fn extract(
                 match *island {
                     Some(island) => {
                         let centre = members(c, island, &mesh.positions, &mut k);
-                        stats.discarded += merge.apply(&mut mesh.positions, &k, centre, &mut region);
+                        stats.discarded +=
+                            merge.apply(&mut mesh.positions, &k, centre, &mut region);
                         stats.clusters_committed += 1;
                         if island != c.island {
                             stats.clusters_reduced += 1;
@@ -457,8 +469,10 @@ pub fn extract(
                     .map(|&u| (u, merge.member_count(u)))
                     .filter(|&(_, n)| n > 1)
                     .min_by(|a, b| {
-                        let da = px.distance_squared(glam::Vec3::from(mesh.positions[a.0 as usize]));
-                        let db = px.distance_squared(glam::Vec3::from(mesh.positions[b.0 as usize]));
+                        let da =
+                            px.distance_squared(glam::Vec3::from(mesh.positions[a.0 as usize]));
+                        let db =
+                            px.distance_squared(glam::Vec3::from(mesh.positions[b.0 as usize]));
                         da.total_cmp(&db).then(a.0.cmp(&b.0))
                     });
                 if let Some((u, n)) = target {
@@ -498,7 +512,8 @@ pub fn extract(
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     } else if clustering == Clustering::Meshopt {
         let t = std::time::Instant::now();
-        stats.discarded += crate::simplify::meshopt_simplify(mesh, settings.grid.h(), settings.collapse_threshold);
+        stats.discarded +=
+            crate::simplify::meshopt_simplify(mesh, settings.grid.h(), settings.collapse_threshold);
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     }
 
@@ -509,7 +524,14 @@ pub fn extract(
 }
 
 /// Vertex pass over one storage plane: owned crossings, counts, cluster proposals.
-fn vertex_plane(l: &Layout, z: usize, iso: f32, propose: bool, pinch_rule: bool, owned: &mut [u16]) -> (PlaneCounts, Vec<Candidate>) {
+fn vertex_plane(
+    l: &Layout,
+    z: usize,
+    iso: f32,
+    propose: bool,
+    pinch_rule: bool,
+    owned: &mut [u16],
+) -> (PlaneCounts, Vec<Candidate>) {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
     let mut counts = PlaneCounts::default();
@@ -570,7 +592,9 @@ fn vertex_plane(l: &Layout, z: usize, iso: f32, propose: bool, pinch_rule: bool,
             counts.edges += valid.count_ones() as usize;
             if propose && own.count_ones() >= 2 {
                 let colour = lattice::colour(l.lattice, p) as u8;
-                counts.proposals.add(cluster::propose(l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands));
+                counts.proposals.add(cluster::propose(
+                    l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands,
+                ));
             }
         }
     }

@@ -113,13 +113,20 @@ fn unchecked_clustering_reproduces_the_dissertation_counts() {
 fn integrated_clustering_removes_three_quarters_of_the_triangles() {
     let sphere = Sphere::new(Vec3::ZERO, 1.0);
     let asteroid = rmt_fields::Asteroid::new(Vec3::ZERO, rmt_fields::AsteroidParams::default());
-    for (name, field) in [("sphere", &sphere as &dyn ScalarField), ("asteroid", &asteroid)] {
+    for (name, field) in [
+        ("sphere", &sphere as &dyn ScalarField),
+        ("asteroid", &asteroid),
+    ] {
         for lattice in LATTICES {
             let (_, none, _) = run(field, Grid::cube(50, 1.0), lattice, Clustering::None);
-            let (mesh, merged, r) = run(field, Grid::cube(50, 1.0), lattice, Clustering::Integrated);
+            let (mesh, merged, r) =
+                run(field, Grid::cube(50, 1.0), lattice, Clustering::Integrated);
             assert_clean(name, &r);
             let reduction = 1.0 - merged.triangles as f64 / none.triangles as f64;
-            assert!(reduction >= 0.75, "{name} {lattice:?}: reduction {reduction}");
+            assert!(
+                reduction >= 0.75,
+                "{name} {lattice:?}: reduction {reduction}"
+            );
             let ar = rmt_mesh::quality(&mesh).ar_mean;
             if !(name == "sphere" && lattice == rmt_extract::Lattice::Simple) {
                 assert!(ar <= 1.25, "{name} {lattice:?}: AR mean {ar}");

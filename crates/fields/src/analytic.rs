@@ -95,7 +95,11 @@ mod tests {
 
     #[test]
     fn torus_is_negative_inside_the_tube_and_positive_in_the_hole() {
-        let t = Torus { centre: Vec3::ZERO, major: 1.0, minor: 0.3 };
+        let t = Torus {
+            centre: Vec3::ZERO,
+            major: 1.0,
+            minor: 0.3,
+        };
         assert!(t.sample(Vec3::new(1.0, 0.0, 0.0)) < 0.0);
         assert!(t.sample(Vec3::ZERO) > 0.0);
         assert!((t.sample(Vec3::new(1.3, 0.0, 0.0))).abs() < 1e-6);
@@ -103,7 +107,10 @@ mod tests {
 
     #[test]
     fn gyroid_is_zero_free_at_the_origin_sheet() {
-        let g = Gyroid { frequency: 1.0, thickness: 0.3 };
+        let g = Gyroid {
+            frequency: 1.0,
+            thickness: 0.3,
+        };
         // g(0) = 0, so the origin lies inside the thickened sheet.
         assert!(g.sample(Vec3::ZERO) < 0.0);
     }

@@ -22,7 +22,13 @@ pub struct AsteroidParams {
 
 impl Default for AsteroidParams {
     fn default() -> Self {
-        Self { seed: 7, octaves: 4, frequency: 1.5, amplitude: 0.25, radius: 0.7 }
+        Self {
+            seed: 7,
+            octaves: 4,
+            frequency: 1.5,
+            amplitude: 0.25,
+            radius: 0.7,
+        }
     }
 }
 
@@ -40,7 +46,11 @@ impl Asteroid {
         let fbm = Fbm::<Perlin>::new(params.seed)
             .set_octaves(params.octaves.clamp(1, 32))
             .set_frequency(params.frequency);
-        Self { params, centre, fbm }
+        Self {
+            params,
+            centre,
+            fbm,
+        }
     }
 
     /// The parameters it was built with.
@@ -66,7 +76,13 @@ mod tests {
     fn asteroid_is_deterministic_for_a_seed_and_differs_across_seeds() {
         let a = Asteroid::new(Vec3::ZERO, AsteroidParams::default());
         let b = Asteroid::new(Vec3::ZERO, AsteroidParams::default());
-        let c = Asteroid::new(Vec3::ZERO, AsteroidParams { seed: 8, ..Default::default() });
+        let c = Asteroid::new(
+            Vec3::ZERO,
+            AsteroidParams {
+                seed: 8,
+                ..Default::default()
+            },
+        );
         let p = Vec3::new(0.31, -0.2, 0.55);
         assert_eq!(a.sample(p), b.sample(p));
         assert_ne!(a.sample(p), c.sample(p));

@@ -1,0 +1,155 @@
+//! Writing files: tables as CSV and Markdown, every file through a temporary name and a rename, so
+//! a reader never sees half a file.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::error::{io_error, Result};
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or_else(|| Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "output".into());
+    let temporary = dir.join(format!(".{name}.tmp"));
+    {
+        let mut file = std::fs::File::create(&temporary).map_err(io_error(&temporary))?;
+        file.write_all(bytes).map_err(io_error(&temporary))?;
+        file.sync_all().map_err(io_error(&temporary))?;
+    }
+    std::fs::rename(&temporary, path).map_err(io_error(path))
+}
+
+/// One Markdown table of a [`TextTable`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    /// A sub-heading.
+    pub caption: Option<String>,
+    /// Column titles.
+    pub header: Vec<String>,
+    /// Cells, already formatted for reading.
+    pub rows: Vec<Vec<String>>,
+}
+
+/// A table with a machine-readable CSV form and a readable Markdown form.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextTable {
+    /// File stem (`benchmark_summary`).
+    pub name: String,
+    /// Heading.
+    pub title: String,
+    /// Paragraphs under the heading (units, sources, definitions).
+    pub notes: Vec<String>,
+    /// CSV column names.
+    pub csv_header: Vec<String>,
+    /// CSV cells.
+    pub csv_rows: Vec<Vec<String>>,
+    /// Markdown tables.
+    pub blocks: Vec<Block>,
+}
+
+impl TextTable {
+    /// The CSV text (RFC 4180 quoting, `\n` line ends).
+    pub fn to_csv(&self) -> Vec<u8> {
+        let mut writer = csv::WriterBuilder::new()
+            .terminator(csv::Terminator::Any(b'\n'))
+            .from_writer(Vec::new());
+        // Writing to a Vec cannot fail.
+        let _ = writer.write_record(&self.csv_header);
+        for row in &self.csv_rows {
+            let _ = writer.write_record(row);
+        }
+        writer.into_inner().unwrap_or_default()
+    }
+
+    /// The Markdown text: a level-2 heading, the notes, then each block.
+    pub fn to_markdown(&self) -> String {
+        let mut out = format!("## {}\n\n", self.title);
+        for note in &self.notes {
+            out.push_str(note);
+            out.push_str("\n\n");
+        }
+        for block in &self.blocks {
+            if let Some(caption) = &block.caption {
+                out.push_str(&format!("### {caption}\n\n"));
+            }
+            out.push_str(&markdown_block(block));
+            out.push('\n');
+        }
+        out
+    }
+}
+
+/// A pipe table; the first column is left-aligned, the others right-aligned.
+pub fn markdown_block(block: &Block) -> String {
+    let escape = |s: &str| s.replace('|', "\\|");
+    let mut out = format!(
+        "| {} |\n",
+        block
+            .header
+            .iter()
+            .map(|h| escape(h))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    out.push('|');
+    for i in 0..block.header.len() {
+        out.push_str(if i == 0 { "---|" } else { "---:|" });
+    }
+    out.push('\n');
+    for row in &block.rows {
+        let cells: Vec<String> = row
+            .iter()
+            .map(|c| {
+                if c.is_empty() {
+                    "–".into()
+                } else {
+                    escape(c)
+                }
+            })
+            .collect();
+        out.push_str(&format!("| {} |\n", cells.join(" | ")));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tables_print_as_csv_and_markdown() {
+        let table = TextTable {
+            name: "t".into(),
+            title: "T".into(),
+            notes: vec!["note".into()],
+            csv_header: vec!["a".into(), "b".into()],
+            csv_rows: vec![vec!["x,y".into(), "1".into()]],
+            blocks: vec![Block {
+                caption: None,
+                header: vec!["a".into(), "b".into()],
+                rows: vec![vec!["x|y".into(), String::new()]],
+            }],
+        };
+        assert_eq!(table.to_csv(), b"a,b\n\"x,y\",1\n");
+        assert_eq!(
+            table.to_markdown(),
+            "## T\n\nnote\n\n| a | b |\n|---|---:|\n| x\\|y | – |\n\n"
+        );
+    }
+
+    #[test]
+    fn atomic_writes_leave_only_the_target() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.txt");
+        write_atomically(&path, b"one, longer").unwrap();
+        write_atomically(&path, b"two").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"two");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

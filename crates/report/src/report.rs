@@ -1,0 +1,371 @@
+//! Building the report folder from a run folder (and optionally a scaling run and the
+//! questionnaire data), and checking a committed report against a fresh rebuild.
+//!
+//! ```text
+//! <out>/README.md            one page: provenance, every figure with a sentence, links
+//! <out>/data/                the run's run.json, manifest.toml, configurations.csv, summary.csv,
+//!                            raw.csv, paper_comparison.csv (copied; the report's own input)
+//! <out>/data/scaling/        the same files of the scaling run, when given
+//! <out>/figures/NAME.{png,svg}
+//! <out>/tables/NAME.{md,csv}
+//! <out>/questionnaire/       the questionnaire analysis (rmt-analysis: tables and charts)
+//! ```
+//!
+//! `data/` is itself a valid run folder (with `data/scaling/` found by default), so a report
+//! rebuilds from its own copy: that is what [`check`] does.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use crate::data::{
+    Run, CONFIGURATIONS_CSV, MANIFEST_TOML, PAPER_CSV, RAW_CSV, RUN_JSON, SUMMARY_CSV,
+};
+use crate::error::{io_error, ReportError, Result};
+use crate::figures::{self, AnyFigure};
+use crate::output::{write_atomically, TextTable};
+use crate::readme::{readme, QuestionnaireSummary, ReadmeInput};
+use crate::scaling::{fit_scaling, ScalingFit};
+use crate::tables;
+
+/// The run files copied into `data/` (when present), in this order.
+pub const DATA_FILES: [&str; 6] = [
+    RUN_JSON,
+    MANIFEST_TOML,
+    CONFIGURATIONS_CSV,
+    SUMMARY_CSV,
+    RAW_CSV,
+    PAPER_CSV,
+];
+
+/// The questionnaire part of a report.
+#[derive(Clone, Debug)]
+pub struct Questionnaire {
+    /// The three CSV files.
+    pub inputs: rmt_analysis::Inputs,
+    /// Analysis options (exclusions, resamples, seed).
+    pub options: rmt_analysis::Options,
+}
+
+/// What a report is built from.
+#[derive(Clone, Debug)]
+pub struct ReportInputs {
+    /// The benchmark run folder (or a report's `data/` folder).
+    pub run: PathBuf,
+    /// The scaling run folder, if any (see [`default_scaling`]).
+    pub scaling: Option<PathBuf>,
+    /// The questionnaire, if it is part of the report.
+    pub questionnaire: Option<Questionnaire>,
+    /// Copy `raw.csv` into `data/` (it can be large; `summary.csv` holds what the report uses).
+    pub keep_raw: bool,
+}
+
+/// `run/scaling` when it holds a scaling run (as a report's `data/` folder does).
+pub fn default_scaling(run: &Path) -> Option<PathBuf> {
+    let candidate = run.join("scaling");
+    candidate.join(SUMMARY_CSV).is_file().then_some(candidate)
+}
+
+/// The files of a run folder that go into `data/`, read into memory (so a report can be rebuilt
+/// over its own `data/`).
+fn read_data_files(folder: &Path, keep_raw: bool) -> Result<Vec<(&'static str, Vec<u8>)>> {
+    let mut files = Vec::new();
+    for name in DATA_FILES {
+        if name == RAW_CSV && !keep_raw {
+            continue;
+        }
+        let path = folder.join(name);
+        if path.is_file() {
+            files.push((name, std::fs::read(&path).map_err(io_error(&path))?));
+        }
+    }
+    Ok(files)
+}
+
+/// Writes the data files to `dir` and removes the run files that are not part of this report;
+/// returns the names written.
+fn write_data_files(dir: &Path, files: &[(&'static str, Vec<u8>)]) -> Result<Vec<String>> {
+    std::fs::create_dir_all(dir).map_err(io_error(dir))?;
+    for (name, bytes) in files {
+        write_atomically(&dir.join(name), bytes)?;
+    }
+    for name in DATA_FILES {
+        let path = dir.join(name);
+        if path.is_file() && !files.iter().any(|(n, _)| *n == name) {
+            std::fs::remove_file(&path).map_err(io_error(&path))?;
+        }
+    }
+    Ok(files.iter().map(|(n, _)| n.to_string()).collect())
+}
+
+/// Removes files with one of `extensions` in `dir` that are not in `keep` (stale outputs of an
+/// earlier report); other files are left alone.
+fn remove_stale(dir: &Path, keep: &BTreeSet<PathBuf>, extensions: &[&str]) -> Result<()> {
+    for entry in std::fs::read_dir(dir).map_err(io_error(dir))? {
+        let path = entry.map_err(io_error(dir))?.path();
+        let ours = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| extensions.contains(&e));
+        if path.is_file() && ours && !keep.contains(&path) {
+            std::fs::remove_file(&path).map_err(io_error(&path))?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes `table` as `dir/NAME.csv` and `dir/NAME.md`.
+fn write_table(dir: &Path, table: &TextTable) -> Result<Vec<PathBuf>> {
+    let csv = dir.join(format!("{}.csv", table.name));
+    write_atomically(&csv, &table.to_csv())?;
+    let md = dir.join(format!("{}.md", table.name));
+    write_atomically(&md, table.to_markdown().as_bytes())?;
+    Ok(vec![csv, md])
+}
+
+/// Builds the report into `out` (created if needed); returns every file written, relative to
+/// `out`, sorted. The same inputs always give the same bytes: nothing depends on the clock, the
+/// paths of the inputs or the order of a hash map.
+pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
+    let run = Run::read(&inputs.run)?;
+    let scaling: Option<(Run, Vec<ScalingFit>)> = match &inputs.scaling {
+        Some(folder) => {
+            let scaling_run = Run::read(folder)?;
+            let fits = fit_scaling(&scaling_run);
+            Some((scaling_run, fits))
+        }
+        None => None,
+    };
+    // Read every input before writing anything: `out/data` may be the input.
+    let data = read_data_files(&inputs.run, inputs.keep_raw)?;
+    let scaling_data = match &inputs.scaling {
+        Some(folder) => Some(read_data_files(folder, inputs.keep_raw)?),
+        None => None,
+    };
+
+    let mut written: Vec<PathBuf> = Vec::new();
+    std::fs::create_dir_all(out).map_err(io_error(out))?;
+    let data_dir = out.join("data");
+    let mut data_files = write_data_files(&data_dir, &data)?;
+    let scaling_dir = data_dir.join("scaling");
+    match &scaling_data {
+        Some(files) => {
+            let names = write_data_files(&scaling_dir, files)?;
+            data_files.extend(names.into_iter().map(|n| format!("scaling/{n}")));
+        }
+        None if scaling_dir.is_dir() => {
+            write_data_files(&scaling_dir, &[])?;
+        }
+        None => {}
+    }
+    written.extend(data_files.iter().map(|f| data_dir.join(f)));
+
+    // Tables.
+    let tables_dir = out.join("tables");
+    std::fs::create_dir_all(&tables_dir).map_err(io_error(&tables_dir))?;
+    let mut all_tables = vec![tables::benchmark_summary(&run)];
+    if let Some(paper) = &run.paper {
+        all_tables.push(tables::paper_comparison(&run, paper));
+        all_tables.push(tables::paper_ratios(paper));
+    }
+    if let Some((scaling_run, fits)) = &scaling {
+        all_tables.push(tables::scaling_table(scaling_run, fits));
+    }
+    let mut kept = BTreeSet::new();
+    for table in &all_tables {
+        for path in write_table(&tables_dir, table)? {
+            kept.insert(path.clone());
+            written.push(path);
+        }
+    }
+    remove_stale(&tables_dir, &kept, &["csv", "md"])?;
+
+    // Figures.
+    let figures_dir = out.join("figures");
+    std::fs::create_dir_all(&figures_dir).map_err(io_error(&figures_dir))?;
+    let mut all_figures: Vec<(String, AnyFigure)> = vec![
+        (
+            "triangles".into(),
+            AnyFigure::Rows(figures::triangles(&run)),
+        ),
+        (
+            "pass_times".into(),
+            AnyFigure::Rows(figures::pass_times(&run)),
+        ),
+        (
+            "stage_shares".into(),
+            AnyFigure::Rows(figures::stage_shares(&run)),
+        ),
+        (
+            "aspect_ratio".into(),
+            AnyFigure::Rows(figures::aspect_ratio(&run)),
+        ),
+    ];
+    if let Some(chart) = figures::fidelity(&run) {
+        all_figures.push(("fidelity".into(), AnyFigure::Xy(chart)));
+    }
+    if let Some((scaling_run, fits)) = &scaling {
+        if let Some(chart) = figures::scaling(scaling_run, fits) {
+            all_figures.push(("scaling".into(), AnyFigure::Xy(chart)));
+        }
+    }
+    let mut kept = BTreeSet::new();
+    for (name, figure) in &all_figures {
+        for path in figure.write(&figures_dir, name)? {
+            kept.insert(path.clone());
+            written.push(path);
+        }
+    }
+    remove_stale(&figures_dir, &kept, &["png", "svg"])?;
+    let figure_names: Vec<String> = all_figures.iter().map(|(n, _)| n.clone()).collect();
+
+    // Questionnaire.
+    let questionnaire = match &inputs.questionnaire {
+        Some(q) => {
+            let analysis = rmt_analysis::analyse(&q.inputs, &q.options)?;
+            let dir = out.join("questionnaire");
+            let files = rmt_analysis::write_outputs(&analysis, &dir)?;
+            let mut names: Vec<String> = files
+                .iter()
+                .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+                .collect();
+            names.sort();
+            written.extend(files);
+            Some(QuestionnaireSummary {
+                participants: analysis.basis.participants,
+                responses: analysis.basis.responses,
+                questions: analysis.questions.len(),
+                significant: analysis.questions.iter().filter(|q| q.significant).count(),
+                files: names,
+            })
+        }
+        None => None,
+    };
+
+    let text = readme(&ReadmeInput {
+        run: &run,
+        scaling: scaling.as_ref().map(|(r, f)| (r, f.as_slice())),
+        figures: &figure_names,
+        tables: &all_tables,
+        questionnaire: questionnaire.as_ref(),
+        data_files: &data_files,
+    });
+    let readme_path = out.join("README.md");
+    write_atomically(&readme_path, text.as_bytes())?;
+    written.push(readme_path);
+
+    let mut relative: Vec<PathBuf> = written
+        .iter()
+        .map(|p| p.strip_prefix(out).unwrap_or(p).to_path_buf())
+        .collect();
+    relative.sort();
+    relative.dedup();
+    Ok(relative)
+}
+
+/// The folders and files of a report that [`build`] owns and [`check`] compares.
+pub const OWNED: [&str; 5] = ["README.md", "data", "figures", "tables", "questionnaire"];
+
+/// How a committed report differs from a fresh rebuild.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CheckOutcome {
+    /// Files compared.
+    pub compared: usize,
+    /// Text files (tables, README, data) whose bytes differ.
+    pub differing: Vec<PathBuf>,
+    /// Files the rebuild makes that the committed report lacks.
+    pub missing: Vec<PathBuf>,
+    /// Files in the committed report's owned folders that the rebuild does not make.
+    pub unexpected: Vec<PathBuf>,
+    /// Figures whose bytes differ (reported, not a failure: only the set of figures must match).
+    pub figures_changed: Vec<PathBuf>,
+}
+
+impl CheckOutcome {
+    /// Whether the committed report matches: same files, identical text.
+    pub fn passed(&self) -> bool {
+        self.differing.is_empty() && self.missing.is_empty() && self.unexpected.is_empty()
+    }
+}
+
+/// Every file under the owned entries of `root`, relative to it, hidden files skipped.
+fn owned_files(root: &Path) -> Result<BTreeSet<PathBuf>> {
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeSet<PathBuf>) -> Result<()> {
+        let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+            .map_err(io_error(dir))?
+            .map(|e| e.map(|e| e.path()).map_err(io_error(dir)))
+            .collect::<Result<_>>()?;
+        entries.sort();
+        for path in entries {
+            let hidden = path
+                .file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with('.'));
+            if hidden {
+                continue;
+            }
+            if path.is_dir() {
+                walk(root, &path, out)?;
+            } else if path.is_file() {
+                out.insert(path.strip_prefix(root).unwrap_or(&path).to_path_buf());
+            }
+        }
+        Ok(())
+    }
+    let mut files = BTreeSet::new();
+    for name in OWNED {
+        let path = root.join(name);
+        if path.is_dir() {
+            walk(root, &path, &mut files)?;
+        } else if path.is_file() {
+            files.insert(PathBuf::from(name));
+        }
+    }
+    Ok(files)
+}
+
+fn is_figure(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e == "png" || e == "svg")
+}
+
+/// Compares the report in `committed` with the one in `fresh` (file sets of the owned folders;
+/// bytes of every non-figure file).
+pub fn compare(committed: &Path, fresh: &Path) -> Result<CheckOutcome> {
+    let theirs = owned_files(committed)?;
+    let ours = owned_files(fresh)?;
+    let mut outcome = CheckOutcome::default();
+    for file in &ours {
+        if !theirs.contains(file) {
+            outcome.missing.push(file.clone());
+            continue;
+        }
+        outcome.compared += 1;
+        let a = committed.join(file);
+        let b = fresh.join(file);
+        let same =
+            std::fs::read(&a).map_err(io_error(&a))? == std::fs::read(&b).map_err(io_error(&b))?;
+        if !same {
+            if is_figure(file) {
+                outcome.figures_changed.push(file.clone());
+            } else {
+                outcome.differing.push(file.clone());
+            }
+        }
+    }
+    outcome.unexpected = theirs.difference(&ours).cloned().collect();
+    Ok(outcome)
+}
+
+/// Rebuilds the report from `inputs` into a temporary folder and compares it with the one in
+/// `committed`.
+pub fn check(inputs: &ReportInputs, committed: &Path) -> Result<CheckOutcome> {
+    if !committed.is_dir() {
+        return Err(ReportError::MissingFile {
+            path: committed.to_path_buf(),
+            hint: "the committed report folder to check".into(),
+        });
+    }
+    let temporary = tempfile::tempdir().map_err(io_error(Path::new("temporary folder")))?;
+    build(inputs, temporary.path())?;
+    compare(committed, temporary.path())
+}

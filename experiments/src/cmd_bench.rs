@@ -1,0 +1,54 @@
+//! `experiments bench`: the extraction benchmark of [`crate::bench`] without criterion, printed as
+//! a table or as one JSON object `{"results": [...]}`.
+//!
+//! ```text
+//! experiments bench --fields sphere,asteroid --sizes 32,64,128 --reps 20 --threads 1,2 --json
+//! ```
+
+use anyhow::{Context, Result};
+
+use crate::bench::{format_table, run_bench, BenchConfig, BenchField};
+
+/// Arguments of `bench`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Fields, comma-separated: sphere, asteroid.
+    #[arg(long, value_delimiter = ',', default_value = "sphere,asteroid")]
+    pub fields: Vec<String>,
+    /// Cells per axis, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "32,64,128")]
+    pub sizes: Vec<usize>,
+    /// Timed repetitions of every method (interleaved; the median is reported).
+    #[arg(long, default_value_t = 20)]
+    pub reps: usize,
+    /// Thread counts of our methods, comma-separated (the peers are single-threaded).
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub threads: Vec<usize>,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `bench`.
+pub fn run(args: Args) -> Result<()> {
+    let fields = args
+        .fields
+        .iter()
+        .map(|f| BenchField::parse(f))
+        .collect::<Result<Vec<_>, _>>()
+        .context("reading --fields")?;
+    let config = BenchConfig {
+        fields,
+        sizes: args.sizes,
+        reps: args.reps,
+        threads: args.threads,
+    };
+    let report = run_bench(&config, |line| eprintln!("bench: {line}"))?;
+    if args.json {
+        let text = serde_json::to_string_pretty(&report).context("serialising the results")?;
+        println!("{text}");
+    } else {
+        print!("{}", format_table(&report));
+    }
+    Ok(())
+}

@@ -1,0 +1,279 @@
+//! One extraction's full description ([`Extraction`]): object, box, resolution and extractor
+//! settings, shared by `extract` and the runner, and the names these take on the command line,
+//! in manifests and in CSV files.
+
+use rmt_extract::{Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode};
+use serde::{Deserialize, Serialize};
+
+use crate::objects::{Bounds, ObjectSpec, Resolution};
+
+/// How normals are computed, with the names used on the command line and in manifests
+/// (`area`, `gradient`, `none`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Normals {
+    /// Area-weighted mean of the face normals (the dissertation's choice).
+    #[default]
+    Area,
+    /// Central differences of the field.
+    Gradient,
+    /// No normals.
+    None,
+}
+
+impl Normals {
+    /// The extractor's setting.
+    pub fn mode(self) -> NormalMode {
+        match self {
+            Normals::Area => NormalMode::AreaWeighted,
+            Normals::Gradient => NormalMode::Gradient,
+            Normals::None => NormalMode::Skip,
+        }
+    }
+
+    /// The name (`area`, `gradient`, `none`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Normals::Area => "area",
+            Normals::Gradient => "gradient",
+            Normals::None => "none",
+        }
+    }
+}
+
+/// Parses `bcdl` or `simple`.
+pub fn parse_lattice(s: &str) -> Result<Lattice, String> {
+    match s {
+        "bcdl" => Ok(Lattice::BodyCentred),
+        "simple" => Ok(Lattice::Simple),
+        _ => Err(format!("unknown lattice `{s}` (expected bcdl or simple)")),
+    }
+}
+
+/// Parses `none`, `integrated`, `integrated-unchecked`, `postprocessed` or `meshopt`.
+pub fn parse_clustering(s: &str) -> Result<Clustering, String> {
+    use Clustering::*;
+    [
+        None,
+        Integrated,
+        IntegratedUnchecked,
+        Postprocessed,
+        Meshopt,
+    ]
+    .into_iter()
+    .find(|c| c.name() == s)
+    .ok_or_else(|| {
+        format!(
+            "unknown clustering `{s}` (expected none, integrated, integrated-unchecked, \
+                 postprocessed or meshopt)"
+        )
+    })
+}
+
+/// Parses `mt` or `mc`.
+pub fn parse_method(s: &str) -> Result<Method, String> {
+    match s {
+        "mt" => Ok(Method::Mt),
+        "mc" => Ok(Method::Mc),
+        _ => Err(format!("unknown method `{s}` (expected mt or mc)")),
+    }
+}
+
+/// Parses `area`, `gradient` or `none`.
+pub fn parse_normals(s: &str) -> Result<Normals, String> {
+    match s {
+        "area" => Ok(Normals::Area),
+        "gradient" => Ok(Normals::Gradient),
+        "none" => Ok(Normals::None),
+        _ => Err(format!(
+            "unknown normals `{s}` (expected area, gradient or none)"
+        )),
+    }
+}
+
+/// The method's name (`mt`, `mc`).
+pub fn method_name(m: Method) -> &'static str {
+    match m {
+        Method::Mt => "mt",
+        Method::Mc => "mc",
+    }
+}
+
+/// The lattice a configuration samples, by name: marching cubes samples the simple cubic
+/// lattice whatever the setting says.
+pub fn lattice_name(method: Method, lattice: Lattice) -> &'static str {
+    match method {
+        Method::Mc => Lattice::Simple.name(),
+        Method::Mt => lattice.name(),
+    }
+}
+
+/// Everything that decides one extraction.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Extraction {
+    /// The object and its parameters.
+    pub object: ObjectSpec,
+    /// The sampled box.
+    pub bounds: Bounds,
+    /// Cells per axis.
+    pub resolution: Resolution,
+    /// Marching tetrahedra or marching cubes.
+    pub method: Method,
+    /// The tetrahedral lattice (marching cubes: always simple).
+    pub lattice: Lattice,
+    /// Vertex merging.
+    pub clustering: Clustering,
+    /// Edge-collapse threshold (post-processed) or error bound (meshopt), in grid spacings.
+    pub collapse_threshold: f32,
+    /// The isovalue.
+    pub iso: f32,
+    /// Normals.
+    pub normals: Normals,
+}
+
+/// The extractor's default collapse threshold, in grid spacings.
+pub fn default_collapse_threshold() -> f32 {
+    ExtractSettings::new(Grid::cube(1, 1.0), Lattice::Simple, Clustering::None).collapse_threshold
+}
+
+impl Extraction {
+    /// The extractor settings for `threads` worker threads.
+    pub fn settings(&self, threads: usize) -> ExtractSettings {
+        let grid = Grid::new(self.resolution.cells(), self.bounds.min, self.bounds.max);
+        let lattice = match self.method {
+            Method::Mc => Lattice::Simple,
+            Method::Mt => self.lattice,
+        };
+        let mut s = ExtractSettings::new(grid, lattice, self.clustering);
+        s.method = self.method;
+        s.collapse_threshold = self.collapse_threshold;
+        s.iso = self.iso;
+        s.threads = threads;
+        s.normals = self.normals.mode();
+        s
+    }
+
+    /// Checks what can be checked without building the field: grid, settings, the memory the
+    /// sample array and per-point tables would need, and method/clustering combinations.
+    pub fn check(&self, threads: usize) -> Result<(), String> {
+        let settings = self.settings(threads);
+        settings.check().map_err(|e| e.to_string())?;
+        if self.method == Method::Mc && self.clustering != Clustering::None {
+            return Err(format!(
+                "marching cubes takes clustering none, got {}",
+                self.clustering.name()
+            ));
+        }
+        check_memory(&settings)
+    }
+}
+
+/// Estimated bytes of working memory per sample slot: the extractor keeps 10 per slot (a 4-byte
+/// value, 2 bytes of crossing flags, a 4-byte first-crossing id); the rest is headroom for the
+/// buffers that grow with the surface (crossings, clusters, triangles, the output mesh), which for
+/// a dense surface such as a fine gyroid approach the volume's size.
+pub const BYTES_PER_SAMPLE_ESTIMATE: u64 = 24;
+
+/// The estimated bytes an extraction with `settings` holds: sample slots times
+/// [`BYTES_PER_SAMPLE_ESTIMATE`] (saturating).
+pub fn estimated_bytes(settings: &ExtractSettings) -> u64 {
+    let [nx, ny, nz] = settings.grid.cells.map(|c| c as u64);
+    let slots = match rmt_extract::samples::sampled_lattice(settings) {
+        Lattice::Simple => (nx + 1).saturating_mul(ny + 1).saturating_mul(nz + 1),
+        Lattice::BodyCentred => (nx + 2)
+            .saturating_mul(ny + 2)
+            .saturating_mul(nz.saturating_mul(2) + 3),
+    };
+    slots.saturating_mul(BYTES_PER_SAMPLE_ESTIMATE)
+}
+
+/// Memory the system reports as available (Linux `MemAvailable`), if known.
+pub fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Refuses settings whose estimated memory exceeds what is available, before allocating.
+pub fn check_memory(settings: &ExtractSettings) -> Result<(), String> {
+    let need = estimated_bytes(settings);
+    match available_memory() {
+        Some(have) if need > have => Err(format!(
+            "resolution {:?} needs an estimated {} (sample array and per-point tables), more than \
+             the {} of memory available",
+            settings.grid.cells,
+            human_bytes(need),
+            human_bytes(have)
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// `1.5 GiB`-style sizes.
+pub fn human_bytes(b: u64) -> String {
+    let units = ["B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < units.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    format!("{v:.1} {}", units[u])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for s in ["bcdl", "simple"] {
+            assert_eq!(parse_lattice(s).unwrap().name(), s);
+        }
+        for s in [
+            "none",
+            "integrated",
+            "integrated-unchecked",
+            "postprocessed",
+            "meshopt",
+        ] {
+            assert_eq!(parse_clustering(s).unwrap().name(), s);
+        }
+        for s in ["mt", "mc"] {
+            assert_eq!(method_name(parse_method(s).unwrap()), s);
+        }
+        for s in ["area", "gradient", "none"] {
+            assert_eq!(parse_normals(s).unwrap().name(), s);
+        }
+        assert!(parse_lattice("fcc").unwrap_err().contains("fcc"));
+        assert!(parse_clustering("all").is_err());
+        assert!(parse_method("dc").is_err());
+    }
+
+    #[test]
+    fn memory_estimate_grows_with_resolution_and_refuses_huge_grids() {
+        let small = Grid::cube(10, 1.0);
+        let big = Grid::cube(40, 1.0);
+        let s = |g| ExtractSettings::new(g, Lattice::BodyCentred, Clustering::None);
+        // Four times the cells per axis: at least 4^3 / 2 times the memory (boundary slots aside).
+        assert!(estimated_bytes(&s(big)) > 32 * estimated_bytes(&s(small)));
+        assert!(check_memory(&s(small)).is_ok());
+        let huge = ExtractSettings::new(
+            Grid::new([1 << 20; 3], glam::Vec3::ZERO, glam::Vec3::ONE),
+            Lattice::Simple,
+            Clustering::None,
+        );
+        if available_memory().is_some() {
+            assert!(check_memory(&huge)
+                .unwrap_err()
+                .contains("needs an estimated"));
+        }
+    }
+
+    #[test]
+    fn human_bytes_picks_a_unit() {
+        assert_eq!(human_bytes(512), "512.0 B");
+        assert_eq!(human_bytes(3 << 30), "3.0 GiB");
+    }
+}

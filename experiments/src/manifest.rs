@@ -1,0 +1,978 @@
+//! Experiment manifests: a TOML file naming objects and the configurations to extract them with,
+//! expanded into a [`Plan`] of uniquely named [`Configuration`]s. Unknown keys are rejected.
+//!
+//! ```toml
+//! name = "paper"            # run name: letters, digits, '-', '_', '.'
+//! repetitions = 100         # timed repetitions per configuration (default 100)
+//! warmup = 2                # untimed extractions first, same extractor (default 1)
+//! threads = 1               # worker threads (default: every core)
+//! seed = 7                  # noise seed of objects that do not set their own
+//! output = "results"        # parent folder of run folders (default "results")
+//! save_meshes = true        # mesh of the last repetition as <run>/meshes/<id>.ply
+//! paper_benchmark = "data/paper/benchmark.csv"   # compare with the dissertation (optional)
+//! collapse_threshold = 0.5  # defaults for every configuration (optional)
+//! iso = 0.0
+//! normals = "area"          # area | gradient | none
+//!
+//! [[objects]]
+//! name = "sphere"           # used in the `object` column; also the kind unless `kind` is set
+//! kind = "sphere"           # sphere | asteroid | gyroid | torus | bunny | terrain | caves
+//! code = "ss"               # id prefix (default: the kind's code)
+//! resolution = 50           # or [75, 40, 56] (default 50)
+//! bounds = [-1, -1, -1, 1, 1, 1]   # default [-1, 1]^3
+//! radius = 1.0              # the kind's parameters (see `objects`)
+//!
+//! [matrix]                  # objects x methods x lattices x clustering
+//! objects = ["sphere"]      # default: every object, in order
+//! methods = ["mt"]          # mt | mc (default mt); mc gives one configuration (clustering none)
+//! lattices = ["bcdl", "simple"]
+//! clustering = ["none", "integrated", "postprocessed"]
+//!
+//! [[configurations]]        # and/or an explicit list
+//! object = "sphere"
+//! lattice = "bcdl"          # default bcdl
+//! clustering = "meshopt"    # default none
+//! method = "mt"             # default mt
+//! id = "my_id"              # default: the naming rule
+//! resolution = 64           # overrides the object's (optional)
+//! collapse_threshold = 0.3  # optional
+//!
+//! [sweep]                   # every configuration for each value (cross product)
+//! resolution = [16, 32, 64]
+//! collapse_threshold = [0.3, 0.5]
+//! ```
+//!
+//! **Naming rule** (reproduces the dissertation's ids): object code, `_`, lattice letter (`b`
+//! body-centred, `s` simple, `m` marching cubes), clustering letter (`u` none, `i` integrated,
+//! `c` integrated-unchecked, `p` postprocessed, `q` meshopt); each sweep appends `_r<cells>`
+//! (`_r64`, `_r75x40x56`) or `_t<threshold>` (`_t0.3`). So `as_bi` is the asteroid on the
+//! body-centred lattice with integrated clustering.
+
+use std::collections::HashSet;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use rmt_extract::{Clustering, Lattice, Method};
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::{Deserialize, Serialize};
+
+use crate::config::{self, Extraction, Normals};
+use crate::objects::{self, Bounds, ObjectKind, ObjectParams, ObjectSpec, Resolution};
+
+/// Why a manifest cannot be run. Every message names the file; semantic errors name the key.
+#[derive(Debug, thiserror::Error)]
+pub enum ManifestError {
+    /// The file could not be read.
+    #[error("cannot read manifest {}: {source}", path.display())]
+    Read {
+        /// The manifest.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Malformed TOML, an unknown key, or a value of the wrong type (the message has the line and
+    /// column).
+    #[error("manifest {}: {message}", path.display())]
+    Parse {
+        /// The manifest.
+        path: PathBuf,
+        /// The parser's message, with line, column and the offending text.
+        message: String,
+    },
+    /// A value that parses but cannot be run.
+    #[error("manifest {}: {key}: {message}", path.display())]
+    Invalid {
+        /// The manifest.
+        path: PathBuf,
+        /// Where in the manifest (`objects[1].resolution`, `configuration as_bi`, ...).
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Cells per axis as written in a manifest: `50` or `[75, 40, 56]`, every axis >= 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(transparent)]
+pub struct Cells(pub Resolution);
+
+impl<'de> Deserialize<'de> for Cells {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        const EXPECTED: &str = "a positive number of cells or [nx, ny, nz]";
+        fn positive<E: de::Error>(v: i64) -> Result<usize, E> {
+            if v >= 1 {
+                usize::try_from(v).map_err(|_| E::custom(format!("resolution {v} is too large")))
+            } else {
+                Err(E::custom(format!(
+                    "resolution must be at least 1 cell per axis, got {v}"
+                )))
+            }
+        }
+        impl<'de> Visitor<'de> for V {
+            type Value = Cells;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str(EXPECTED)
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Cells, E> {
+                Ok(Cells(Resolution::Cube(positive(v)?)))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Cells, E> {
+                self.visit_i64(i64::try_from(v).unwrap_or(i64::MAX))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Cells, A::Error> {
+                let mut cells = [0usize; 3];
+                for (i, c) in cells.iter_mut().enumerate() {
+                    let v: i64 = seq
+                        .next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &"3 numbers [nx, ny, nz]"))?;
+                    *c = positive(v)?;
+                }
+                if seq.next_element::<de::IgnoredAny>()?.is_some() {
+                    return Err(de::Error::invalid_length(4, &"3 numbers [nx, ny, nz]"));
+                }
+                Ok(Cells(Resolution::Axes(cells)))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+fn default_repetitions() -> usize {
+    100
+}
+fn default_warmup() -> usize {
+    1
+}
+fn yes() -> bool {
+    true
+}
+
+/// A manifest as written (see the [module documentation](self)).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    /// Run name (folder prefix).
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Timed repetitions per configuration.
+    #[serde(default = "default_repetitions")]
+    pub repetitions: usize,
+    /// Untimed extractions before the timed ones.
+    #[serde(default = "default_warmup")]
+    pub warmup: usize,
+    /// Worker threads (default: every core).
+    #[serde(default)]
+    pub threads: Option<usize>,
+    /// Noise seed for objects that do not set their own.
+    #[serde(default)]
+    pub seed: Option<u32>,
+    /// Parent folder of run folders.
+    #[serde(default)]
+    pub output: Option<PathBuf>,
+    /// Save the last repetition's mesh of each configuration.
+    #[serde(default = "yes")]
+    pub save_meshes: bool,
+    /// The dissertation's benchmark table to compare with.
+    #[serde(default)]
+    pub paper_benchmark: Option<PathBuf>,
+    /// Default collapse threshold (grid spacings).
+    #[serde(default)]
+    pub collapse_threshold: Option<f32>,
+    /// Default isovalue.
+    #[serde(default)]
+    pub iso: Option<f32>,
+    /// Default normals.
+    #[serde(default)]
+    pub normals: Option<Normals>,
+    /// The objects.
+    #[serde(default)]
+    pub objects: Vec<ObjectEntry>,
+    /// A matrix of configurations.
+    #[serde(default)]
+    pub matrix: Option<Matrix>,
+    /// Explicit configurations.
+    #[serde(default)]
+    pub configurations: Vec<ConfigEntry>,
+    /// Parameter sweeps applied to every configuration.
+    #[serde(default)]
+    pub sweep: Option<Sweep>,
+}
+
+/// One `[[objects]]` entry.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectEntry {
+    /// Name used by configurations and in the `object` column.
+    pub name: String,
+    /// The kind (default: `name`).
+    #[serde(default)]
+    pub kind: Option<ObjectKind>,
+    /// Id prefix (default: the kind's code).
+    #[serde(default)]
+    pub code: Option<String>,
+    /// Cells per axis (default 50).
+    #[serde(default)]
+    pub resolution: Option<Cells>,
+    /// The sampled box (default `[-1, 1]^3`).
+    #[serde(default)]
+    pub bounds: Option<Bounds>,
+    /// See [`ObjectParams::radius`].
+    #[serde(default)]
+    pub radius: Option<f32>,
+    /// See [`ObjectParams::seed`].
+    #[serde(default)]
+    pub seed: Option<u32>,
+    /// See [`ObjectParams::octaves`].
+    #[serde(default)]
+    pub octaves: Option<usize>,
+    /// See [`ObjectParams::frequency`].
+    #[serde(default)]
+    pub frequency: Option<f64>,
+    /// See [`ObjectParams::amplitude`].
+    #[serde(default)]
+    pub amplitude: Option<f32>,
+    /// See [`ObjectParams::thickness`].
+    #[serde(default)]
+    pub thickness: Option<f32>,
+    /// See [`ObjectParams::major`].
+    #[serde(default)]
+    pub major: Option<f32>,
+    /// See [`ObjectParams::minor`].
+    #[serde(default)]
+    pub minor: Option<f32>,
+    /// See [`ObjectParams::mesh`].
+    #[serde(default)]
+    pub mesh: Option<PathBuf>,
+    /// See [`ObjectParams::margin`].
+    #[serde(default)]
+    pub margin: Option<f32>,
+    /// See [`ObjectParams::base`].
+    #[serde(default)]
+    pub base: Option<f32>,
+    /// See [`ObjectParams::cave_frequency`].
+    #[serde(default)]
+    pub cave_frequency: Option<f64>,
+    /// See [`ObjectParams::cave_radius`].
+    #[serde(default)]
+    pub cave_radius: Option<f32>,
+    /// See [`ObjectParams::cave_ceiling`].
+    #[serde(default)]
+    pub cave_ceiling: Option<f32>,
+}
+
+impl ObjectEntry {
+    fn params(&self) -> ObjectParams {
+        ObjectParams {
+            radius: self.radius,
+            seed: self.seed,
+            octaves: self.octaves,
+            frequency: self.frequency,
+            amplitude: self.amplitude,
+            thickness: self.thickness,
+            major: self.major,
+            minor: self.minor,
+            mesh: self.mesh.clone(),
+            margin: self.margin,
+            base: self.base,
+            cave_frequency: self.cave_frequency,
+            cave_radius: self.cave_radius,
+            cave_ceiling: self.cave_ceiling,
+        }
+    }
+}
+
+fn default_lattices() -> Vec<Lattice> {
+    vec![Lattice::BodyCentred, Lattice::Simple]
+}
+fn default_clusterings() -> Vec<Clustering> {
+    vec![
+        Clustering::None,
+        Clustering::Integrated,
+        Clustering::Postprocessed,
+    ]
+}
+fn default_methods() -> Vec<Method> {
+    vec![Method::Mt]
+}
+
+/// `[matrix]`: objects x methods x lattices x clustering.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Matrix {
+    /// Object names (default: all, in order).
+    #[serde(default)]
+    pub objects: Option<Vec<String>>,
+    /// Methods (default `["mt"]`).
+    #[serde(default = "default_methods")]
+    pub methods: Vec<Method>,
+    /// Lattices (default both).
+    #[serde(default = "default_lattices")]
+    pub lattices: Vec<Lattice>,
+    /// Clustering modes (default none, integrated, postprocessed).
+    #[serde(default = "default_clusterings")]
+    pub clustering: Vec<Clustering>,
+}
+
+/// One `[[configurations]]` entry.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConfigEntry {
+    /// Id (default: the naming rule).
+    #[serde(default)]
+    pub id: Option<String>,
+    /// Object name.
+    pub object: String,
+    /// Lattice (default bcdl).
+    #[serde(default)]
+    pub lattice: Option<Lattice>,
+    /// Clustering (default none).
+    #[serde(default)]
+    pub clustering: Option<Clustering>,
+    /// Method (default mt).
+    #[serde(default)]
+    pub method: Option<Method>,
+    /// Overrides the object's resolution.
+    #[serde(default)]
+    pub resolution: Option<Cells>,
+    /// Overrides the collapse threshold.
+    #[serde(default)]
+    pub collapse_threshold: Option<f32>,
+    /// Overrides the isovalue.
+    #[serde(default)]
+    pub iso: Option<f32>,
+}
+
+/// `[sweep]`: lists of values, each configuration repeated for every combination.
+#[derive(Clone, Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sweep {
+    /// Resolutions (suffix `_r<cells>`).
+    #[serde(default)]
+    pub resolution: Option<Vec<Cells>>,
+    /// Collapse thresholds (suffix `_t<value>`).
+    #[serde(default)]
+    pub collapse_threshold: Option<Vec<f32>>,
+}
+
+/// One configuration of a plan: an id, the object's manifest name, and the extraction.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Configuration {
+    /// Unique id (file-name safe).
+    pub id: String,
+    /// The object's name in the manifest.
+    pub object: String,
+    /// Everything that decides the extraction.
+    pub extraction: Extraction,
+}
+
+/// Values that command-line flags override.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Overrides {
+    /// Timed repetitions.
+    pub repetitions: Option<usize>,
+    /// Warm-up extractions.
+    pub warmup: Option<usize>,
+    /// Worker threads.
+    pub threads: Option<usize>,
+    /// Save meshes.
+    pub save_meshes: Option<bool>,
+}
+
+/// A manifest expanded and checked: what the runner executes.
+#[derive(Clone, Debug, Serialize)]
+pub struct Plan {
+    /// Run name.
+    pub name: String,
+    /// Timed repetitions per configuration (>= 1).
+    pub repetitions: usize,
+    /// Warm-up extractions per configuration.
+    pub warmup: usize,
+    /// Worker threads.
+    pub threads: usize,
+    /// Save the last repetition's mesh.
+    pub save_meshes: bool,
+    /// Parent folder of run folders.
+    pub output: PathBuf,
+    /// The resolved benchmark table to compare with, if any.
+    pub paper_benchmark: Option<PathBuf>,
+    /// Folders searched for relative data paths (the manifest's folder).
+    pub search: Vec<PathBuf>,
+    /// The sweep variables in use (`resolution`, `collapse_threshold`).
+    pub sweep_variables: Vec<String>,
+    /// The configurations, in execution order.
+    pub configurations: Vec<Configuration>,
+}
+
+/// Reads and parses a manifest file (no expansion yet).
+pub fn read(path: &Path) -> Result<(Manifest, String), ManifestError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ManifestError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let manifest = parse(&text, path)?;
+    Ok((manifest, text))
+}
+
+/// Parses manifest text; `path` names it in errors.
+pub fn parse(text: &str, path: &Path) -> Result<Manifest, ManifestError> {
+    toml::from_str(text).map_err(|e| ManifestError::Parse {
+        path: path.to_path_buf(),
+        message: e.to_string().trim_end().to_string(),
+    })
+}
+
+/// A manifest read, expanded and checked, with its objects built.
+pub struct Loaded {
+    /// The configurations and options.
+    pub plan: Plan,
+    /// The manifest's text (copied into the run folder).
+    pub text: String,
+    /// The field of every object used.
+    pub fields: Fields,
+}
+
+/// Reads, expands and checks a manifest, and builds every object once, so that every error
+/// shows before any work starts.
+pub fn load(path: &Path, overrides: &Overrides) -> Result<Loaded, ManifestError> {
+    let (manifest, text) = read(path)?;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let plan = manifest.plan(path, &base, overrides)?;
+    let fields = plan.build_fields(path)?;
+    Ok(Loaded { plan, text, fields })
+}
+
+/// The clustering letter of ids.
+pub fn clustering_letter(c: Clustering) -> char {
+    match c {
+        Clustering::None => 'u',
+        Clustering::Integrated => 'i',
+        Clustering::IntegratedUnchecked => 'c',
+        Clustering::Postprocessed => 'p',
+        Clustering::Meshopt => 'q',
+    }
+}
+
+/// The lattice letter of ids (`m` for marching cubes).
+pub fn lattice_letter(method: Method, l: Lattice) -> char {
+    match (method, l) {
+        (Method::Mc, _) => 'm',
+        (Method::Mt, Lattice::BodyCentred) => 'b',
+        (Method::Mt, Lattice::Simple) => 's',
+    }
+}
+
+/// The id of a configuration before sweep suffixes: `code_` + lattice letter + clustering letter.
+pub fn base_id(code: &str, method: Method, lattice: Lattice, clustering: Clustering) -> String {
+    format!(
+        "{code}_{}{}",
+        lattice_letter(method, lattice),
+        clustering_letter(clustering)
+    )
+}
+
+fn safe_name(s: &str) -> bool {
+    !s.is_empty()
+        && !s.starts_with('.')
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+}
+
+impl Manifest {
+    /// Expands into a checked [`Plan`]. `path` names the manifest in errors; `base` is the folder
+    /// relative data paths are searched from (before the workspace root).
+    pub fn plan(
+        &self,
+        path: &Path,
+        base: &Path,
+        overrides: &Overrides,
+    ) -> Result<Plan, ManifestError> {
+        let invalid = |key: &str, message: String| ManifestError::Invalid {
+            path: path.to_path_buf(),
+            key: key.to_string(),
+            message,
+        };
+        if !safe_name(&self.name) {
+            return Err(invalid(
+                "name",
+                format!(
+                    "`{}` must be non-empty letters, digits, '-', '_' or '.'",
+                    self.name
+                ),
+            ));
+        }
+        let repetitions = overrides.repetitions.unwrap_or(self.repetitions);
+        if repetitions == 0 {
+            return Err(invalid("repetitions", "must be at least 1".into()));
+        }
+        let warmup = overrides.warmup.unwrap_or(self.warmup);
+        let threads = overrides
+            .threads
+            .or(self.threads)
+            .unwrap_or_else(crate::cmd_extract::default_threads);
+        if !(1..=1024).contains(&threads) {
+            return Err(invalid(
+                "threads",
+                format!("must be 1 to 1024, got {threads}"),
+            ));
+        }
+        let collapse_default = self
+            .collapse_threshold
+            .unwrap_or_else(config::default_collapse_threshold);
+        let search = vec![base.to_path_buf()];
+        let paper_benchmark = match &self.paper_benchmark {
+            Some(p) => Some(
+                objects::resolve_data_path(p, &search)
+                    .map_err(|e| invalid("paper_benchmark", e.to_string()))?,
+            ),
+            None => None,
+        };
+
+        // Objects.
+        if self.objects.is_empty() {
+            return Err(invalid(
+                "objects",
+                "the manifest defines no [[objects]]".into(),
+            ));
+        }
+        struct Obj {
+            name: String,
+            code: String,
+            spec: ObjectSpec,
+            resolution: Resolution,
+            bounds: Bounds,
+        }
+        let mut objs: Vec<Obj> = Vec::new();
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = format!("objects[{i}] ({})", o.name);
+            if !safe_name(&o.name) {
+                return Err(invalid(
+                    &key,
+                    "name must be letters, digits, '-', '_' or '.'".into(),
+                ));
+            }
+            if objs.iter().any(|x| x.name == o.name) {
+                return Err(invalid(
+                    &key,
+                    format!("object name `{}` is used twice", o.name),
+                ));
+            }
+            let kind = match o.kind {
+                Some(k) => k,
+                None => o.name.parse::<ObjectKind>().map_err(|e| {
+                    invalid(&key, format!("{e}; set `kind` when the name is not a kind"))
+                })?,
+            };
+            let mut params = o.params();
+            if kind.accepted().contains(&"seed") && params.seed.is_none() {
+                params.seed = self.seed;
+            }
+            let spec = ObjectSpec::new(kind, params).map_err(|e| invalid(&key, e.to_string()))?;
+            let code = o.code.clone().unwrap_or_else(|| kind.code().to_string());
+            if !safe_name(&code) {
+                return Err(invalid(
+                    &key,
+                    format!("code `{code}` must be letters or digits"),
+                ));
+            }
+            let resolution = o.resolution.map(|c| c.0).unwrap_or(Resolution::Cube(50));
+            objs.push(Obj {
+                name: o.name.clone(),
+                code,
+                spec,
+                resolution,
+                bounds: o.bounds.unwrap_or_default(),
+            });
+        }
+
+        // Base configurations: (object index, id or None, method, lattice, clustering,
+        // resolution, threshold, iso, key).
+        struct Base {
+            obj: usize,
+            id: String,
+            method: Method,
+            lattice: Lattice,
+            clustering: Clustering,
+            resolution: Option<Resolution>,
+            threshold: Option<f32>,
+            iso: Option<f32>,
+            key: String,
+        }
+        let find = |name: &str, key: &str| {
+            objs.iter().position(|o| o.name == name).ok_or_else(|| {
+                let names: Vec<&str> = objs.iter().map(|o| o.name.as_str()).collect();
+                invalid(
+                    key,
+                    format!("no object named `{name}` (defined: {})", names.join(", ")),
+                )
+            })
+        };
+        let mut bases: Vec<Base> = Vec::new();
+        if let Some(m) = &self.matrix {
+            let names: Vec<String> = match &m.objects {
+                Some(list) => list.clone(),
+                None => objs.iter().map(|o| o.name.clone()).collect(),
+            };
+            for (key, empty) in [
+                ("matrix.objects", names.is_empty()),
+                ("matrix.methods", m.methods.is_empty()),
+                ("matrix.lattices", m.lattices.is_empty()),
+                ("matrix.clustering", m.clustering.is_empty()),
+            ] {
+                if empty {
+                    return Err(invalid(key, "the list is empty".into()));
+                }
+            }
+            for name in &names {
+                let obj = find(name, "matrix.objects")?;
+                for &method in &m.methods {
+                    // Marching cubes has no lattice choice and no clustering: one configuration.
+                    let combos: Vec<(Lattice, Clustering)> = match method {
+                        Method::Mc => vec![(Lattice::Simple, Clustering::None)],
+                        Method::Mt => m
+                            .lattices
+                            .iter()
+                            .flat_map(|&l| m.clustering.iter().map(move |&c| (l, c)))
+                            .collect(),
+                    };
+                    for (lattice, clustering) in combos {
+                        bases.push(Base {
+                            obj,
+                            id: base_id(&objs[obj].code, method, lattice, clustering),
+                            method,
+                            lattice,
+                            clustering,
+                            resolution: None,
+                            threshold: None,
+                            iso: None,
+                            key: "matrix".into(),
+                        });
+                    }
+                }
+            }
+        }
+        for (i, c) in self.configurations.iter().enumerate() {
+            let key = format!("configurations[{i}]");
+            let obj = find(&c.object, &key)?;
+            let method = c.method.unwrap_or(Method::Mt);
+            let lattice = match method {
+                Method::Mc => Lattice::Simple,
+                Method::Mt => c.lattice.unwrap_or(Lattice::BodyCentred),
+            };
+            let clustering = c.clustering.unwrap_or(Clustering::None);
+            let id = match &c.id {
+                Some(id) => id.clone(),
+                None => base_id(&objs[obj].code, method, lattice, clustering),
+            };
+            bases.push(Base {
+                obj,
+                id,
+                method,
+                lattice,
+                clustering,
+                resolution: c.resolution.map(|r| r.0),
+                threshold: c.collapse_threshold,
+                iso: c.iso,
+                key,
+            });
+        }
+        if bases.is_empty() {
+            return Err(invalid(
+                "configurations",
+                "no configurations: add a [matrix] or [[configurations]]".into(),
+            ));
+        }
+
+        // Sweeps.
+        let sweep = self.sweep.clone().unwrap_or_default();
+        let mut sweep_variables = Vec::new();
+        let resolutions: Vec<Option<Resolution>> = match &sweep.resolution {
+            Some(list) if list.is_empty() => {
+                return Err(invalid("sweep.resolution", "the list is empty".into()))
+            }
+            Some(list) => {
+                sweep_variables.push("resolution".to_string());
+                list.iter().map(|c| Some(c.0)).collect()
+            }
+            None => vec![None],
+        };
+        let thresholds: Vec<Option<f32>> = match &sweep.collapse_threshold {
+            Some(list) if list.is_empty() => {
+                return Err(invalid(
+                    "sweep.collapse_threshold",
+                    "the list is empty".into(),
+                ))
+            }
+            Some(list) => {
+                sweep_variables.push("collapse_threshold".to_string());
+                list.iter().map(|&t| Some(t)).collect()
+            }
+            None => vec![None],
+        };
+
+        let mut configurations = Vec::new();
+        let mut ids = HashSet::new();
+        for b in &bases {
+            let o = &objs[b.obj];
+            for r in &resolutions {
+                for t in &thresholds {
+                    let mut id = b.id.clone();
+                    if let Some(r) = r {
+                        id += &format!("_r{}", r.label());
+                    }
+                    if let Some(t) = t {
+                        id += &format!("_t{t}");
+                    }
+                    if !safe_name(&id) {
+                        return Err(invalid(
+                            &b.key,
+                            format!("id `{id}` must be letters, digits, '-', '_' or '.'"),
+                        ));
+                    }
+                    if !ids.insert(id.clone()) {
+                        return Err(invalid(
+                            &b.key,
+                            format!("configuration id `{id}` is used twice"),
+                        ));
+                    }
+                    let extraction = Extraction {
+                        object: o.spec.clone(),
+                        bounds: o.bounds,
+                        resolution: r.or(b.resolution).unwrap_or(o.resolution),
+                        method: b.method,
+                        lattice: b.lattice,
+                        clustering: b.clustering,
+                        collapse_threshold: t.or(b.threshold).unwrap_or(collapse_default),
+                        iso: b.iso.or(self.iso).unwrap_or(0.0),
+                        normals: self.normals.unwrap_or_default(),
+                    };
+                    extraction
+                        .check(threads)
+                        .map_err(|e| invalid(&format!("configuration {id}"), e))?;
+                    configurations.push(Configuration {
+                        id,
+                        object: o.name.clone(),
+                        extraction,
+                    });
+                }
+            }
+        }
+
+        Ok(Plan {
+            name: self.name.clone(),
+            repetitions,
+            warmup,
+            threads,
+            save_meshes: overrides.save_meshes.unwrap_or(self.save_meshes),
+            output: self
+                .output
+                .clone()
+                .unwrap_or_else(|| PathBuf::from("results")),
+            paper_benchmark,
+            search,
+            sweep_variables,
+            configurations,
+        })
+    }
+}
+
+/// The fields of a plan's objects, built once and shared by their configurations.
+pub struct Fields {
+    /// `(object name, its field)`, one per distinct object used.
+    pub fields: Vec<(String, Box<dyn rmt_fields::ScalarField>)>,
+}
+
+impl Fields {
+    /// The field of object `name`.
+    pub fn get(&self, name: &str) -> Option<&dyn rmt_fields::ScalarField> {
+        self.fields
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, f)| f.as_ref())
+    }
+}
+
+impl Plan {
+    /// Builds the field of every object the configurations use (mesh files are read here).
+    /// `path` names the manifest in errors.
+    pub fn build_fields(&self, path: &Path) -> Result<Fields, ManifestError> {
+        let mut fields: Vec<(String, Box<dyn rmt_fields::ScalarField>)> = Vec::new();
+        for c in &self.configurations {
+            if fields.iter().any(|(n, _)| *n == c.object) {
+                continue;
+            }
+            let e = &c.extraction;
+            let field =
+                e.object
+                    .build(&e.bounds, &self.search)
+                    .map_err(|err| ManifestError::Invalid {
+                        path: path.to_path_buf(),
+                        key: "building objects".to_string(),
+                        message: err.to_string(),
+                    })?;
+            fields.push((c.object.clone(), field));
+        }
+        Ok(Fields { fields })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan(text: &str) -> Result<Plan, ManifestError> {
+        let p = Path::new("test.toml");
+        parse(text, p)?.plan(
+            p,
+            Path::new("."),
+            &Overrides {
+                threads: Some(1),
+                ..Default::default()
+            },
+        )
+    }
+
+    #[test]
+    fn matrix_expands_in_object_lattice_clustering_order_with_dissertation_ids() {
+        let p = plan(
+            r#"
+            name = "t"
+            [[objects]]
+            name = "sphere"
+            [[objects]]
+            name = "asteroid"
+            [matrix]
+            "#,
+        )
+        .unwrap();
+        let ids: Vec<&str> = p.configurations.iter().map(|c| c.id.as_str()).collect();
+        assert_eq!(
+            ids,
+            [
+                "ss_bu", "ss_bi", "ss_bp", "ss_su", "ss_si", "ss_sp", "as_bu", "as_bi", "as_bp",
+                "as_su", "as_si", "as_sp"
+            ]
+        );
+        assert_eq!(p.repetitions, 100);
+        assert_eq!(p.configurations[4].extraction.lattice, Lattice::Simple);
+        assert_eq!(
+            p.configurations[4].extraction.clustering,
+            Clustering::Integrated
+        );
+    }
+
+    #[test]
+    fn sweeps_multiply_configurations_and_append_suffixes() {
+        let p = plan(
+            r#"
+            name = "t"
+            [[objects]]
+            name = "sphere"
+            [matrix]
+            methods = ["mt", "mc"]
+            lattices = ["bcdl"]
+            clustering = ["postprocessed", "meshopt"]
+            [sweep]
+            resolution = [8, [4, 5, 6]]
+            collapse_threshold = [0.25, 0.5]
+            "#,
+        )
+        .unwrap();
+        let ids: Vec<&str> = p.configurations.iter().map(|c| c.id.as_str()).collect();
+        assert_eq!(ids.len(), 3 * 2 * 2);
+        assert!(ids.contains(&"ss_bp_r8_t0.25"));
+        assert!(ids.contains(&"ss_bq_r4x5x6_t0.5"));
+        assert!(ids.contains(&"ss_mu_r8_t0.5"));
+        let c = p
+            .configurations
+            .iter()
+            .find(|c| c.id == "ss_bq_r4x5x6_t0.5")
+            .unwrap();
+        assert_eq!(c.extraction.resolution.cells(), [4, 5, 6]);
+        assert_eq!(c.extraction.collapse_threshold, 0.5);
+        assert_eq!(p.sweep_variables, ["resolution", "collapse_threshold"]);
+    }
+
+    #[test]
+    fn explicit_configurations_take_defaults_and_overrides() {
+        let p = plan(
+            r#"
+            name = "t"
+            seed = 11
+            [[objects]]
+            name = "rock"
+            kind = "asteroid"
+            code = "rk"
+            resolution = 12
+            [[configurations]]
+            object = "rock"
+            [[configurations]]
+            object = "rock"
+            id = "custom"
+            clustering = "integrated-unchecked"
+            resolution = [3, 4, 5]
+            "#,
+        )
+        .unwrap();
+        assert_eq!(p.configurations[0].id, "rk_bu");
+        assert_eq!(p.configurations[0].extraction.resolution.cells(), [12; 3]);
+        assert_eq!(p.configurations[0].extraction.object.params.seed, Some(11));
+        assert_eq!(p.configurations[1].id, "custom");
+        assert_eq!(p.configurations[1].extraction.resolution.cells(), [3, 4, 5]);
+    }
+
+    #[test]
+    fn parse_errors_carry_line_and_column() {
+        let err = plan("name = \"t\"\nrepetitions = \"many\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("line 2") && err.contains("column"), "{err}");
+        let err = plan("name = \"t\"\nbogus = 1\n").unwrap_err().to_string();
+        assert!(err.contains("bogus") && err.contains("line 2"), "{err}");
+    }
+
+    #[test]
+    fn duplicate_ids_and_unknown_objects_are_refused() {
+        let dup = r#"
+            name = "t"
+            [[objects]]
+            name = "sphere"
+            [[configurations]]
+            object = "sphere"
+            [[configurations]]
+            object = "sphere"
+        "#;
+        assert!(plan(dup).unwrap_err().to_string().contains("used twice"));
+        let unknown = r#"
+            name = "t"
+            [[objects]]
+            name = "sphere"
+            [[configurations]]
+            object = "cube"
+        "#;
+        let err = plan(unknown).unwrap_err().to_string();
+        assert!(err.contains("no object named `cube`"), "{err}");
+    }
+
+    #[test]
+    fn overrides_replace_manifest_values() {
+        let p = Path::new("t.toml");
+        let m = parse(
+            "name = \"t\"\nrepetitions = 5\nthreads = 2\n[[objects]]\nname = \"sphere\"\n[matrix]\n",
+            p,
+        )
+        .unwrap();
+        let o = Overrides {
+            repetitions: Some(3),
+            warmup: Some(0),
+            threads: Some(1),
+            save_meshes: Some(false),
+        };
+        let plan = m.plan(p, Path::new("."), &o).unwrap();
+        assert_eq!((plan.repetitions, plan.warmup, plan.threads), (3, 0, 1));
+        assert!(!plan.save_meshes);
+    }
+}

@@ -1,0 +1,265 @@
+//! The `experiments` binary: `extract` output and errors, `run` exit codes, resume through the
+//! command line, and determinism of repeated extractions (which the runner relies on to measure
+//! each configuration's mesh once).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use experiments::config::Normals;
+use experiments::objects::{Bounds, ObjectKind, ObjectParams, ObjectSpec, Resolution};
+use rmt_extract::{Clustering, Extractor, Lattice, Method};
+use rmt_mesh::Mesh;
+
+fn experiments(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_experiments"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn extract_json_has_the_config_keys_then_the_measurement() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = dir.path().join("s.ply");
+    let o = experiments(&[
+        "extract",
+        "--object",
+        "sphere",
+        "--radius",
+        "0.7",
+        "--resolution",
+        "10",
+        "--lattice",
+        "simple",
+        "--clustering",
+        "integrated",
+        "--threads",
+        "1",
+        "--json",
+        "--out",
+        ply.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
+    assert_eq!(
+        &keys[..5],
+        ["object", "lattice", "clustering", "method", "resolution"]
+    );
+    assert_eq!(v["object"], "sphere");
+    assert_eq!(v["lattice"], "simple");
+    assert_eq!(v["resolution"], serde_json::json!([10, 10, 10]));
+    for key in [
+        "vertices",
+        "triangles",
+        "t_total_s",
+        "ar_mean",
+        "euler",
+        "fidelity_mean_h",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    let mesh = rmt_mesh::io::read_ply(&ply).unwrap();
+    assert_eq!(serde_json::json!(mesh.triangle_count()), v["triangles"]);
+}
+
+#[test]
+fn extract_prints_a_readable_summary_without_json() {
+    let o = experiments(&[
+        "extract",
+        "--object",
+        "torus",
+        "--resolution",
+        "8",
+        "--threads",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.starts_with("torus (mt, bcdl, integrated) at 8x8x8 cells"),
+        "{text}"
+    );
+    assert!(
+        text.contains("triangles") && text.contains("ms total"),
+        "{text}"
+    );
+}
+
+#[test]
+fn extract_refuses_bad_input_with_a_message_and_no_panic() {
+    for (args, expect) in [
+        (&["--resolution", "0"][..], "at least one cell"),
+        (&["--bounds", "NaN,0,0,1,1,1"][..], "invalid bounds"),
+        (&["--bounds", "0,0,0,1,1"][..], "6 comma-separated"),
+        (&["--object", "teapot"][..], "unknown object `teapot`"),
+        (
+            &["--object", "bunny", "--mesh", "nowhere.obj"][..],
+            "not found",
+        ),
+        (
+            &["--object", "sphere", "--thickness", "1"][..],
+            "takes no parameter `thickness`",
+        ),
+        (
+            &["--method", "mc", "--clustering", "integrated"][..],
+            "marching cubes takes clustering none",
+        ),
+        (&["--resolution", "100000"][..], "too large"),
+        (&["--lattice", "hex"][..], "unknown lattice"),
+    ] {
+        let mut all = vec!["extract"];
+        all.extend_from_slice(args);
+        let o = experiments(&all);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(
+            err.contains(expect),
+            "{args:?}: expected `{expect}` in {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    }
+}
+
+#[test]
+fn run_exits_non_zero_on_a_bad_manifest_before_creating_anything() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_manifests/missing_mesh.toml");
+    let o = experiments(&["run", bad.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("no_such_bunny.obj"), "{}", stderr(&o));
+    assert!(!out.exists(), "nothing is created for a bad manifest");
+}
+
+#[test]
+fn run_stops_and_resumes_through_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let out_s = out.to_str().unwrap();
+    let o = experiments(&[
+        "run",
+        "manifests/ci.toml",
+        "--out",
+        out_s,
+        "--reps",
+        "1",
+        "--warmup",
+        "0",
+        "--quiet",
+        "--no-meshes",
+        "--stop-after",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("--resume"));
+    assert!(!out.join("summary.csv").exists());
+    let o = experiments(&["run", "--resume", out_s, "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let raw = std::fs::read_to_string(out.join("raw.csv")).unwrap();
+    let configs = std::fs::read_to_string(out.join("configurations.csv")).unwrap();
+    // One repetition (the override survives the resume): one raw row per configuration.
+    assert_eq!(raw.lines().count(), configs.lines().count());
+    assert!(out.join("summary.csv").exists());
+    assert!(
+        !out.join("meshes").exists(),
+        "--no-meshes survives the resume"
+    );
+    // Flags that change the plan cannot be combined with --resume.
+    let o = experiments(&["run", "--resume", out_s, "--reps", "3"]);
+    assert!(!o.status.success());
+}
+
+#[test]
+fn run_dry_run_lists_the_paper_configurations() {
+    let o = experiments(&["run", "manifests/paper.toml", "--dry-run", "--threads", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let listed: Vec<&str> = text
+        .lines()
+        .skip(2)
+        .map(|l| l.split(',').next().unwrap_or(""))
+        .collect();
+    let expected = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/questionnaire/configurations.csv"),
+    )
+    .unwrap();
+    let expected: Vec<&str> = expected
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap_or(""))
+        .collect();
+    assert_eq!(listed, expected);
+}
+
+/// The runner measures a configuration's mesh once and copies the metrics to every repetition's
+/// row; that is only right if repeated extractions give the same mesh, with a reused extractor as
+/// with a fresh one.
+#[test]
+fn repeated_extractions_give_identical_meshes() {
+    for (kind, lattice, clustering) in [
+        (
+            ObjectKind::Sphere,
+            Lattice::BodyCentred,
+            Clustering::Integrated,
+        ),
+        (
+            ObjectKind::Asteroid,
+            Lattice::Simple,
+            Clustering::Integrated,
+        ),
+        (
+            ObjectKind::Asteroid,
+            Lattice::BodyCentred,
+            Clustering::Postprocessed,
+        ),
+        (ObjectKind::Bunny, Lattice::BodyCentred, Clustering::None),
+        (ObjectKind::Gyroid, Lattice::Simple, Clustering::Integrated),
+    ] {
+        let spec = ObjectSpec::new(kind, ObjectParams::default()).unwrap();
+        let e = experiments::config::Extraction {
+            object: spec,
+            bounds: Bounds::default(),
+            resolution: Resolution::Cube(9),
+            method: Method::Mt,
+            lattice,
+            clustering,
+            collapse_threshold: 0.5,
+            iso: 0.0,
+            normals: Normals::Area,
+        };
+        let field = e.object.build(&e.bounds, &[]).unwrap();
+        for threads in [1, 2] {
+            let settings = e.settings(threads);
+            let mut reused = Extractor::new();
+            let mut meshes = Vec::new();
+            for _ in 0..3 {
+                let mut mesh = Mesh::default();
+                reused
+                    .extract(field.as_ref(), &settings, &mut mesh)
+                    .unwrap();
+                meshes.push(mesh);
+            }
+            let mut fresh = Mesh::default();
+            Extractor::new()
+                .extract(field.as_ref(), &settings, &mut fresh)
+                .unwrap();
+            assert!(fresh.triangle_count() > 0, "{kind} produced no surface");
+            for m in &meshes {
+                assert_eq!(
+                    m, &fresh,
+                    "{kind} {lattice:?} {clustering:?} threads {threads}"
+                );
+            }
+            assert_eq!(
+                experiments::runner::mesh_fingerprint(&meshes[0]),
+                experiments::runner::mesh_fingerprint(&fresh)
+            );
+        }
+    }
+}

@@ -1,0 +1,362 @@
+//! End-to-end tests of the runner on `manifests/ci.toml`: files and columns, summary against raw
+//! rows, meshes, provenance, the paper comparison, and resume after an interruption.
+
+use std::collections::HashMap;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use experiments::manifest::{self, Overrides};
+use experiments::runner::{self, RunOptions, Status, Table, RAW_PREFIX};
+
+fn ci_manifest() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("manifests/ci.toml")
+}
+
+fn quiet() -> RunOptions {
+    RunOptions {
+        quiet: true,
+        stop_after: None,
+    }
+}
+
+fn ci_plan() -> manifest::Plan {
+    manifest::load(&ci_manifest(), &Overrides::default())
+        .unwrap()
+        .plan
+}
+
+/// Raw rows keyed by (id, repetition) with time columns and the run id removed.
+fn rows_without_times(folder: &Path) -> Vec<Vec<String>> {
+    let raw = Table::read(&folder.join("raw.csv")).unwrap();
+    let keep: Vec<usize> = (0..raw.header.len())
+        .filter(|&i| {
+            let h = &raw.header[i];
+            h != "run_id" && !runner::is_time_column(h)
+        })
+        .collect();
+    raw.rows
+        .iter()
+        .map(|r| keep.iter().map(|&i| r[i].clone()).collect())
+        .collect()
+}
+
+#[test]
+fn ci_manifest_runs_end_to_end_into_the_documented_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("run");
+    let report = runner::start(
+        &ci_manifest(),
+        &Overrides::default(),
+        Some(&folder),
+        &quiet(),
+    )
+    .unwrap();
+    assert_eq!(report.status, Status::Finished);
+    let plan = ci_plan();
+    let n = plan.configurations.len();
+    assert_eq!(report.configurations_run, n);
+
+    // configurations.csv: the documented columns, one row per configuration, in plan order.
+    let configs = Table::read(&folder.join("configurations.csv")).unwrap();
+    assert_eq!(
+        &configs.header[..5],
+        ["id", "object", "lattice", "clustering", "method"]
+    );
+    let ids: Vec<&str> = configs.rows.iter().map(|r| r[0].as_str()).collect();
+    let plan_ids: Vec<&str> = plan.configurations.iter().map(|c| c.id.as_str()).collect();
+    assert_eq!(ids, plan_ids);
+
+    // raw.csv: configurations x repetitions rows, the prefix then every measurement key.
+    let raw = Table::read(&folder.join("raw.csv")).unwrap();
+    assert_eq!(raw.header, runner::raw_header());
+    assert_eq!(
+        &raw.header[..RAW_PREFIX.len()],
+        RAW_PREFIX.map(String::from).as_slice()
+    );
+    assert_eq!(raw.rows.len(), n * plan.repetitions);
+    for (k, c) in plan.configurations.iter().enumerate() {
+        for rep in 0..plan.repetitions {
+            let r = k * plan.repetitions + rep;
+            assert_eq!(raw.get(r, "id"), Some(c.id.as_str()));
+            assert_eq!(
+                raw.get(r, "repetition"),
+                Some((rep + 1).to_string().as_str())
+            );
+            assert_eq!(raw.get(r, "run_id"), Some("run"));
+        }
+    }
+
+    // summary.csv matches raw.csv.
+    let summary = Table::read(&folder.join("summary.csv")).unwrap();
+    assert_eq!(summary.rows.len(), n);
+    for s in 0..n {
+        let id = summary.get(s, "id").unwrap();
+        let members: Vec<usize> = (0..raw.rows.len())
+            .filter(|&r| raw.get(r, "id") == Some(id))
+            .collect();
+        assert_eq!(
+            summary.get(s, "repetitions").unwrap(),
+            members.len().to_string()
+        );
+        let times: Vec<f64> = members
+            .iter()
+            .map(|&r| raw.get(r, "t_total_s").unwrap().parse().unwrap())
+            .collect();
+        let mean = times.iter().sum::<f64>() / times.len() as f64;
+        let got: f64 = summary.get(s, "t_total_s_mean").unwrap().parse().unwrap();
+        assert!(
+            (got - mean).abs() <= 1e-12 * mean.max(1e-9),
+            "{id}: {got} vs {mean}"
+        );
+        let min: f64 = summary.get(s, "t_total_s_min").unwrap().parse().unwrap();
+        let max: f64 = summary.get(s, "t_total_s_max").unwrap().parse().unwrap();
+        let median: f64 = summary.get(s, "t_total_s_median").unwrap().parse().unwrap();
+        assert!(min <= median && median <= max);
+        assert_eq!(min, times.iter().cloned().fold(f64::INFINITY, f64::min));
+        for col in [
+            "vertices",
+            "triangles",
+            "discarded",
+            "euler",
+            "ar_mean",
+            "boundary_edges_interior",
+        ] {
+            for &r in &members {
+                assert_eq!(summary.get(s, col), raw.get(r, col), "{id} {col}");
+            }
+        }
+        // Shares of the stages are fractions of the total.
+        let share: f64 = summary.get(s, "share_sampling").unwrap().parse().unwrap();
+        assert!((0.0..=1.0).contains(&share), "{id}: {share}");
+    }
+
+    // Triangle reduction against the unclustered configuration of the same object and lattice.
+    let row = |id: &str| (0..n).find(|&s| summary.get(s, "id") == Some(id)).unwrap();
+    let tri = |id: &str| {
+        summary
+            .get(row(id), "triangles")
+            .unwrap()
+            .parse::<f64>()
+            .unwrap()
+    };
+    let reduction: f64 = summary
+        .get(row("as_bi"), "triangle_reduction")
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((reduction - (1.0 - tri("as_bi") / tri("as_bu"))).abs() < 1e-12);
+    assert!(reduction > 0.0, "integrated clustering removes triangles");
+
+    // Meshes of the last repetition, as PLY, with the summary's counts.
+    for s in 0..n {
+        let id = summary.get(s, "id").unwrap();
+        let mesh = rmt_mesh::io::read_ply(folder.join("meshes").join(format!("{id}.ply"))).unwrap();
+        assert_eq!(
+            mesh.triangle_count().to_string(),
+            summary.get(s, "triangles").unwrap()
+        );
+        assert_eq!(
+            mesh.vertex_count().to_string(),
+            summary.get(s, "vertices").unwrap()
+        );
+    }
+
+    // Provenance.
+    let record: serde_json::Value =
+        serde_json::from_slice(&fs::read(folder.join("run.json")).unwrap()).unwrap();
+    assert_eq!(record["status"], "finished");
+    assert_eq!(record["settings"]["repetitions"], plan.repetitions);
+    assert_eq!(record["settings"]["threads"], 1);
+    for key in [
+        "version",
+        "git_commit",
+        "build_profile",
+        "cpu_model",
+        "cores",
+        "os",
+        "date",
+    ] {
+        assert!(
+            record["provenance"].get(key).is_some(),
+            "run.json lacks provenance.{key}"
+        );
+    }
+    assert_eq!(record["configuration_ids"].as_array().unwrap().len(), n);
+    assert_eq!(
+        fs::read_to_string(folder.join("manifest.toml")).unwrap(),
+        fs::read_to_string(ci_manifest()).unwrap()
+    );
+
+    // Paper comparison: every dissertation id in the plan, every metric, ours = the summary.
+    let cmp = Table::read(&folder.join("paper_comparison.csv")).unwrap();
+    assert_eq!(cmp.header, ["id", "metric", "ours", "theirs", "ratio"]);
+    assert_eq!(cmp.rows.len(), 18 * runner::PAPER_METRICS.len());
+    for r in 0..cmp.rows.len() {
+        let id = cmp.get(r, "id").unwrap();
+        let metric = cmp.get(r, "metric").unwrap();
+        let ours = summary.get(row(id), metric).unwrap();
+        assert_eq!(
+            cmp.get(r, "ours").unwrap().parse::<f64>().ok(),
+            ours.parse::<f64>().ok(),
+            "{id} {metric}"
+        );
+    }
+    let theirs = (0..cmp.rows.len())
+        .find(|&r| cmp.get(r, "id") == Some("ss_bi") && cmp.get(r, "metric") == Some("triangles"))
+        .unwrap();
+    assert_eq!(cmp.get(theirs, "theirs"), Some("27200"));
+
+    // No temporary files left behind.
+    for entry in fs::read_dir(&folder).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.ends_with(".tmp"), "leftover {name}");
+    }
+}
+
+#[test]
+fn a_run_stopped_and_resumed_gives_the_rows_of_an_uninterrupted_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole");
+    runner::start(
+        &ci_manifest(),
+        &Overrides::default(),
+        Some(&whole),
+        &quiet(),
+    )
+    .unwrap();
+
+    let parts = dir.path().join("parts");
+    let stop = |k| RunOptions {
+        quiet: true,
+        stop_after: Some(k),
+    };
+    let first = runner::start(
+        &ci_manifest(),
+        &Overrides::default(),
+        Some(&parts),
+        &stop(3),
+    )
+    .unwrap();
+    assert_eq!(first.status, Status::Stopped);
+    assert_eq!(first.configurations_done, 3);
+    assert!(
+        !parts.join("summary.csv").exists(),
+        "no summary before the end"
+    );
+
+    // Simulate a kill in the middle of the next configuration: a few rows appended but not yet
+    // recorded in progress.json, the last one torn.
+    let raw_path = parts.join("raw.csv");
+    let rows_before = Table::read(&raw_path).unwrap().rows.len();
+    let mut f = fs::OpenOptions::new().append(true).open(&raw_path).unwrap();
+    let header = runner::raw_header();
+    let fake: Vec<String> = header.iter().map(|_| "7".to_string()).collect();
+    writeln!(f, "{}", fake.join(",")).unwrap();
+    write!(f, "parts,ss_su,sphere,sph").unwrap();
+    drop(f);
+
+    let second = runner::resume(&parts, &stop(5)).unwrap();
+    assert_eq!(second.status, Status::Stopped);
+    assert_eq!(second.configurations_run, 5);
+    assert_eq!(second.configurations_done, 8);
+    let rows_now = Table::read(&raw_path).unwrap().rows.len();
+    assert_eq!(
+        rows_now,
+        rows_before + 5 * ci_plan().repetitions,
+        "the torn rows are gone"
+    );
+
+    let third = runner::resume(&parts, &quiet()).unwrap();
+    assert_eq!(third.status, Status::Finished);
+    assert_eq!(third.configurations_done, ci_plan().configurations.len());
+
+    assert_eq!(rows_without_times(&parts), rows_without_times(&whole));
+    let record: serde_json::Value =
+        serde_json::from_slice(&fs::read(parts.join("run.json")).unwrap()).unwrap();
+    assert_eq!(record["sessions"].as_array().unwrap().len(), 3);
+    assert_eq!(record["status"], "finished");
+
+    // Summaries agree too, apart from times.
+    let strip = |p: &Path| {
+        let t = Table::read(&p.join("summary.csv")).unwrap();
+        let keep: Vec<usize> = (0..t.header.len())
+            .filter(|&i| !t.header[i].starts_with("t_") && !t.header[i].starts_with("share_"))
+            .collect();
+        t.rows
+            .iter()
+            .map(|r| keep.iter().map(|&i| r[i].clone()).collect::<Vec<_>>())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(strip(&parts), strip(&whole));
+
+    // Resuming a finished run does nothing.
+    let again = runner::resume(&parts, &quiet()).unwrap();
+    assert_eq!(
+        (again.status, again.configurations_run),
+        (Status::Finished, 0)
+    );
+}
+
+#[test]
+fn a_non_empty_output_folder_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("something"), "x").unwrap();
+    let err = runner::start(
+        &ci_manifest(),
+        &Overrides::default(),
+        Some(dir.path()),
+        &quiet(),
+    )
+    .unwrap_err();
+    assert!(format!("{err:#}").contains("not empty"), "{err:#}");
+}
+
+#[test]
+fn resuming_a_folder_that_is_not_a_run_fails_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = runner::resume(dir.path(), &quiet()).unwrap_err();
+    assert!(
+        format!("{err:#}").contains("not a resumable run folder"),
+        "{err:#}"
+    );
+}
+
+#[test]
+fn every_bad_manifest_gives_its_specific_error() {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_manifests");
+    let mut checked = 0;
+    let mut entries: Vec<PathBuf> = fs::read_dir(&folder)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    entries.sort();
+    let mut messages = HashMap::new();
+    for path in entries
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+    {
+        let text = fs::read_to_string(path).unwrap();
+        let expect = text
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix("# expect: "))
+            .unwrap_or_else(|| panic!("{} lacks a first line `# expect: ...`", path.display()));
+        let err = match manifest::load(path, &Overrides::default()) {
+            Ok(_) => panic!("{} was accepted", path.display()),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            err.contains(expect),
+            "{}: expected `{expect}` in:\n{err}",
+            path.display()
+        );
+        assert!(
+            err.contains(&*path.file_name().unwrap().to_string_lossy()),
+            "error names the file: {err}"
+        );
+        messages.insert(path.clone(), err);
+        checked += 1;
+    }
+    assert!(checked >= 20, "only {checked} bad manifests");
+}
