@@ -60,6 +60,9 @@ pub struct Args {
     /// Write ASCII PLY instead of binary.
     #[arg(long)]
     pub ascii: bool,
+    /// Render a turntable GIF of the mesh (default turntable settings) to this file.
+    #[arg(long)]
+    pub gif: Option<PathBuf>,
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     pub json: bool,
@@ -144,6 +147,10 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.out {
         rmt_mesh::io::save_ply(out, &mesh, !args.ascii)
             .with_context(|| format!("saving the mesh to {}", out.display()))?;
+    }
+    if let Some(gif) = &args.gif {
+        rmt_render::render_turntable_gif(&mesh, &rmt_render::TurntableSettings::default(), gif)
+            .with_context(|| format!("rendering the turntable to {}", gif.display()))?;
     }
     if args.json {
         let mut map = config_json(&e, threads);

@@ -1,8 +1,8 @@
 //! The experiment runner as a library: the `experiments` binary only parses arguments and calls
 //! into these modules.
 //!
-//! - [`objects`]: the sample objects (sphere, asteroid, gyroid, torus, bunny) built from names and
-//!   parameters, shared by `extract` and manifests;
+//! - [`objects`]: the sample objects (sphere, asteroid, gyroid, torus, bunny, terrain, caves) built
+//!   from names and parameters, shared by `extract` and manifests;
 //! - [`config`]: one extraction's full description and the names of its settings;
 //! - [`cmd_extract`]: one extraction, printed as a summary or JSON;
 //! - [`manifest`]: experiment manifests (TOML) expanded into configurations;
@@ -12,7 +12,7 @@
 //! - [`cmd_render`], [`cmd_questionnaire`]: turntable GIFs of a run's meshes and the questionnaire
 //!   built from them (`rmt-render`);
 //! - [`cmd_analyse`]: the questionnaire analysis (`rmt-analysis`);
-//! - [`bench`], [`cmd_bench`]: extraction speed against peer crates on pre-sampled values.
+//! - [`bench`](mod@bench), [`cmd_bench`]: extraction speed against peer crates on pre-sampled values.
 
 pub mod bench;
 pub mod cmd_analyse;

@@ -133,9 +133,7 @@ fn triangles_sentence(run: &Run) -> String {
             };
             parts.push(format!(
                 "{} removes {span} of the unclustered triangles",
-                variant_label(variant)
-                    .trim_start_matches("MT, ")
-                    .to_string()
+                variant_label(variant).trim_start_matches("MT, ")
             ));
         }
     }
