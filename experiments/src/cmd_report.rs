@@ -84,6 +84,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         list("differs", &outcome.differing);
         list("missing", &outcome.missing);
         list("not produced by the rebuild", &outcome.unexpected);
+        for (file, why) in &outcome.invalid {
+            println!("invalid: {}: {why}", args.out.join(file).display());
+        }
         if !outcome.figures_changed.is_empty() {
             println!(
                 "note: {} figure(s) have other bytes than the rebuild (allowed)",
@@ -92,8 +95,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         if !outcome.passed() {
             bail!(
-                "{} does not match a rebuild from {}: regenerate it with `experiments report \
-                 --run {} --out {}`",
+                "{} does not match a rebuild from {} (with the same questionnaire options \
+                 --resamples, --seed, --exclude): regenerate it with `experiments report --run \
+                 {} --out {}`",
                 args.out.display(),
                 args.run.display(),
                 args.run.display(),

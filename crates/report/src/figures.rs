@@ -138,7 +138,7 @@ fn repetitions_text(run: &Run) -> String {
 
 fn source_line(run: &Run) -> String {
     format!(
-        "Run `{}` ({} manifest), {}; {}.",
+        "Run {} ({} manifest), {}; {}.",
         run.info.run_id,
         run.info.name,
         repetitions_text(run),
@@ -448,6 +448,7 @@ pub fn fidelity(run: &Run) -> Option<XyChart> {
             title: heading(&object, &measured),
             x: Axis::auto(&xs, 30.0),
             y: Axis::auto(&ys, 30.0),
+            x_ticks: Vec::new(),
             series: measured
                 .iter()
                 .map(|c| Series {
@@ -475,7 +476,7 @@ pub fn fidelity(run: &Run) -> Option<XyChart> {
                 .into(),
         ],
         x_label: "output triangles".into(),
-        y_label: "mean vertex distance to the surface (grid spacings h)".into(),
+        y_label: "mean vertex distance to the surface in grid spacings h".into(),
         columns: 3,
         plot_size: (330, 260),
         panels,
@@ -490,11 +491,11 @@ pub fn scaling(run: &Run, fits: &[ScalingFit]) -> Option<XyChart> {
     if fitted.is_empty() {
         return None;
     }
-    let max = fitted
+    let times: Vec<f64> = fitted
         .iter()
         .flat_map(|f| f.points.iter().map(|p| p.1))
-        .fold(0.0, f64::max);
-    let (scale, unit) = format::time_unit(max);
+        .collect();
+    let (scale, unit) = format::time_unit_median(&times);
     let mut objects: Vec<String> = Vec::new();
     for f in &fitted {
         if !objects.contains(&f.object) {
@@ -545,8 +546,12 @@ pub fn scaling(run: &Run, fits: &[ScalingFit]) -> Option<XyChart> {
                 points: f.points.iter().map(|p| (p.0, p.1 * scale)).collect(),
             });
         }
+        let mut resolutions: Vec<f64> = xs.iter().map(|x| x.round()).collect();
+        resolutions.sort_by(f64::total_cmp);
+        resolutions.dedup();
         panels.push(Panel {
             title: object.clone(),
+            x_ticks: resolutions,
             x: Axis::log(&xs),
             y: Axis::log(&ys),
             series,
@@ -577,11 +582,85 @@ pub fn scaling(run: &Run, fits: &[ScalingFit]) -> Option<XyChart> {
              in the number of cells)."
                 .into(),
         ],
-        x_label: "resolution N (cells per axis, log scale)".into(),
-        y_label: format!("mean total time per extraction ({unit}, log scale)"),
+        x_label: "resolution N, cells per axis".into(),
+        y_label: format!("mean total time per extraction in {unit}"),
         columns: 2,
         plot_size: (560, 380),
         panels,
         legend,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::read_summary;
+
+    fn fixture() -> Run {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/ci");
+        Run::read(&dir).unwrap()
+    }
+
+    #[test]
+    fn stage_shares_add_up_to_the_whole() {
+        let run = fixture();
+        let stages = stages(&run);
+        assert!(stages.iter().any(|s| s == "sampling") && !stages.iter().any(|s| s == "total"));
+        for c in &run.configurations {
+            let shares = stage_shares_of(c, &stages);
+            let sum: f64 = shares.iter().map(|s| s.1).sum();
+            assert!((sum - 1.0).abs() < 1e-9, "{}: {sum}", c.id);
+            assert!(shares.iter().all(|s| s.1 >= 0.0));
+        }
+        // Stages that add up to more than the total are scaled down, not drawn past 100%.
+        let mut c = run.configurations[0].clone();
+        for (_, t) in c.times.iter_mut().filter(|(s, _)| s != "total") {
+            t.mean *= 10.0;
+        }
+        let sum: f64 = stage_shares_of(&c, &stages).iter().map(|s| s.1).sum();
+        assert!((sum - 1.0).abs() < 1e-9, "{sum}");
+    }
+
+    #[test]
+    fn every_configuration_gets_one_row_under_its_object() {
+        let run = fixture();
+        let chart = triangles(&run);
+        let rows = chart
+            .lines
+            .iter()
+            .filter(|l| matches!(l, RowLine::Bars { .. }))
+            .count();
+        let headings = chart.lines.len() - rows;
+        assert_eq!(rows, run.configurations.len());
+        assert_eq!(headings, run.objects().len());
+        // The dissertation's count is the reference tick where the comparison has it.
+        let summary = read_summary(&run.folder.join("summary.csv")).unwrap();
+        assert_eq!(summary.len(), rows);
+        let with_reference = chart
+            .lines
+            .iter()
+            .filter(|l| matches!(l, RowLine::Bars { bars, .. } if bars[0].reference.is_some()))
+            .count();
+        let compared = run
+            .paper
+            .as_ref()
+            .unwrap()
+            .iter()
+            .filter(|r| r.metric == "triangles" && r.theirs.is_some())
+            .count();
+        assert!(compared > 0);
+        assert_eq!(with_reference, compared);
+    }
+
+    #[test]
+    fn fidelity_panels_only_for_objects_that_know_their_distance() {
+        let run = fixture();
+        let chart = fidelity(&run).unwrap();
+        let titles: Vec<&str> = chart.panels.iter().map(|p| p.title.as_str()).collect();
+        for p in &chart.panels {
+            assert!(!p.series.is_empty());
+        }
+        assert!(titles.iter().any(|t| t.starts_with("sphere")));
+        assert!(!titles.iter().any(|t| t.starts_with("asteroid")));
+    }
 }

@@ -103,6 +103,16 @@ pub fn time_unit(max_seconds: f64) -> (f64, &'static str) {
     }
 }
 
+/// The time unit for values that span orders of magnitude: the one that suits their median.
+pub fn time_unit_median(seconds: &[f64]) -> (f64, &'static str) {
+    let mut v: Vec<f64> = seconds.iter().copied().filter(|t| t.is_finite()).collect();
+    if v.is_empty() {
+        return time_unit(0.0);
+    }
+    v.sort_by(f64::total_cmp);
+    time_unit(v[v.len() / 2])
+}
+
 /// A byte count in KiB or MiB with 3 significant digits (`1.06 MiB`).
 pub fn bytes(v: f64) -> String {
     if !v.is_finite() {
@@ -154,6 +164,7 @@ mod tests {
         assert_eq!(time_unit(2.5), (1.0, "s"));
         assert_eq!(time_unit(0.0178), (1e3, "ms"));
         assert_eq!(time_unit(0.0000178), (1e6, "µs"));
+        assert_eq!(time_unit_median(&[0.002, 0.1, 3.2]), (1e3, "ms"));
         assert_eq!(bytes(1220760.0), "1.16 MiB");
         assert_eq!(bytes(2048.0), "2 KiB");
     }

@@ -10,7 +10,8 @@
 //!
 //! Everything is byte-deterministic: the same input files give the same output bytes (no clock,
 //! no input paths, no hash-map order), so a committed report can be checked by rebuilding it from
-//! its own `data/` copy ([`check`]).
+//! its own `data/` copy ([`check`]: same files, identical tables and README, every file parses
+//! ([`validate`]) and every README link resolves).
 //!
 //! - [`data`]: the run folder read by column name ([`csv_file`]), with errors naming file, line
 //!   and column;
@@ -51,5 +52,5 @@ pub mod tables;
 
 pub use error::{ReportError, Result};
 pub use report::{
-    build, check, compare, default_scaling, CheckOutcome, Questionnaire, ReportInputs,
+    build, check, compare, default_scaling, validate, CheckOutcome, Questionnaire, ReportInputs,
 };

@@ -28,9 +28,9 @@ const GRID_MINOR: RGBColor = RGBColor(243, 243, 243);
 /// Outer margin, pixels.
 const MARGIN: i32 = 16;
 /// Title size.
-const TITLE_SIZE: f64 = 19.0;
+const TITLE_SIZE: f64 = 20.0;
 /// Subtitle, axis titles and legend size.
-const SMALL_SIZE: f64 = 13.0;
+const SMALL_SIZE: f64 = 14.0;
 /// Row labels and headings.
 const LABEL_SIZE: f64 = 14.0;
 /// Tick labels and value labels.
@@ -138,8 +138,8 @@ impl Axis {
         }
     }
 
-    /// A logarithmic axis from the decade below the smallest positive value to the decade above
-    /// the largest.
+    /// A logarithmic axis from the round value (1, 2 or 5 times a power of ten) at or below the
+    /// smallest positive value to the one at or above the largest.
     pub fn log(values: &[f64]) -> Axis {
         let positive: Vec<f64> = values
             .iter()
@@ -155,10 +155,10 @@ impl Axis {
         }
         let min = positive.iter().copied().fold(f64::INFINITY, f64::min);
         let max = positive.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let lo = 10f64.powf(min.log10().floor());
-        let mut hi = 10f64.powf(max.log10().ceil());
+        let lo = round_125(min, false);
+        let mut hi = round_125(max, true);
         if hi <= lo {
-            hi = lo * 10.0;
+            hi = round_125(lo * 1.5, true);
         }
         Axis { lo, hi, log: true }
     }
@@ -210,30 +210,67 @@ impl Axis {
             }
             return ticks;
         }
-        let decades = (self.hi / self.lo).log10().round() as i64;
-        let first = self.lo.log10().round() as i64;
+        // Decades are major and labelled; 2 and 5 are labelled too unless the axis spans more
+        // than two and a half decades; an end is labelled when it is at least 2.5x from every
+        // other label, so that labels never run into each other.
+        let span = (self.hi / self.lo).log10();
+        let first = self.lo.log10().floor() as i32;
+        let last = self.hi.log10().ceil() as i32;
         let mut ticks = Vec::new();
-        for d in 0..=decades {
-            let base = 10f64.powi((first + d) as i32);
-            ticks.push(Tick {
-                value: base,
-                label: Some(tick_label(base, base)),
-                major: true,
-            });
-            if d == decades {
-                break;
-            }
-            for m in 2..=9 {
+        let mut ends = Vec::new();
+        for d in first..=last {
+            let base = 10f64.powi(d);
+            for m in 1..=9 {
                 let value = base * m as f64;
-                let labelled = decades <= 2 && (m == 2 || m == 5);
+                let inside = value >= self.lo * (1.0 - 1e-9) && value <= self.hi * (1.0 + 1e-9);
+                if !inside {
+                    continue;
+                }
+                let is_end =
+                    (value / self.lo - 1.0).abs() < 1e-9 || (value / self.hi - 1.0).abs() < 1e-9;
+                let labelled = m == 1 || (span <= 2.5 && (m == 2 || m == 5));
+                if is_end && !labelled {
+                    ends.push((ticks.len(), base));
+                }
                 ticks.push(Tick {
                     value,
                     label: labelled.then(|| tick_label(value, base)),
-                    major: false,
+                    major: m == 1,
                 });
             }
         }
+        for (i, base) in ends {
+            let value = ticks[i].value;
+            let room = ticks
+                .iter()
+                .filter(|t| t.label.is_some())
+                .all(|t| (t.value / value).max(value / t.value) >= 2.5);
+            if room {
+                ticks[i].label = Some(tick_label(value, base));
+            }
+        }
         ticks
+    }
+}
+
+/// The round value (1, 2 or 5 times a power of ten) at or below `v` (`up`: at or above).
+fn round_125(v: f64, up: bool) -> f64 {
+    let base = 10f64.powf(v.log10().floor());
+    let steps = [1.0, 2.0, 5.0, 10.0];
+    let tolerance = 1e-9;
+    if up {
+        steps
+            .iter()
+            .map(|m| m * base)
+            .find(|c| *c >= v * (1.0 - tolerance))
+            .unwrap_or(10.0 * base)
+    } else {
+        steps
+            .iter()
+            .rev()
+            .map(|m| m * base)
+            .find(|c| *c <= v * (1.0 + tolerance))
+            .unwrap_or(base)
     }
 }
 
@@ -862,11 +899,15 @@ impl RowChart {
                 end = end.max(px(hi));
             }
         }
+        // The value goes right after the bar, unless the reference marker would sit under it.
+        let text_end = end + 6 + text_width(&bar.text, TICK_SIZE) + 6;
         if let Some((value, marker)) = bar.reference {
             if value.is_finite() {
                 let x = px(value);
                 draw_marker(root, marker, (x, cy), BAR_HEIGHT / 2 - 1, INK)?;
-                end = end.max(x + 4);
+                if x + 4 >= end && x - 4 <= text_end {
+                    end = x + 4;
+                }
             }
         }
         let at = (end + 6, cy);
@@ -917,6 +958,8 @@ pub struct Panel {
     pub y: Axis,
     /// The series, drawn in order.
     pub series: Vec<Series>,
+    /// Labelled x positions instead of the axis' own ticks (e.g. the measured resolutions).
+    pub x_ticks: Vec<f64>,
 }
 
 /// Panels of points and lines side by side (wrapping after `columns`), sharing axis titles and
@@ -963,7 +1006,8 @@ impl XyChart {
 
     fn panel_width(&self) -> i32 {
         let (w, _) = self.plot_size;
-        (self.tick_width() + w).max(text_width(&self.y_label, SMALL_SIZE))
+        let y_label = format!("{} (log scale)", self.y_label);
+        (self.tick_width() + w).max(text_width(&y_label, SMALL_SIZE))
     }
 
     fn panel_height(&self) -> i32 {
@@ -995,9 +1039,14 @@ impl XyChart {
             HPos::Left,
             VPos::Top,
         )?;
+        let y_label = if panel.y.log {
+            format!("{} (log scale)", self.y_label)
+        } else {
+            self.y_label.clone()
+        };
         label(
             root,
-            &self.y_label,
+            &y_label,
             (x0, y0 + PANEL_TITLE + 2),
             SMALL_SIZE,
             HPos::Left,
@@ -1005,7 +1054,20 @@ impl XyChart {
         )?;
         let px = |x: f64| panel.x.pixel(x, left, right);
         let py = |y: f64| panel.y.pixel(y, bottom, top);
-        for tick in panel.x.ticks() {
+        let x_ticks = if panel.x_ticks.is_empty() {
+            panel.x.ticks()
+        } else {
+            panel
+                .x_ticks
+                .iter()
+                .map(|&value| Tick {
+                    value,
+                    label: Some(tick_label(value, 1.0)),
+                    major: true,
+                })
+                .collect()
+        };
+        for tick in x_ticks {
             let x = px(tick.value);
             let colour = if tick.major { GRID } else { GRID_MINOR };
             root.draw(&PathElement::new(vec![(x, top), (x, bottom)], colour))
@@ -1046,9 +1108,16 @@ impl XyChart {
             INK,
         ))
         .map_err(e)?;
+        let log_note = |axis: &Axis, text: &str| {
+            if axis.log {
+                format!("{text} (log scale)")
+            } else {
+                text.to_string()
+            }
+        };
         label(
             root,
-            &self.x_label,
+            &log_note(&panel.x, &self.x_label),
             ((left + right) / 2, bottom + 30),
             SMALL_SIZE,
             HPos::Center,
@@ -1176,7 +1245,7 @@ mod tests {
         let axis = Axis::linear(&[0.3, 7.2], true);
         assert_eq!((axis.lo, axis.hi), (0.0, 8.0));
         let labels: Vec<String> = axis.ticks().into_iter().filter_map(|t| t.label).collect();
-        assert_eq!(labels, ["0", "1", "2", "3", "4", "5", "6", "7", "8"]);
+        assert_eq!(labels, ["0", "2", "4", "6", "8"]);
         let small = Axis::linear(&[0.0, 0.013], true);
         let labels: Vec<String> = small.ticks().into_iter().filter_map(|t| t.label).collect();
         assert_eq!(labels.last().map(String::as_str), Some("0.014"));
@@ -1184,20 +1253,21 @@ mod tests {
     }
 
     #[test]
-    fn log_axes_span_whole_decades() {
+    fn log_axes_end_on_round_values() {
         let axis = Axis::log(&[27200.0, 101720.0, 3.0]);
-        assert_eq!((axis.lo, axis.hi), (1.0, 1e6));
+        assert_eq!((axis.lo, axis.hi), (2.0, 200000.0));
         let labels: Vec<String> = axis.ticks().into_iter().filter_map(|t| t.label).collect();
-        assert_eq!(
-            labels,
-            ["1", "10", "100", "1,000", "10,000", "100,000", "1,000,000"]
-        );
-        let narrow = Axis::log(&[0.002, 0.03]);
+        assert_eq!(labels, ["2", "10", "100", "1,000", "10,000", "100,000"]);
+        let ends = Axis::log(&[0.3, 40.0]);
+        assert_eq!((ends.lo, ends.hi), (0.2, 50.0));
+        let labels: Vec<String> = ends.ticks().into_iter().filter_map(|t| t.label).collect();
+        assert_eq!(labels, ["0.2", "0.5", "1", "2", "5", "10", "20", "50"]);
+        let narrow = Axis::log(&[0.0021, 0.03]);
+        assert_eq!((narrow.lo, narrow.hi), (0.002, 0.05));
         let labels: Vec<String> = narrow.ticks().into_iter().filter_map(|t| t.label).collect();
-        assert_eq!(
-            labels,
-            ["0.001", "0.002", "0.005", "0.01", "0.02", "0.05", "0.1"]
-        );
+        assert_eq!(labels, ["0.002", "0.005", "0.01", "0.02", "0.05"]);
+        let exact = Axis::log(&[10.0, 100.0]);
+        assert_eq!((exact.lo, exact.hi), (10.0, 100.0));
     }
 
     #[test]
@@ -1210,6 +1280,7 @@ mod tests {
     #[test]
     fn pixels_are_clamped_to_the_axis() {
         let axis = Axis::log(&[1.0, 100.0]);
+        assert_eq!((axis.lo, axis.hi), (1.0, 100.0));
         assert_eq!(axis.pixel(10.0, 0, 200), 100);
         assert_eq!(axis.pixel(1e9, 0, 200), 200);
         assert_eq!(axis.pixel(0.0, 0, 200), 0);

@@ -300,7 +300,21 @@ fn table_link(tables: &[TextTable], name: &str) -> Option<String> {
         .map(|t| format!("[{}](tables/{name}.md) ([CSV](tables/{name}.csv))", t.title))
 }
 
-fn figure(out: &mut String, figures: &[String], name: &str, heading: &str, sentence: &str) {
+/// The heading of a figure in the README.
+fn figure_heading(name: &str) -> &str {
+    match name {
+        "triangles" => "Triangle counts",
+        "pass_times" => "Vertex and geometry pass times",
+        "stage_shares" => "Share of time per stage",
+        "aspect_ratio" => "Triangle aspect ratio",
+        "fidelity" => "Triangle count against fidelity",
+        "scaling" => "Time against resolution",
+        other => other,
+    }
+}
+
+fn figure(out: &mut String, figures: &[String], name: &str, sentence: &str) {
+    let heading = figure_heading(name);
     if !figures.iter().any(|f| f == name) {
         return;
     }
@@ -317,9 +331,14 @@ pub fn readme(input: &ReadmeInput) -> String {
     out.push_str(
         "Figures and tables rebuilt from data by `cargo run --release -p experiments -- report` \
          (see [Regenerate](#regenerate)); do not edit by hand. The benchmark comes from the run \
-         whose files are in [`data/`](data/), the questionnaire from the answers in \
-         `data/questionnaire/` of the repository.\n\n",
+         whose files are in [`data/`](data/)",
     );
+    if input.questionnaire.is_some() {
+        out.push_str(
+            ", the questionnaire from the answers in `data/questionnaire/` of the repository",
+        );
+    }
+    out.push_str(".\n\n");
     out.push_str("## Provenance\n\n");
     out.push_str(&provenance_table(&run.info));
     out.push('\n');
@@ -340,48 +359,17 @@ pub fn readme(input: &ReadmeInput) -> String {
         ));
     }
     let figures = input.figures;
-    figure(
-        &mut out,
-        figures,
-        "triangles",
-        "Triangle counts",
-        &triangles_sentence(run),
-    );
-    figure(
-        &mut out,
-        figures,
-        "pass_times",
-        "Vertex and geometry pass times",
-        &times_sentence(run),
-    );
-    figure(
-        &mut out,
-        figures,
-        "stage_shares",
-        "Share of time per stage",
-        &shares_sentence(run),
-    );
-    figure(
-        &mut out,
-        figures,
-        "aspect_ratio",
-        "Triangle aspect ratio",
-        &aspect_sentence(run),
-    );
-    figure(
-        &mut out,
-        figures,
-        "fidelity",
-        "Triangle count against fidelity",
-        &fidelity_sentence(run),
-    );
+    figure(&mut out, figures, "triangles", &triangles_sentence(run));
+    figure(&mut out, figures, "pass_times", &times_sentence(run));
+    figure(&mut out, figures, "stage_shares", &shares_sentence(run));
+    figure(&mut out, figures, "aspect_ratio", &aspect_sentence(run));
+    figure(&mut out, figures, "fidelity", &fidelity_sentence(run));
     match input.scaling {
         Some((scaling_run, fits)) if figures.iter().any(|f| f == "scaling") => {
             figure(
                 &mut out,
                 figures,
                 "scaling",
-                "Time against resolution",
                 &format!(
                     "{} From run `{}` (`{}` manifest, {}; commit `{}`, {}).",
                     scaling_sentence(fits),
@@ -482,7 +470,8 @@ pub fn readme(input: &ReadmeInput) -> String {
     }
     for name in figures {
         out.push_str(&format!(
-            "| `figures/{name}.png`, `figures/{name}.svg` | figure |\n"
+            "| `figures/{name}.png`, `figures/{name}.svg` | figure: {} |\n",
+            figure_heading(name)
         ));
     }
     for file in input.data_files {

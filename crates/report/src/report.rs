@@ -278,13 +278,74 @@ pub struct CheckOutcome {
     pub unexpected: Vec<PathBuf>,
     /// Figures whose bytes differ (reported, not a failure: only the set of figures must match).
     pub figures_changed: Vec<PathBuf>,
+    /// Committed files that do not parse (CSV, JSON, PNG, SVG, Markdown, README links), with why.
+    pub invalid: Vec<(PathBuf, String)>,
 }
 
 impl CheckOutcome {
-    /// Whether the committed report matches: same files, identical text.
+    /// Whether the committed report matches: same files, identical text, everything parses.
     pub fn passed(&self) -> bool {
-        self.differing.is_empty() && self.missing.is_empty() && self.unexpected.is_empty()
+        self.differing.is_empty()
+            && self.missing.is_empty()
+            && self.unexpected.is_empty()
+            && self.invalid.is_empty()
     }
+}
+
+/// Why `bytes` (the file `name`) is not a well-formed file of its kind, if it is not.
+pub fn validate(name: &Path, bytes: &[u8]) -> Option<String> {
+    let extension = name.extension().and_then(|e| e.to_str()).unwrap_or("");
+    match extension {
+        "csv" => {
+            let mut reader = csv::Reader::from_reader(bytes);
+            let columns = match reader.headers() {
+                Ok(h) if !h.is_empty() => h.len(),
+                Ok(_) => return Some("no header".into()),
+                Err(e) => return Some(e.to_string()),
+            };
+            for (i, record) in reader.records().enumerate() {
+                match record {
+                    Ok(r) if r.len() == columns => {}
+                    Ok(r) => {
+                        return Some(format!(
+                            "line {}: {} cells, header has {columns}",
+                            i + 2,
+                            r.len()
+                        ))
+                    }
+                    Err(e) => return Some(e.to_string()),
+                }
+            }
+            None
+        }
+        "json" => serde_json::from_slice::<serde_json::Value>(bytes)
+            .err()
+            .map(|e| e.to_string()),
+        "png" => {
+            let signature_ok = bytes.len() > 24 && bytes[..8] == *b"\x89PNG\r\n\x1a\n";
+            let ihdr_ok = signature_ok && &bytes[12..16] == b"IHDR";
+            (!ihdr_ok).then(|| "not a PNG image".to_string())
+        }
+        "svg" => match std::str::from_utf8(bytes) {
+            Ok(text) if text.starts_with("<svg") && text.trim_end().ends_with("</svg>") => None,
+            _ => Some("not an SVG document".into()),
+        },
+        "md" => match std::str::from_utf8(bytes) {
+            Ok(text) if text.starts_with('#') => None,
+            _ => Some("not a Markdown page with a heading".into()),
+        },
+        _ => None,
+    }
+}
+
+/// Relative link targets of a Markdown page (`[text](target)`), anchors and URLs left out.
+pub fn local_links(markdown: &str) -> Vec<String> {
+    markdown
+        .split("](")
+        .skip(1)
+        .filter_map(|part| part.find(')').map(|end| part[..end].to_string()))
+        .filter(|t| !t.starts_with('#') && !t.contains("://"))
+        .collect()
 }
 
 /// Every file under the owned entries of `root`, relative to it, hidden files skipped.
@@ -329,7 +390,8 @@ fn is_figure(path: &Path) -> bool {
 }
 
 /// Compares the report in `committed` with the one in `fresh` (file sets of the owned folders;
-/// bytes of every non-figure file).
+/// bytes of every non-figure file) and validates every committed file that the rebuild also
+/// makes ([`validate`], and the README's links).
 pub fn compare(committed: &Path, fresh: &Path) -> Result<CheckOutcome> {
     let theirs = owned_files(committed)?;
     let ours = owned_files(fresh)?;
@@ -342,8 +404,20 @@ pub fn compare(committed: &Path, fresh: &Path) -> Result<CheckOutcome> {
         outcome.compared += 1;
         let a = committed.join(file);
         let b = fresh.join(file);
-        let same =
-            std::fs::read(&a).map_err(io_error(&a))? == std::fs::read(&b).map_err(io_error(&b))?;
+        let committed_bytes = std::fs::read(&a).map_err(io_error(&a))?;
+        if let Some(why) = validate(file, &committed_bytes) {
+            outcome.invalid.push((file.clone(), why));
+        }
+        if file == Path::new("README.md") {
+            for target in local_links(&String::from_utf8_lossy(&committed_bytes)) {
+                if !committed.join(&target).exists() {
+                    outcome
+                        .invalid
+                        .push((file.clone(), format!("links to missing {target}")));
+                }
+            }
+        }
+        let same = committed_bytes == std::fs::read(&b).map_err(io_error(&b))?;
         if !same {
             if is_figure(file) {
                 outcome.figures_changed.push(file.clone());
@@ -368,4 +442,35 @@ pub fn check(inputs: &ReportInputs, committed: &Path) -> Result<CheckOutcome> {
     let temporary = tempfile::tempdir().map_err(io_error(Path::new("temporary folder")))?;
     build(inputs, temporary.path())?;
     compare(committed, temporary.path())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validation_finds_ragged_csv_bad_json_and_fake_images() {
+        let p = |s: &str| PathBuf::from(s);
+        assert_eq!(validate(&p("a.csv"), b"a,b\n1,2\n"), None);
+        assert_eq!(
+            validate(&p("a.csv"), b"a,b\n1,2\n3\n").as_deref(),
+            Some("CSV error: record 2 (line: 3, byte: 8): found record with 1 fields, but the previous record has 2 fields")
+        );
+        assert!(validate(&p("run.json"), b"{\"a\": 1}").is_none());
+        assert!(validate(&p("run.json"), b"{\"a\": ").is_some());
+        assert!(validate(&p("f.png"), b"GIF89a not a png at all....").is_some());
+        let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
+        png.extend([0u8; 13]);
+        assert!(validate(&p("f.png"), &png).is_none());
+        assert!(validate(&p("f.svg"), b"<svg></svg>\n").is_none());
+        assert!(validate(&p("f.svg"), b"<svg>").is_some());
+        assert!(validate(&p("t.md"), b"no heading").is_some());
+        assert!(validate(&p("manifest.toml"), b"anything").is_none());
+    }
+
+    #[test]
+    fn local_links_skip_anchors_and_urls() {
+        let text = "[a](figures/a.png) [b](#regenerate) [c](https://x.org) ![d](tables/d.md)";
+        assert_eq!(local_links(text), ["figures/a.png", "tables/d.md"]);
+    }
 }

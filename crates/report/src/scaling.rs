@@ -7,7 +7,7 @@ use crate::data::{lattice_name, Run};
 /// One method's times over the resolutions, with its fitted growth exponent.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScalingFit {
-    /// `MT BCDL, none`, `marching cubes` (prefixed by the object when there are several).
+    /// `BCDL, none`, `marching cubes` (prefixed by the object when there are several).
     pub label: String,
     /// Object.
     pub object: String,
@@ -108,7 +108,7 @@ pub fn fit_scaling(run: &Run) -> Vec<ScalingFit> {
             let mut label = if first.is_marching_cubes() {
                 "marching cubes".to_string()
             } else {
-                format!("MT {}, {}", lattice_name(lattice), clustering)
+                format!("{}, {}", lattice_name(lattice), clustering)
             };
             if objects.len() > 1 {
                 label = format!("{object}: {label}");

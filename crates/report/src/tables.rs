@@ -380,7 +380,7 @@ pub fn paper_comparison(run: &Run, rows: &[PaperRow]) -> TextTable {
                         .map(|r| {
                             let ratio = r
                                 .ratio
-                                .map(|x| format!(" ({}×)", fixed(x, 2)))
+                                .map(|x| format!(" ({})", ratio_text(x)))
                                 .unwrap_or_default();
                             format!("{} / {}{ratio}", show(kind, r.ours), show(kind, r.theirs))
                         })
@@ -414,7 +414,19 @@ pub fn paper_comparison(run: &Run, rows: &[PaperRow]) -> TextTable {
     }
 }
 
-/// Median of sorted-able values (NaN-free).
+/// A ratio as `1.02×`, `246×` from 100 up, or with two significant digits below 0.1
+/// (`0.0031×`).
+pub fn ratio_text(v: f64) -> String {
+    if v.abs() >= 99.5 {
+        format!("{}×", fixed(v, 0))
+    } else if v.abs() >= 0.095 || v == 0.0 {
+        format!("{}×", fixed(v, 2))
+    } else {
+        format!("{}×", sig(v, 2))
+    }
+}
+
+/// Median of finite values; `None` for none.
 pub fn median(values: &[f64]) -> Option<f64> {
     if values.is_empty() {
         return None;
@@ -450,7 +462,7 @@ pub fn paper_ratios(rows: &[PaperRow]) -> TextTable {
             opt((!ratios.is_empty()).then_some(min), |v| sig(v, 6)),
             opt((!ratios.is_empty()).then_some(max), |v| sig(v, 6)),
         ]);
-        let show = |v: f64| format!("{}×", fixed(v, 2));
+        let show = ratio_text;
         md_rows.push(vec![
             metric_info(&m).0.to_string(),
             ratios.len().to_string(),
@@ -495,11 +507,11 @@ pub fn scaling_table(run: &Run, fits: &[ScalingFit]) -> TextTable {
         .collect();
     resolutions.sort_unstable();
     resolutions.dedup();
-    let max = fits
+    let times: Vec<f64> = fits
         .iter()
         .flat_map(|f| f.points.iter().map(|p| p.1))
-        .fold(0.0, f64::max);
-    let (scale, unit) = format::time_unit(max);
+        .collect();
+    let (scale, unit) = format::time_unit_median(&times);
     let mut header = vec!["method".to_string()];
     header.extend(resolutions.iter().map(|n| format!("{n}³")));
     header.extend(["exponent b", "R²"].map(String::from));
@@ -574,5 +586,25 @@ pub fn scaling_table(run: &Run, fits: &[ScalingFit]) -> TextTable {
             header,
             rows,
         }],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ratios_keep_two_significant_digits_when_small() {
+        assert_eq!(ratio_text(1.0), "1.00×");
+        assert_eq!(ratio_text(0.0031), "0.0031×");
+        assert_eq!(ratio_text(245.87), "246×");
+        assert_eq!(ratio_text(0.0), "0.00×");
+    }
+
+    #[test]
+    fn medians_of_odd_and_even_counts() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), Some(2.5));
+        assert_eq!(median(&[]), None);
     }
 }

@@ -1,0 +1,394 @@
+//! The report end to end on real run folders (`tests/fixtures/ci`: `experiments run` of
+//! `experiments/manifests/ci.toml`; `tests/fixtures/scaling`: a small scaling sweep at 8..24
+//! cells) and the bundled questionnaire data.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use rmt_report::{build, check, compare, Questionnaire, ReportInputs};
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
+}
+
+fn questionnaire(resamples: usize) -> Questionnaire {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/questionnaire");
+    Questionnaire {
+        inputs: rmt_analysis::Inputs::in_dir(&dir),
+        options: rmt_analysis::Options {
+            resamples,
+            ..rmt_analysis::Options::default()
+        },
+    }
+}
+
+fn inputs(run: &Path, scaling: Option<&Path>, resamples: Option<usize>) -> ReportInputs {
+    ReportInputs {
+        run: run.to_path_buf(),
+        scaling: scaling.map(Path::to_path_buf),
+        questionnaire: resamples.map(questionnaire),
+        keep_raw: true,
+    }
+}
+
+/// Every file under `dir` with its bytes, keyed by relative path.
+fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, Vec<u8>>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                walk(root, &path, out);
+            } else {
+                let relative = path.strip_prefix(root).unwrap().to_path_buf();
+                out.insert(relative, std::fs::read(&path).unwrap());
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, to.join(path.file_name().unwrap())).unwrap();
+    }
+}
+
+#[test]
+fn the_same_inputs_give_the_same_bytes_wherever_they_are() {
+    // The second build reads copies of the inputs from other paths.
+    let elsewhere = tempfile::tempdir().unwrap();
+    let ci = elsewhere.path().join("some/other/ci");
+    let scaling = elsewhere.path().join("scaling-copy");
+    copy_dir(&fixtures().join("ci"), &ci);
+    copy_dir(&fixtures().join("scaling"), &scaling);
+
+    let a = tempfile::tempdir().unwrap();
+    let b = tempfile::tempdir().unwrap();
+    let files_a = build(
+        &inputs(
+            &fixtures().join("ci"),
+            Some(&fixtures().join("scaling")),
+            Some(1000),
+        ),
+        a.path(),
+    )
+    .unwrap();
+    let files_b = build(&inputs(&ci, Some(&scaling), Some(1000)), b.path()).unwrap();
+    assert_eq!(files_a, files_b);
+    let (tree_a, tree_b) = (tree(a.path()), tree(b.path()));
+    assert_eq!(
+        tree_a.keys().collect::<Vec<_>>(),
+        tree_b.keys().collect::<Vec<_>>()
+    );
+    for (path, bytes) in &tree_a {
+        assert!(bytes == &tree_b[path], "{} differs", path.display());
+    }
+    // Every written file is listed, and only those.
+    let listed: Vec<&PathBuf> = files_a.iter().collect();
+    assert_eq!(listed, tree_a.keys().collect::<Vec<_>>());
+    // The figures and tables the issue asks for.
+    for name in [
+        "triangles",
+        "pass_times",
+        "stage_shares",
+        "aspect_ratio",
+        "fidelity",
+        "scaling",
+    ] {
+        for ext in ["png", "svg"] {
+            let path = PathBuf::from(format!("figures/{name}.{ext}"));
+            assert!(tree_a.contains_key(&path), "missing {}", path.display());
+        }
+    }
+    for name in [
+        "benchmark_summary",
+        "paper_comparison",
+        "paper_ratios",
+        "scaling",
+    ] {
+        for ext in ["md", "csv"] {
+            let path = PathBuf::from(format!("tables/{name}.{ext}"));
+            assert!(tree_a.contains_key(&path), "missing {}", path.display());
+        }
+    }
+    for name in ["preference_factors", "preference_weights", "bradley_terry"] {
+        assert!(tree_a.contains_key(&PathBuf::from(format!("questionnaire/{name}.png"))));
+    }
+}
+
+#[test]
+fn a_report_rebuilds_identically_from_its_own_data_copy() {
+    let out = tempfile::tempdir().unwrap();
+    build(
+        &inputs(
+            &fixtures().join("ci"),
+            Some(&fixtures().join("scaling")),
+            Some(0),
+        ),
+        out.path(),
+    )
+    .unwrap();
+    // data/ is a run folder, and data/scaling is found without being named.
+    let data = out.path().join("data");
+    let scaling = rmt_report::default_scaling(&data);
+    assert_eq!(scaling.as_deref(), Some(data.join("scaling").as_path()));
+    let outcome = check(&inputs(&data, scaling.as_deref(), Some(0)), out.path()).unwrap();
+    assert!(outcome.passed(), "{outcome:?}");
+    assert!(outcome.figures_changed.is_empty(), "{outcome:?}");
+    assert!(outcome.compared > 40, "{}", outcome.compared);
+
+    // Rebuilding over its own data folder changes nothing either.
+    let before = tree(out.path());
+    build(&inputs(&data, scaling.as_deref(), Some(0)), out.path()).unwrap();
+    assert!(before == tree(out.path()));
+}
+
+#[test]
+fn check_names_edited_missing_and_unexpected_files() {
+    let out = tempfile::tempdir().unwrap();
+    let ci = fixtures().join("ci");
+    build(&inputs(&ci, None, None), out.path()).unwrap();
+    let summary_md = out.path().join("tables/benchmark_summary.md");
+    let mut text = std::fs::read_to_string(&summary_md).unwrap();
+    text.push_str("edited\n");
+    std::fs::write(&summary_md, text).unwrap();
+    std::fs::remove_file(out.path().join("figures/triangles.svg")).unwrap();
+    std::fs::write(out.path().join("tables/extra.csv"), "a\n1\n").unwrap();
+    // A valid figure with other bytes is allowed (reported, not a failure).
+    std::fs::copy(
+        out.path().join("figures/triangles.png"),
+        out.path().join("figures/pass_times.png"),
+    )
+    .unwrap();
+    let ratios = out.path().join("tables/paper_ratios.csv");
+    let mut ragged = std::fs::read_to_string(&ratios).unwrap();
+    ragged.push_str("only,two\n");
+    std::fs::write(&ratios, ragged).unwrap();
+    let readme = out.path().join("README.md");
+    let mut text = std::fs::read_to_string(&readme).unwrap();
+    text.push_str("[gone](figures/gone.png)\n");
+    std::fs::write(&readme, text).unwrap();
+    // Files outside the folders the report owns are not its business.
+    std::fs::write(out.path().join("notes.txt"), "mine").unwrap();
+
+    let outcome = check(&inputs(&ci, None, None), out.path()).unwrap();
+    assert!(!outcome.passed());
+    assert_eq!(
+        outcome.differing,
+        [
+            PathBuf::from("README.md"),
+            PathBuf::from("tables/benchmark_summary.md"),
+            PathBuf::from("tables/paper_ratios.csv"),
+        ]
+    );
+    let invalid: Vec<(&str, &str)> = outcome
+        .invalid
+        .iter()
+        .map(|(f, why)| (f.to_str().unwrap(), why.as_str()))
+        .collect();
+    assert_eq!(invalid.len(), 3, "{invalid:?}");
+    assert_eq!(
+        invalid[0],
+        ("README.md", "links to missing figures/triangles.svg")
+    );
+    assert_eq!(
+        invalid[1],
+        ("README.md", "links to missing figures/gone.png")
+    );
+    assert_eq!(invalid[2].0, "tables/paper_ratios.csv");
+    assert!(invalid[2].1.contains("found record with 2 fields"));
+    assert_eq!(outcome.missing, [PathBuf::from("figures/triangles.svg")]);
+    assert_eq!(outcome.unexpected, [PathBuf::from("tables/extra.csv")]);
+    assert_eq!(
+        outcome.figures_changed,
+        [PathBuf::from("figures/pass_times.png")]
+    );
+}
+
+#[test]
+fn scaling_is_optional_and_a_rebuild_without_it_removes_its_files() {
+    let out = tempfile::tempdir().unwrap();
+    let ci = fixtures().join("ci");
+    build(
+        &inputs(&ci, Some(&fixtures().join("scaling")), None),
+        out.path(),
+    )
+    .unwrap();
+    assert!(out.path().join("figures/scaling.png").is_file());
+    assert!(out.path().join("data/scaling/summary.csv").is_file());
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(readme.contains("![Time against resolution](figures/scaling.png)"));
+
+    let files = build(&inputs(&ci, None, None), out.path()).unwrap();
+    for gone in [
+        "figures/scaling.png",
+        "figures/scaling.svg",
+        "tables/scaling.md",
+        "tables/scaling.csv",
+        "data/scaling/summary.csv",
+        "data/scaling/run.json",
+    ] {
+        assert!(!out.path().join(gone).exists(), "{gone} left behind");
+        assert!(!files.contains(&PathBuf::from(gone)));
+    }
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(readme.contains("Not included: no scaling run was given"));
+    assert!(!readme.contains("figures/scaling.png"));
+    // And the smaller report checks clean against itself.
+    let outcome = compare(out.path(), out.path()).unwrap();
+    assert!(outcome.passed());
+}
+
+#[test]
+fn every_file_parses_and_every_readme_link_resolves() {
+    let out = tempfile::tempdir().unwrap();
+    let files = build(
+        &inputs(
+            &fixtures().join("ci"),
+            Some(&fixtures().join("scaling")),
+            Some(0),
+        ),
+        out.path(),
+    )
+    .unwrap();
+    for file in &files {
+        let path = out.path().join(file);
+        let bytes = std::fs::read(&path).unwrap();
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("png") => {
+                assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{}", file.display());
+                let width = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+                let height = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+                assert!(
+                    width >= 400 && height >= 200,
+                    "{}: {width}x{height}",
+                    file.display()
+                );
+            }
+            Some("svg") => {
+                let text = String::from_utf8(bytes).unwrap();
+                assert!(text.starts_with("<svg"), "{}", file.display());
+                assert!(text.trim_end().ends_with("</svg>"), "{}", file.display());
+                assert!(text.contains("<text"), "{}: no text", file.display());
+            }
+            Some("csv") => {
+                let mut reader = csv::Reader::from_reader(bytes.as_slice());
+                let columns = reader.headers().unwrap().len();
+                assert!(columns >= 2, "{}", file.display());
+                for record in reader.records() {
+                    assert_eq!(record.unwrap().len(), columns, "{}", file.display());
+                }
+            }
+            Some("json") => {
+                serde_json::from_slice::<serde_json::Value>(&bytes).unwrap();
+            }
+            Some("md") => {
+                let text = String::from_utf8(bytes).unwrap();
+                assert!(text.starts_with('#'), "{}", file.display());
+            }
+            _ => {}
+        }
+    }
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    let mut links = 0;
+    for part in readme.split("](").skip(1) {
+        let target = &part[..part.find(')').unwrap()];
+        if target.starts_with('#') || target.starts_with("http") {
+            continue;
+        }
+        links += 1;
+        assert!(
+            out.path().join(target).exists(),
+            "README links to missing {target}"
+        );
+    }
+    assert!(links > 20, "{links}");
+    // Provenance comes from run.json, not from the clock.
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(fixtures().join("ci/run.json")).unwrap()).unwrap();
+    let date = run["provenance"]["date"].as_str().unwrap();
+    let commit = &run["provenance"]["git_commit"].as_str().unwrap()[..12];
+    assert!(readme.contains(date) && readme.contains(commit));
+}
+
+#[test]
+fn the_summary_table_has_the_dissertations_columns_and_the_runs_numbers() {
+    let out = tempfile::tempdir().unwrap();
+    let ci = fixtures().join("ci");
+    build(&inputs(&ci, None, None), out.path()).unwrap();
+    let paper = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/paper/benchmark.csv");
+    let paper_header: Vec<String> = csv::Reader::from_path(&paper)
+        .unwrap()
+        .headers()
+        .unwrap()
+        .iter()
+        .map(String::from)
+        .collect();
+    let mut ours = csv::Reader::from_path(out.path().join("tables/benchmark_summary.csv")).unwrap();
+    let header: Vec<String> = ours.headers().unwrap().iter().map(String::from).collect();
+    assert_eq!(header[..paper_header.len()], paper_header[..]);
+
+    let mut summary = csv::Reader::from_path(ci.join("summary.csv")).unwrap();
+    let summary_header = summary.headers().unwrap().clone();
+    let column = |name: &str| summary_header.iter().position(|h| h == name).unwrap();
+    let expected: Vec<(String, String, String)> = summary
+        .records()
+        .map(|r| {
+            let r = r.unwrap();
+            (
+                r[column("id")].to_string(),
+                r[column("triangles")].to_string(),
+                r[column("vertices")].to_string(),
+            )
+        })
+        .collect();
+    let got: Vec<(String, String, String)> = ours
+        .records()
+        .map(|r| {
+            let r = r.unwrap();
+            (r[0].to_string(), r[8].to_string(), r[7].to_string())
+        })
+        .collect();
+    assert_eq!(got, expected);
+}
+
+#[test]
+fn a_run_without_summary_says_how_to_finish_it() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(fixtures().join("ci/run.json"), dir.path().join("run.json")).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let error = build(&inputs(dir.path(), None, None), out.path())
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("summary.csv: not found"), "{error}");
+    assert!(error.contains("--resume"), "{error}");
+    // Nothing was written.
+    assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn a_bad_cell_names_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    copy_dir(&fixtures().join("ci"), dir.path());
+    let path = dir.path().join("summary.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let triangles = header.iter().position(|h| *h == "triangles").unwrap();
+    let mut cells: Vec<String> = lines[2].split(',').map(String::from).collect();
+    cells[triangles] = "many".into();
+    lines[2] = cells.join(",");
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let error = build(&inputs(dir.path(), None, None), out.path())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.ends_with("summary.csv: line 3, column `triangles`: `many` is not a number"),
+        "{error}"
+    );
+}
