@@ -135,7 +135,11 @@ pub fn run(args: Args) -> Result<()> {
     let (e, threads) = extraction(&args)?;
     let field = e
         .object
-        .build(&e.bounds, &[])
+        .build_for_spacing(
+            &e.bounds,
+            Some(e.settings(1).grid.spacing().max_element()),
+            &[],
+        )
         .with_context(|| format!("building object {}", e.object.kind))?;
     let settings = e.settings(threads);
     let mut extractor = Extractor::new();

@@ -28,6 +28,8 @@ enum Command {
     Analyse(experiments::cmd_analyse::Args),
     /// Benchmark extraction against peer crates (medians of interleaved repetitions).
     Bench(experiments::cmd_bench::Args),
+    /// Rebuild reports/ (figures, tables, README) from a run folder and the questionnaire data.
+    Report(experiments::cmd_report::Args),
 }
 
 fn main() -> Result<()> {
@@ -39,5 +41,6 @@ fn main() -> Result<()> {
         Command::Questionnaire(args) => experiments::cmd_questionnaire::run(args),
         Command::Analyse(args) => experiments::cmd_analyse::run(args),
         Command::Bench(args) => experiments::cmd_bench::run(args),
+        Command::Report(args) => experiments::cmd_report::run(args),
     }
 }

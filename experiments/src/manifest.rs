@@ -250,6 +250,9 @@ pub struct ObjectEntry {
     /// See [`ObjectParams::margin`].
     #[serde(default)]
     pub margin: Option<f32>,
+    /// See [`ObjectParams::band`].
+    #[serde(default)]
+    pub band: Option<f32>,
     /// See [`ObjectParams::base`].
     #[serde(default)]
     pub base: Option<f32>,
@@ -277,6 +280,7 @@ impl ObjectEntry {
             minor: self.minor,
             mesh: self.mesh.clone(),
             margin: self.margin,
+            band: self.band,
             base: self.base,
             cave_frequency: self.cave_frequency,
             cave_radius: self.cave_radius,
@@ -805,14 +809,28 @@ impl Plan {
                 continue;
             }
             let e = &c.extraction;
-            let field =
-                e.object
-                    .build(&e.bounds, &self.search)
-                    .map_err(|err| ManifestError::Invalid {
-                        path: path.to_path_buf(),
-                        key: "building objects".to_string(),
-                        message: err.to_string(),
-                    })?;
+            // The coarsest grid this object is sampled on sets its narrow band (mesh objects).
+            let spacing = self
+                .configurations
+                .iter()
+                .filter(|o| o.object == c.object)
+                .map(|o| {
+                    let x = &o.extraction;
+                    let cells = x.resolution.cells();
+                    let size = x.bounds.max - x.bounds.min;
+                    (0..3)
+                        .map(|a| size[a] / cells[a].max(1) as f32)
+                        .fold(0.0f32, f32::max)
+                })
+                .fold(0.0f32, f32::max);
+            let field = e
+                .object
+                .build_for_spacing(&e.bounds, Some(spacing), &self.search)
+                .map_err(|err| ManifestError::Invalid {
+                    path: path.to_path_buf(),
+                    key: "building objects".to_string(),
+                    message: err.to_string(),
+                })?;
             fields.push((c.object.clone(), field));
         }
         Ok(Fields { fields })

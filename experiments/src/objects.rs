@@ -10,7 +10,7 @@
 //! | `asteroid` | `as` | `seed` (7), `octaves` (4), `frequency` (1.5), `amplitude` (0.25), `radius` (0.7) |
 //! | `gyroid` | `gs` | `frequency` (1.0), `thickness` (0.3) |
 //! | `torus` | `os` | `major` (0.6 half-side), `minor` (0.25 half-side), around the y axis |
-//! | `bunny` | `bs` | `mesh` (`data/bunny.obj`), `margin` (0.05 of the box per side) |
+//! | `bunny` | `bs` | `mesh` (`data/bunny.obj`), `margin` (0.05 of the box per side), `band` (2 grid spacings) |
 //! | `terrain` | `ts` | Svoboda's height field: `seed` (11), `octaves` (5), `frequency` (1.0), `amplitude` (0.45), `base` (0) |
 //! | `caves` | `cs` | 3D noise ground with tunnels: `seed` (5), `octaves` (4), `frequency` (1.2), `amplitude` (0.5), `base` (0), `cave_frequency` (1.5), `cave_radius` (0.18), `cave_ceiling` (0.2) |
 //!
@@ -151,7 +151,7 @@ impl ObjectKind {
             ObjectKind::Asteroid => &["seed", "octaves", "frequency", "amplitude", "radius"],
             ObjectKind::Gyroid => &["frequency", "thickness"],
             ObjectKind::Torus => &["major", "minor"],
-            ObjectKind::Bunny => &["mesh", "margin"],
+            ObjectKind::Bunny => &["mesh", "margin", "band"],
             ObjectKind::Terrain => &["seed", "octaves", "frequency", "amplitude", "base"],
             ObjectKind::Caves => &[
                 "seed",
@@ -228,6 +228,12 @@ pub struct ObjectParams {
     #[arg(long)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub margin: Option<f32>,
+    /// Narrow band of a mesh object's distance field, in grid spacings: distances are exact
+    /// within it and clamped beyond it (signs stay exact). The default, 2, changes no extracted
+    /// mesh and samples the bunny about 4x faster; 0 computes exact distances everywhere.
+    #[arg(long)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band: Option<f32>,
     /// Terrain ground height where the noise is zero.
     #[arg(long, allow_hyphen_values = true)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -265,6 +271,7 @@ impl ObjectParams {
         push(self.minor.is_some(), "minor");
         push(self.mesh.is_some(), "mesh");
         push(self.margin.is_some(), "margin");
+        push(self.band.is_some(), "band");
         push(self.base.is_some(), "base");
         push(self.cave_frequency.is_some(), "cave_frequency");
         push(self.cave_radius.is_some(), "cave_radius");
@@ -426,9 +433,23 @@ impl ObjectSpec {
 
     /// Builds the field for the box `bounds`. `search` lists folders in which to look for a
     /// relative mesh path (after the current folder; the workspace root is always tried last).
+    /// Distances of mesh objects are exact everywhere; [`ObjectSpec::build_for_spacing`] gives
+    /// the faster narrow-band field for a known grid.
     pub fn build(
         &self,
         bounds: &Bounds,
+        search: &[PathBuf],
+    ) -> Result<Box<dyn ScalarField>, ObjectError> {
+        self.build_for_spacing(bounds, None, search)
+    }
+
+    /// Like [`ObjectSpec::build`], for sampling on grids whose largest cell edge is at most
+    /// `spacing`: mesh objects then truncate their distance to a band of `band` (2 by default)
+    /// such spacings, which changes no extracted mesh and saves most of the sampling time.
+    pub fn build_for_spacing(
+        &self,
+        bounds: &Bounds,
+        spacing: Option<f32>,
         search: &[PathBuf],
     ) -> Result<Box<dyn ScalarField>, ObjectError> {
         let p = &self.params;
@@ -549,9 +570,20 @@ impl ObjectSpec {
                     .unwrap_or_else(|| PathBuf::from(DEFAULT_BUNNY));
                 let path = resolve_data_path(&given, search)?;
                 let mesh = rmt_mesh::io::read_mesh(&path)?;
+                let band = p.band.unwrap_or(2.0);
+                if !(band.is_finite() && band >= 0.0) {
+                    return Err(ObjectError::InvalidParameter {
+                        kind,
+                        param: "band",
+                        message: format!("must be finite and >= 0 (grid spacings), got {band}"),
+                    });
+                }
                 let sdf = MeshSdf::fit(&mesh, bounds.min, bounds.max, margin)
                     .map_err(|e| e.with_path(&path))?;
-                Box::new(sdf)
+                match spacing {
+                    Some(h) if band > 0.0 => Box::new(sdf.with_band(band * h)),
+                    _ => Box::new(sdf),
+                }
             }
         })
     }

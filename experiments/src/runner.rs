@@ -970,6 +970,7 @@ pub const PAPER_METRICS: [(&str, &str); 16] = [
 
 /// Joins a summary with the dissertation's table (`data/paper/benchmark.csv`) on configuration
 /// id: `id,metric,ours,theirs,ratio` (ratio = ours / theirs, empty when theirs is 0 or missing).
+/// Rows whose resolution (`rx`, `ry`, `rz`) differs from the dissertation's are left out.
 pub fn paper_comparison(summary: &Table, benchmark: &Path) -> Result<Table> {
     let paper = Table::read(benchmark)?;
     let id_col = paper
@@ -1006,6 +1007,16 @@ pub fn paper_comparison(summary: &Table, benchmark: &Path) -> Result<Table> {
             continue;
         };
         let Some(pr) = their_row(id) else { continue };
+        // Same id at another resolution (e.g. the CI manifest's small grids) is not comparable.
+        let same_resolution = ["rx", "ry", "rz"].iter().all(|axis| {
+            match (summary.get(r, axis), paper.get(pr, axis)) {
+                (Some(a), Some(b)) => a.trim() == b.trim(),
+                _ => true,
+            }
+        });
+        if !same_resolution {
+            continue;
+        }
         for (ours_col, theirs_col) in PAPER_METRICS {
             let ours: Option<f64> = summary.get(r, ours_col).and_then(|c| c.parse().ok());
             let theirs = match ours_col {
@@ -1122,6 +1133,48 @@ fn append_synced(path: &Path, bytes: &[u8]) -> Result<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn paper_comparison_skips_rows_at_another_resolution() {
+        let dir = tempfile::tempdir().unwrap();
+        let bench = dir.path().join("benchmark.csv");
+        std::fs::write(
+            &bench,
+            "id,rx,ry,rz,n_tetrahedra,n_vertices,n_triangles,n_discarded,f_discard,ar_mean,ar_sd,\
+             t_total_s,t_sampling_s,t_vertex_s,t_geometry_s,b_lattice,b_edges,b_vertices,b_indices\n\
+             ss_bu,50,50,50,9,52,100,0,0,2,1,1,1,1,1,1,1,1,1\n\
+             ss_bi,50,50,50,9,14,25,75,75,2,1,1,1,1,1,1,1,1,1\n",
+        )
+        .unwrap();
+        let summary = |res: &str| Table {
+            header: ["id", "rx", "ry", "rz", "triangles", "vertices"]
+                .map(String::from)
+                .to_vec(),
+            rows: vec![
+                ["ss_bu", res, res, res, "90", "50"]
+                    .map(String::from)
+                    .to_vec(),
+                ["ss_bi", res, res, res, "20", "12"]
+                    .map(String::from)
+                    .to_vec(),
+            ],
+        };
+        let same = paper_comparison(&summary("50"), &bench).unwrap();
+        let tri = same
+            .rows
+            .iter()
+            .find(|r| r[0] == "ss_bi" && r[1] == "triangles")
+            .unwrap();
+        assert_eq!((tri[2].as_str(), tri[3].as_str()), ("20", "25"));
+        let reduction = same
+            .rows
+            .iter()
+            .find(|r| r[0] == "ss_bi" && r[1] == "triangle_reduction")
+            .unwrap();
+        assert_eq!(reduction[3], "0.75");
+        let other = paper_comparison(&summary("8"), &bench).unwrap();
+        assert!(other.rows.is_empty(), "{:?}", other.rows);
+    }
 
     #[test]
     fn describe_gives_mean_sd_min_median_max() {

@@ -188,24 +188,11 @@ fn ci_manifest_runs_end_to_end_into_the_documented_files() {
         fs::read_to_string(ci_manifest()).unwrap()
     );
 
-    // Paper comparison: every dissertation id in the plan, every metric, ours = the summary.
+    // Paper comparison: the CI grids are far coarser than the dissertation's, so no row is
+    // comparable (the join itself is tested in `runner::tests`).
     let cmp = Table::read(&folder.join("paper_comparison.csv")).unwrap();
     assert_eq!(cmp.header, ["id", "metric", "ours", "theirs", "ratio"]);
-    assert_eq!(cmp.rows.len(), 18 * runner::PAPER_METRICS.len());
-    for r in 0..cmp.rows.len() {
-        let id = cmp.get(r, "id").unwrap();
-        let metric = cmp.get(r, "metric").unwrap();
-        let ours = summary.get(row(id), metric).unwrap();
-        assert_eq!(
-            cmp.get(r, "ours").unwrap().parse::<f64>().ok(),
-            ours.parse::<f64>().ok(),
-            "{id} {metric}"
-        );
-    }
-    let theirs = (0..cmp.rows.len())
-        .find(|&r| cmp.get(r, "id") == Some("ss_bi") && cmp.get(r, "metric") == Some("triangles"))
-        .unwrap();
-    assert_eq!(cmp.get(theirs, "theirs"), Some("27200"));
+    assert!(cmp.rows.is_empty(), "{:?}", cmp.rows);
 
     // No temporary files left behind.
     for entry in fs::read_dir(&folder).unwrap() {
@@ -359,4 +346,43 @@ fn every_bad_manifest_gives_its_specific_error() {
         checked += 1;
     }
     assert!(checked >= 20, "only {checked} bad manifests");
+}
+
+/// The paper manifest's bunny at 75 x 40 x 56 cells on the body-centred lattice: one closed,
+/// manifold, consistently oriented surface of genus 0 in every clustering mode.
+#[test]
+fn paper_bunny_is_one_closed_manifold_sphere_on_the_bcdl_lattice() {
+    use rmt_extract::{Extractor, Lattice};
+    use rmt_mesh::{validate, Mesh};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("manifests/paper.toml");
+    let loaded = manifest::load(&path, &Overrides::default()).unwrap();
+    let plan = loaded.plan;
+    let fields = plan.build_fields(&path).unwrap();
+    let bunnies: Vec<_> = plan
+        .configurations
+        .iter()
+        .filter(|c| c.object == "bunny" && c.extraction.lattice == Lattice::BodyCentred)
+        .collect();
+    assert_eq!(bunnies.len(), 3, "none, integrated, postprocessed");
+    let mut extractor = Extractor::new();
+    let mut mesh = Mesh::default();
+    for c in bunnies {
+        assert_eq!(c.extraction.resolution.cells(), [75, 40, 56]);
+        let settings = c.extraction.settings(2);
+        let field = fields.get(&c.object).unwrap();
+        let stats = extractor.extract(field, &settings, &mut mesh).unwrap();
+        let grid = settings.grid;
+        let r = validate(&mesh, &|p| rmt_extract::measure::on_box_boundary(&grid, p));
+        let what = format!("{}: {r:?}", c.id);
+        assert!(stats.triangles > 5000, "{what}");
+        assert!(r.is_watertight_manifold(), "{what}");
+        assert_eq!(
+            r.boundary_edges_on_box + r.boundary_edges_interior,
+            0,
+            "{what}"
+        );
+        assert_eq!(r.orientation_errors, 0, "{what}");
+        assert_eq!(r.components, 1, "{what}");
+        assert_eq!(r.euler, 2, "{what}");
+    }
 }

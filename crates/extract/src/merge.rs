@@ -9,7 +9,8 @@
 //! 2. the triangles with exactly one vertex in K, with that vertex replaced by v, are the cone over
 //!    that boundary cycle: each one's far edge is a boundary edge of R, each boundary edge is used
 //!    once (so no two new triangles coincide and every link edge has two triangles);
-//! 3. (geometry) no new triangle flips against the triangle it replaces or becomes (near) flat.
+//! 3. (geometry) no new triangle flips against the triangle it replaces or becomes (near) flat
+//!    (one that was already flat may stay flat, or open up facing like the region).
 //!
 //! Triangles with two or more vertices in K collapse and are dropped. This is the link condition of
 //! edge contraction applied to the whole cluster at once (`rmt-spec.md`, "When merging keeps the
@@ -134,6 +135,11 @@ impl MergeBuffers {
         }
         out.sort_unstable();
         out.dedup();
+    }
+
+    /// Number of triangles loaded (alive or not): `t` in `0..triangle_count()`.
+    pub fn triangle_count(&self) -> usize {
+        self.tris.len()
     }
 
     /// Whether triangle `t` (original numbering) still exists.
@@ -351,10 +357,18 @@ impl MergeBuffers {
                 .length_squared()
                 .max((pw - px).length_squared())
                 .max((pw - pu).length_squared());
-            if old.length() <= 1e-6 * old_longest {
+            let was_flat = old.length() <= 1e-6 * old_longest;
+            let is_flat = new.length() <= 1e-6 * longest;
+            if was_flat {
+                // Already flat (crossings on top of each other where the surface passes through
+                // sample points): staying flat is no worse, and lets such spots be welded one
+                // pair at a time; if it opens up, it must face like the region.
+                if is_flat {
+                    continue;
+                }
                 old = region_normal;
             }
-            if old.dot(new) <= 0.0 || new.length() <= 1e-6 * longest {
+            if old.dot(new) <= 0.0 || is_flat {
                 return Err(Reject::Flip);
             }
         }

@@ -49,6 +49,10 @@ pub struct MtBuffers {
 /// Edges shorter than this many grid spacings are welded after clustering (coincident crossings).
 const WELD: f32 = 1e-4;
 
+/// Integrated clustering ends with one collapse per triangle whose aspect ratio R/(2r) is above
+/// this (see [`crate::collapse::collapse_slivers`]); triangles of a good RMT mesh stay below 2.5.
+const SLIVER_AR: f32 = 4.0;
+
 /// Bit 15 of a point's `owned` word: some edge of the point is crossed (owned or not). A cube or
 /// body-centred face whose anchor point has no crossed edge has all its points on one side.
 const HAS_CROSSING: u16 = 0x8000;
@@ -485,6 +489,12 @@ pub fn extract(
                 }
             }
         }
+        if check {
+            let (slivers, dropped) =
+                crate::collapse::collapse_slivers(merge, &mut mesh.positions, SLIVER_AR);
+            stats.slivers_collapsed += slivers;
+            stats.discarded += dropped;
+        }
         merge.finish(&mut mesh.positions, &mut mesh.indices);
         if check && near_points > 0 {
             // Surfaces through sample points leave crossings on top of each other where a
@@ -512,6 +522,15 @@ pub fn extract(
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     } else if clustering == Clustering::Meshopt {
         let t = std::time::Instant::now();
+        if near_points > 0 {
+            // meshoptimizer tells vertices apart by index: crossings on top of each other (the
+            // surface through sample points) would look like seams and open holes. Weld them
+            // first, under the exact check, as integrated clustering does.
+            let (welds, dropped) =
+                crate::collapse::collapse_short_edges(merge, mesh, WELD * settings.grid.h());
+            stats.collapses += welds;
+            stats.discarded += dropped;
+        }
         stats.discarded +=
             crate::simplify::meshopt_simplify(mesh, settings.grid.h(), settings.collapse_threshold);
         stats.t_geometry_s += t.elapsed().as_secs_f64();

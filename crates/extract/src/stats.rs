@@ -44,6 +44,9 @@ pub struct Stats {
     pub clusters_reduced: usize,
     /// Lone crossings merged into a neighbouring cluster after the clusters (integrated mode).
     pub lone_absorbed: usize,
+    /// Needle and cap triangles removed by one edge collapse each after the clusters
+    /// (integrated mode; see [`crate::collapse::collapse_slivers`]).
+    pub slivers_collapsed: usize,
     /// Clusters refused by the mask rules (more than 10 crossings, loops, pinches).
     pub clusters_rejected_prefilter: usize,
     /// Clusters refused by the exact local check on the mesh.

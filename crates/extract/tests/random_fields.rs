@@ -114,16 +114,18 @@ proptest! {
         let grid = Grid::cube(n, 1.0);
         let (_, base, r0) = run(&field, grid, lattice, Clustering::None);
         prop_assume!(base.triangles > 0);
-        let (_, stats, r) = run(&field, grid, lattice, Clustering::Integrated);
+        let (mesh, stats, r) = run(&field, grid, lattice, Clustering::Integrated);
         let what = format!("{lattice:?} n={n} {f:?}");
         assert_clean(&what, &r);
         prop_assert_eq!(r.euler, r0.euler, "{}", what);
         prop_assert_eq!(r.components, r0.components, "{}", what);
-        // Merging never makes a triangle flat. (Flat triangles of surfaces through sample points
-        // that no cluster or weld could take are not all removed yet: issue 3 stays open.)
+        // Merging never adds flat triangles. Away from the box faces (where the border rule keeps
+        // the mesh boundary as it is) it removes all of them, except on quantised fields: there
+        // whole regions of sample points sit exactly at the threshold, making zero-volume
+        // pockets and zero-thickness sheets that the same topology can only draw flat.
         prop_assert!(r.zero_area_triangles <= r0.zero_area_triangles, "{}: merging made flat triangles", what);
-        if r0.zero_area_triangles == 0 {
-            prop_assert_eq!(r.zero_area_triangles, 0);
+        if f.quantum == 0.0 {
+            prop_assert_eq!(flat_triangles_inside(&mesh, &grid), 0, "{}: flat triangles inside the box ({} in all, {} unmerged)", what, r.zero_area_triangles, r0.zero_area_triangles);
         }
         prop_assert!(stats.triangles <= base.triangles);
         prop_assert_eq!(stats.clusters_committed + stats.clusters_rejected, stats.clusters_proposed);

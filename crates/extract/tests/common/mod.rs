@@ -54,3 +54,53 @@ pub fn assert_clean(what: &str, r: &ValidationReport) {
         "{what}: unreferenced vertices {r:?}"
     );
 }
+
+/// Zero-area triangles (area <= 1e-12 l_max^2, as `rmt_mesh::quality` counts them) none of whose
+/// vertices lies on the box faces: flat spots inside the box. Components of zero total area are
+/// left out: they are zero-volume regions (a single sample point with f = T, outside, walled in by
+/// inside points), which any mesh of the same topology must draw flat.
+pub fn flat_triangles_inside(mesh: &Mesh, grid: &Grid) -> usize {
+    let p = |i: u32| glam::Vec3::from(mesh.positions[i as usize]);
+    // Components by union-find over triangle edges.
+    let mut parent: Vec<usize> = (0..mesh.positions.len()).collect();
+    fn find(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    for t in mesh.indices.chunks_exact(3) {
+        for e in 0..3 {
+            let (a, b) = (
+                find(&mut parent, t[e] as usize),
+                find(&mut parent, t[(e + 1) % 3] as usize),
+            );
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    let h2 = grid.h() * grid.h();
+    let tri_area = |t: &[u32]| 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length();
+    let mut component_area = vec![0.0f32; mesh.positions.len()];
+    for t in mesh.indices.chunks_exact(3) {
+        let root = find(&mut parent, t[0] as usize);
+        component_area[root] += tri_area(t);
+    }
+    mesh.indices
+        .chunks_exact(3)
+        .filter(|t| {
+            let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+            let l2 = (b - a)
+                .length_squared()
+                .max((c - a).length_squared())
+                .max((c - b).length_squared());
+            let flat = tri_area(t) <= 1e-12 * l2 || l2 == 0.0;
+            let degenerate_component =
+                component_area[find(&mut parent, t[0] as usize)] <= 1e-9 * h2;
+            flat && !degenerate_component
+                && !t
+                    .iter()
+                    .any(|&i| on_box_boundary(grid, mesh.positions[i as usize]))
+        })
+        .count()
+}
