@@ -7,6 +7,7 @@
 use rmt_mesh::Mesh;
 
 use crate::merge::MergeBuffers;
+use crate::{Grid, Tiling};
 
 /// Collapses edges of `mesh` shorter than `max_len`, in order of increasing initial length (ties by
 /// vertex ids, so the result is deterministic). Returns (collapses done, triangles dropped).
@@ -14,6 +15,18 @@ pub fn collapse_short_edges(
     merge: &mut MergeBuffers,
     mesh: &mut Mesh,
     max_len: f32,
+) -> (usize, usize) {
+    collapse_short_edges_tiled(merge, mesh, max_len, None)
+}
+
+/// [`collapse_short_edges`] under a tile rule: with `tiles = Some((tiling, grid))` an edge is
+/// collapsed only when both its current end points lie inside one tile's shrunk box
+/// ([`Tiling::allows`]), so collapses in different tiles never interact.
+pub fn collapse_short_edges_tiled(
+    merge: &mut MergeBuffers,
+    mesh: &mut Mesh,
+    max_len: f32,
+    tiles: Option<(&Tiling, &Grid)>,
 ) -> (usize, usize) {
     merge.load(mesh.positions.len(), &mesh.indices);
     let max2 = max_len * max_len;
@@ -42,6 +55,11 @@ pub fn collapse_short_edges(
         let (pa, pb) = (pos(&mesh.positions, ra), pos(&mesh.positions, rb));
         if pa.distance_squared(pb) >= max2 {
             continue;
+        }
+        if let Some((t, g)) = tiles {
+            if !t.allows(g, [pa, pb].into_iter()) {
+                continue;
+            }
         }
         let k = [ra.min(rb), ra.max(rb)];
         if let Ok(d) = merge.merge(&mut mesh.positions, &k, ((pa + pb) * 0.5).to_array(), true) {

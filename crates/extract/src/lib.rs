@@ -43,7 +43,9 @@ pub mod stats;
 
 pub use measure::{measure, Measurement};
 pub use samples::Samples;
-pub use settings::{Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode};
+pub use settings::{
+    CellRange, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Tiling,
+};
 pub use stats::Stats;
 
 use rmt_fields::ScalarField;

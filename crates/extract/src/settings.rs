@@ -184,6 +184,107 @@ pub struct ExtractSettings {
     pub threads: usize,
     /// How vertex normals are computed.
     pub normals: NormalMode,
+    /// Tile rule for chunked extraction: merges (clusters, lone absorption, welds, edge
+    /// collapses) only inside one tile. `None` (the default) leaves the output unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tiles: Option<Tiling>,
+    /// Keep only the triangles anchored in these grid cells (chunked extraction); `None` keeps
+    /// all.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keep_cells: Option<CellRange>,
+}
+
+/// The tile rule of chunked extraction (see `crates/terrain` for the world that uses it).
+///
+/// The integrated clustering commits clusters one lattice colour at a time, each after a check
+/// that sees the earlier commits; lone crossings, welds and edge collapses are sequential too.
+/// Without a rule, a decision may depend on decisions arbitrarily far away, so a sub-box cannot
+/// reproduce the whole volume's mesh and a local edit may change clusters anywhere. With a
+/// tiling, space is cut into tiles of `size` cells (in global cell coordinates, tile `t` covers
+/// cells `t * size .. (t + 1) * size` per axis), and a merge of the current vertices K is
+/// allowed only when the positions of all of K lie in one tile, at least [`Tiling::MARGIN`]
+/// cells inside its faces.
+///
+/// Why one cell: every tetrahedron of either lattice spans at most one cell per axis, so a
+/// crossing at least one cell inside a tile has all the tetrahedra around its edge inside the
+/// tile. Merged vertices sit at averages of their members, so they stay inside the shrunk tile
+/// box too, and by induction every merge touches only triangles of tetrahedra inside its tile.
+/// Two tiles' merges then share no triangle and no vertex, and a merge sees only its own tile,
+/// whose triangles depend only on the samples of the tile's closed box. Merge order inside a
+/// tile (lattice colour, storage order, vertex order) is the same in any box containing the
+/// tile, because [`Tiling::grid_offset`] makes the lattice colours global.
+///
+/// For a sub-box to reproduce the whole volume's triangles bit for bit, its positions must be
+/// computed exactly in both (e.g. unit cell spacing and integer box corners, as the terrain
+/// world does), and it must contain each tile it keeps triangles of plus one cell of halo.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Tiling {
+    /// Tile edge in cells per axis (>= 1; tiles of 2 cells or fewer allow no merge at all).
+    pub size: [usize; 3],
+    /// Global cell index of this grid's cell (0, 0, 0): a sub-box of a larger volume passes its
+    /// offset so that tiles and lattice colours line up with the whole volume's.
+    pub grid_offset: [usize; 3],
+}
+
+impl Tiling {
+    /// How far inside a tile's faces (in cells) merged vertices must lie.
+    pub const MARGIN: f32 = 1.0;
+
+    /// Tiles of `size` cells for a grid that starts at global cell `grid_offset`.
+    pub fn new(size: [usize; 3], grid_offset: [usize; 3]) -> Self {
+        Self { size, grid_offset }
+    }
+
+    /// The tile whose shrunk box (inset by [`Tiling::MARGIN`] cells) holds `p`, a position in
+    /// `grid`'s world coordinates; `None` near tile faces.
+    pub fn tile_of(&self, grid: &Grid, p: Vec3) -> Option<[i64; 3]> {
+        let spacing = grid.spacing();
+        let mut tile = [0i64; 3];
+        for a in 0..3 {
+            let u = (p[a] - grid.min[a]) / spacing[a] + self.grid_offset[a] as f32;
+            let size = self.size[a] as f32;
+            let t = (u / size).floor();
+            let local = u - t * size;
+            if !(local >= Self::MARGIN && local <= size - Self::MARGIN) {
+                return None;
+            }
+            tile[a] = t as i64;
+        }
+        Some(tile)
+    }
+
+    /// Whether all of `points` lie in the shrunk box of one tile (true for no points).
+    pub fn allows(&self, grid: &Grid, mut points: impl Iterator<Item = Vec3>) -> bool {
+        let Some(first) = points.next() else {
+            return true;
+        };
+        match self.tile_of(grid, first) {
+            None => false,
+            Some(t) => points.all(|p| self.tile_of(grid, p) == Some(t)),
+        }
+    }
+}
+
+/// A box of grid cells `lo .. hi` per axis (grid-local indices, `hi` exclusive).
+///
+/// A triangle's anchor cell is the cube it comes from (simple lattice, marching cubes), or for
+/// the body-centred lattice the cell on the upper side of the cube face its tetrahedron stands
+/// on, clamped into the grid (the faces on the grid's upper faces belong to the last cell). Every
+/// triangle has exactly one anchor, so boxes that partition a volume partition its triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct CellRange {
+    /// First cell per axis.
+    pub lo: [usize; 3],
+    /// One past the last cell per axis.
+    pub hi: [usize; 3],
+}
+
+impl CellRange {
+    /// Whether cell `c` is in the range.
+    #[inline]
+    pub fn contains(&self, c: [usize; 3]) -> bool {
+        (0..3).all(|a| c[a] >= self.lo[a] && c[a] < self.hi[a])
+    }
 }
 
 impl ExtractSettings {
@@ -199,6 +300,8 @@ impl ExtractSettings {
             iso: 0.0,
             threads: 1,
             normals: NormalMode::AreaWeighted,
+            tiles: None,
+            keep_cells: None,
         }
     }
 
@@ -222,6 +325,22 @@ impl ExtractSettings {
                 "collapse threshold must be finite and >= 0, got {}",
                 self.collapse_threshold
             )));
+        }
+        if let Some(t) = self.tiles {
+            if t.size.contains(&0) {
+                return Err(ExtractError::InvalidSettings(format!(
+                    "tile size must be at least 1 cell per axis, got {:?}",
+                    t.size
+                )));
+            }
+        }
+        if let Some(k) = self.keep_cells {
+            if (0..3).any(|a| k.lo[a] >= k.hi[a] || k.hi[a] > self.grid.cells[a]) {
+                return Err(ExtractError::InvalidSettings(format!(
+                    "kept cells {:?}..{:?} must be a non-empty box inside the grid's {:?} cells",
+                    k.lo, k.hi, self.grid.cells
+                )));
+            }
         }
         Ok(())
     }
