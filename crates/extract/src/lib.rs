@@ -111,6 +111,16 @@ impl Extractor {
         Self::default()
     }
 
+    /// Runs extractions with `pool.current_num_threads()` threads on `pool` instead of a pool of
+    /// the extractor's own. Callers already running on a rayon pool (e.g. meshing chunks in
+    /// parallel) pass it, so that the extractor's parallel passes run inline on the calling
+    /// worker and its siblings instead of being handed to other threads and back.
+    pub fn set_pool(&mut self, pool: std::sync::Arc<rayon::ThreadPool>) {
+        let threads = pool.current_num_threads();
+        self.pools.retain(|(n, _)| *n != threads);
+        self.pools.push((threads, pool));
+    }
+
     /// The thread pool for `threads` workers, built once and kept.
     pub(crate) fn pool(
         &mut self,

@@ -268,7 +268,11 @@ pub fn extract(
     // Tile rule (chunked extraction): lattice colours in global coordinates, and merges only
     // inside one tile (`Tiling`).
     let colour_shift: Offset = settings.tiles.map_or([0; 3], |t| {
-        let scale = if lattice == Lattice::BodyCentred { 2 } else { 1 };
+        let scale = if lattice == Lattice::BodyCentred {
+            2
+        } else {
+            1
+        };
         t.grid_offset.map(|o| (o * scale) as i32)
     });
     let grid = settings.grid;
@@ -683,6 +687,7 @@ fn number_plane(
 }
 
 /// Geometry pass over one z-layer; returns the tetrahedra processed.
+#[allow(clippy::too_many_arguments)]
 fn geometry_layer(
     l: &Layout,
     k: usize,

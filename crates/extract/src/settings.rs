@@ -345,3 +345,48 @@ impl ExtractSettings {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_accept_points_one_cell_inside_their_faces_only() {
+        // Grid cells of edge 0.5 starting at global cell 3; tiles of 8 cells.
+        let grid = Grid::new([10, 10, 10], Vec3::splat(1.0), Vec3::splat(6.0));
+        let t = Tiling::new([8; 3], [3, 3, 3]);
+        // Local cell 5 = global cell 8: on a tile face.
+        let at = |c: f32| Vec3::splat(1.0 + c * 0.5);
+        assert_eq!(t.tile_of(&grid, at(5.0)), None);
+        assert_eq!(t.tile_of(&grid, at(5.5)), None);
+        assert_eq!(t.tile_of(&grid, at(6.0)), Some([1; 3]));
+        assert_eq!(t.tile_of(&grid, at(4.0)), Some([0; 3]));
+        assert_eq!(t.tile_of(&grid, at(4.25)), None);
+        assert!(t.allows(&grid, [at(6.0), at(9.0)].into_iter()));
+        assert!(!t.allows(&grid, [at(4.0), at(6.0)].into_iter()));
+        assert!(t.allows(&grid, std::iter::empty()));
+    }
+
+    #[test]
+    fn bad_tiles_and_kept_cells_are_refused() {
+        let mut s = ExtractSettings::new(Grid::cube(8, 1.0), Lattice::Simple, Clustering::None);
+        s.tiles = Some(Tiling::new([0, 4, 4], [0; 3]));
+        assert!(s.check().unwrap_err().to_string().contains("tile size"));
+        s.tiles = None;
+        s.keep_cells = Some(CellRange {
+            lo: [0; 3],
+            hi: [9, 8, 8],
+        });
+        assert!(s.check().unwrap_err().to_string().contains("kept cells"));
+        s.keep_cells = Some(CellRange {
+            lo: [2; 3],
+            hi: [2, 8, 8],
+        });
+        assert!(s.check().is_err());
+        s.keep_cells = Some(CellRange {
+            lo: [2; 3],
+            hi: [8; 3],
+        });
+        assert!(s.check().is_ok());
+    }
+}

@@ -65,7 +65,10 @@ impl Brush {
             return bad(format!("centre must be finite, got {}", self.centre));
         }
         if !(self.radius.is_finite() && self.radius > 0.0) {
-            return bad(format!("radius must be finite and > 0, got {}", self.radius));
+            return bad(format!(
+                "radius must be finite and > 0, got {}",
+                self.radius
+            ));
         }
         if !(self.strength.is_finite() && self.strength >= 0.0) {
             return bad(format!(
@@ -128,7 +131,11 @@ mod tests {
         let b = Brush::add(Vec3::ZERO, 1.0, f32::NAN);
         assert!(b.check(0.1).unwrap_err().to_string().contains("strength"));
         let b = Brush::add(Vec3::ZERO, 1.0, 1.0);
-        assert!(b.check(f32::INFINITY).unwrap_err().to_string().contains("time"));
+        assert!(b
+            .check(f32::INFINITY)
+            .unwrap_err()
+            .to_string()
+            .contains("time"));
         assert!(b.with_clamp(-1.0).check(0.1).is_err());
         assert!(b.check(0.1).is_ok());
     }

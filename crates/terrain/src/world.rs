@@ -1,7 +1,7 @@
 //! The chunked world: samples of the whole volume, one mesh per chunk, dirty flags.
 
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use glam::Vec3;
@@ -112,7 +112,10 @@ impl WorldSettings {
             return bad("chunk size must be at least 1 cell, got 0".into());
         }
         if !(self.h.is_finite() && self.h > 0.0) {
-            return bad(format!("cell size h must be finite and > 0, got {}", self.h));
+            return bad(format!(
+                "cell size h must be finite and > 0, got {}",
+                self.h
+            ));
         }
         if !self.origin.is_finite() {
             return bad(format!("origin must be finite, got {}", self.origin));
@@ -171,6 +174,9 @@ pub struct RemeshStats {
     pub seconds: f64,
 }
 
+/// One re-meshing job: chunk index, its own cells, its input box, its mesh (reused).
+type Job = (usize, CellRange, ([usize; 3], [usize; 3]), Mesh);
+
 /// A sampled volume meshed in chunks; see the crate doc.
 pub struct World {
     settings: WorldSettings,
@@ -180,7 +186,7 @@ pub struct World {
     /// Chunk meshes in lattice units, chunk `(cx, cy, cz)` at `cx + nx * (cy + ny * cz)`.
     chunks: Vec<Mesh>,
     dirty: Vec<bool>,
-    pool: rayon::ThreadPool,
+    pool: Arc<rayon::ThreadPool>,
     extractors: Mutex<Vec<Extractor>>,
 }
 
@@ -196,6 +202,7 @@ impl World {
                 threads: settings.threads,
                 message: e.to_string(),
             })?;
+        let pool = Arc::new(pool);
         let unit = settings.unit_settings();
         let mut sampling = unit;
         sampling.grid = settings.world_grid();
@@ -306,7 +313,10 @@ impl World {
                         }
                         Lattice::Simple => {
                             let [x, y, z] = p.map(|c| c as usize);
-                            (samples.simple_index(x, y, z), samples.simple_position(x, y, z))
+                            (
+                                samples.simple_index(x, y, z),
+                                samples.simple_position(x, y, z),
+                            )
                         }
                     };
                     let d = (s.origin + pos * s.h).distance(brush.centre);
@@ -330,10 +340,9 @@ impl World {
         for i in 0..self.chunks.len() {
             let (s0, s1) = self.input_box(i);
             let (ilo, ihi) = match lattice {
-                Lattice::BodyCentred => (
-                    s0.map(|c| 2 * c as i64 - 1),
-                    s1.map(|c| 2 * c as i64 + 1),
-                ),
+                Lattice::BodyCentred => {
+                    (s0.map(|c| 2 * c as i64 - 1), s1.map(|c| 2 * c as i64 + 1))
+                }
                 Lattice::Simple => (s0.map(|c| c as i64), s1.map(|c| c as i64)),
             };
             if (0..3).all(|a| clo[a] <= ihi[a] && chi[a] >= ilo[a]) {
@@ -356,7 +365,7 @@ impl World {
     pub fn remesh_dirty(&mut self) -> Result<RemeshStats, TerrainError> {
         let start = Instant::now();
         let ids: Vec<usize> = (0..self.dirty.len()).filter(|&i| self.dirty[i]).collect();
-        let mut jobs: Vec<(usize, CellRange, ([usize; 3], [usize; 3]), Mesh)> = ids
+        let mut jobs: Vec<Job> = ids
             .iter()
             .map(|&i| {
                 (
@@ -367,7 +376,8 @@ impl World {
                 )
             })
             .collect();
-        let (samples, unit, extractors) = (&self.samples, &self.unit, &self.extractors);
+        let (samples, unit, extractors, pool) =
+            (&self.samples, &self.unit, &self.extractors, &self.pool);
         let results: Vec<Result<(), ExtractError>> = self.pool.install(|| {
             jobs.par_iter_mut()
                 .map(|(_, own, input, mesh)| {
@@ -375,7 +385,11 @@ impl World {
                         .lock()
                         .unwrap_or_else(|e| e.into_inner())
                         .pop()
-                        .unwrap_or_default();
+                        .unwrap_or_else(|| {
+                            let mut ex = Extractor::new();
+                            ex.set_pool(pool.clone());
+                            ex
+                        });
                     let r = extract_chunk(samples, unit, *own, *input, &mut ex, mesh);
                     extractors
                         .lock()
@@ -417,6 +431,7 @@ impl World {
     /// the weld).
     pub fn extract_whole(&self) -> Result<(Mesh, f64), TerrainError> {
         let mut ex = Extractor::new();
+        ex.set_pool(self.pool.clone());
         *ex.samples_mut() = self.samples.clone();
         let mut raw = Mesh::default();
         let stats = ex.extract_presampled(&self.unit, &mut raw)?;
@@ -444,7 +459,7 @@ impl World {
                 }
                 Lattice::Simple => self.samples.values[self.samples.simple_index(ix, iy, iz)],
             };
-            (v < s.iso).then(|| s.origin.y + iy as f32 * s.h)
+            (v < s.iso).then_some(s.origin.y + iy as f32 * s.h)
         })
     }
 
@@ -476,7 +491,7 @@ fn extract_chunk(
         lo: [0, 1, 2].map(|a| own.lo[a] - s0[a]),
         hi: [0, 1, 2].map(|a| own.hi[a] - s0[a]),
     });
-    st.threads = 1;
+    // The world's pool (see `Extractor::set_pool`): nested passes run on the same workers.
     let dst = ex.samples_mut();
     dst.prepare(&st);
     let (wd, ld) = (samples.dims, dst.dims);
@@ -504,9 +519,9 @@ fn compact(mesh: &mut Mesh) {
         id[v as usize] = 0;
     }
     let mut next = 0;
-    for v in 0..id.len() {
-        if id[v] == 0 {
-            id[v] = next;
+    for (v, slot) in id.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = next;
             mesh.positions[next as usize] = mesh.positions[v];
             next += 1;
         }
