@@ -7,7 +7,6 @@
 use rmt_mesh::Mesh;
 
 use crate::merge::MergeBuffers;
-use crate::{Grid, Tiling};
 
 /// Collapses edges of `mesh` shorter than `max_len`, in order of increasing initial length (ties by
 /// vertex ids, so the result is deterministic). Returns (collapses done, triangles dropped).
@@ -19,14 +18,14 @@ pub fn collapse_short_edges(
     collapse_short_edges_tiled(merge, mesh, max_len, None)
 }
 
-/// [`collapse_short_edges`] under a tile rule: with `tiles = Some((tiling, grid))` an edge is
-/// collapsed only when both its current end points lie inside one tile's shrunk box
-/// ([`Tiling::allows`]), so collapses in different tiles never interact.
+/// [`collapse_short_edges`] under the tile rule ([`crate::Tiling`]): with `tile_keys = Some(keys)`
+/// (one key per vertex of `mesh`) an edge is collapsed only when both its end points carry the
+/// same tile key, so collapses in different tiles never interact.
 pub fn collapse_short_edges_tiled(
     merge: &mut MergeBuffers,
     mesh: &mut Mesh,
     max_len: f32,
-    tiles: Option<(&Tiling, &Grid)>,
+    tile_keys: Option<&[u64]>,
 ) -> (usize, usize) {
     merge.load(mesh.positions.len(), &mesh.indices);
     let max2 = max_len * max_len;
@@ -56,10 +55,8 @@ pub fn collapse_short_edges_tiled(
         if pa.distance_squared(pb) >= max2 {
             continue;
         }
-        if let Some((t, g)) = tiles {
-            if !t.allows(g, [pa, pb].into_iter()) {
-                continue;
-            }
+        if tile_keys.is_some_and(|keys| !crate::tiles::same_tile(keys, &[ra, rb])) {
+            continue;
         }
         let k = [ra.min(rb), ra.max(rb)];
         if let Ok(d) = merge.merge(&mut mesh.positions, &k, ((pa + pb) * 0.5).to_array(), true) {

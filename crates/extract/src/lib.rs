@@ -40,6 +40,7 @@ pub mod samples;
 pub mod settings;
 pub mod simplify;
 pub mod stats;
+pub mod tiles;
 
 pub use measure::{measure, Measurement};
 pub use samples::Samples;

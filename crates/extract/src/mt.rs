@@ -275,15 +275,7 @@ pub fn extract(
         };
         t.grid_offset.map(|o| (o * scale) as i32)
     });
-    let grid = settings.grid;
-    let allowed = |k: &[u32], positions: &[[f32; 3]]| -> bool {
-        settings.tiles.is_none_or(|t| {
-            t.allows(
-                &grid,
-                k.iter().map(|&i| glam::Vec3::from(positions[i as usize])),
-            )
-        })
-    };
+    let mut keys: Vec<u64> = Vec::new();
 
     // Allocation: per-slot tables sized to the sample array.
     let t = std::time::Instant::now();
@@ -363,6 +355,13 @@ pub fn extract(
                 .sum::<usize>()
         });
     }
+    if let Some(tiling) = &settings.tiles {
+        if propose || clustering == Clustering::Postprocessed {
+            crate::tiles::crossing_keys(samples, tiling, &buf.owned, &mut keys);
+        }
+    }
+    let tiled = settings.tiles.is_some();
+    let allowed = |k: &[u32], keys: &[u64]| !tiled || crate::tiles::same_tile(keys, k);
     stats.t_vertex_s += t.elapsed().as_secs_f64();
 
     // Geometry pass.
@@ -444,7 +443,7 @@ pub fn extract(
                         |(scratch, k), c| {
                             let mut try_island = |island: u16| {
                                 let centre = members(c, island, positions, k);
-                                allowed(k, positions)
+                                allowed(k, &keys)
                                     && (!check
                                         || merge_ref.check(scratch, positions, k, centre).is_ok())
                             };
@@ -498,7 +497,7 @@ pub fn extract(
                 let target = near
                     .iter()
                     .map(|&u| (u, merge.member_count(u)))
-                    .filter(|&(u, n)| n > 1 && allowed(&[u, x], &mesh.positions))
+                    .filter(|&(u, n)| n > 1 && allowed(&[u, x], &keys))
                     .min_by(|a, b| {
                         let da =
                             px.distance_squared(glam::Vec3::from(mesh.positions[a.0 as usize]));
@@ -517,7 +516,10 @@ pub fn extract(
             }
         }
         merge.finish(&mut mesh.positions, &mut mesh.indices);
-        if check && (near_points > 0 || settings.tiles.is_some()) {
+        if tiled {
+            crate::tiles::compact_keys(merge, &mut keys, buf.triangles.len() / 3);
+        }
+        if check && (near_points > 0 || tiled) {
             // Surfaces through sample points leave crossings on top of each other where a
             // cluster could not take them (near the box, or refused): weld those, under the same
             // check, so no flat triangle is left inside the box.
@@ -525,7 +527,7 @@ pub fn extract(
                 merge,
                 mesh,
                 WELD * settings.grid.h(),
-                settings.tiles.as_ref().map(|t| (t, &grid)),
+                tiled.then_some(&keys[..]),
             );
             stats.collapses += welds;
             stats.discarded += dropped;
@@ -544,7 +546,7 @@ pub fn extract(
             merge,
             mesh,
             settings.collapse_threshold * h,
-            settings.tiles.as_ref().map(|t| (t, &grid)),
+            tiled.then_some(&keys[..]),
         );
         stats.collapses = collapses;
         stats.discarded += dropped;

@@ -200,26 +200,25 @@ pub struct ExtractSettings {
 /// that sees the earlier commits; lone crossings, welds and edge collapses are sequential too.
 /// Without a rule, a decision may depend on decisions arbitrarily far away, so a sub-box cannot
 /// reproduce the whole volume's mesh and a local edit may change clusters anywhere. With a
-/// tiling, space is cut into tiles of `size` cells (in global cell coordinates, tile `t` covers
-/// cells `t * size .. (t + 1) * size` per axis), and a merge of the current vertices K is
-/// allowed only when the positions of all of K lie in one tile, at least [`Tiling::MARGIN`]
-/// cells inside its faces.
+/// tiling, space is cut into tiles of `size` cells (global cell coordinates: tile `t` covers
+/// cells `t * size .. (t + 1) * size` per axis), and a merge is allowed only when every crossing
+/// it involves has its *footprint* (the tetrahedra around its lattice edge, where all triangles
+/// touching it come from) inside one and the same tile ([`crate::tiles`]).
 ///
-/// Why one cell: every tetrahedron of either lattice spans at most one cell per axis, so a
-/// crossing at least one cell inside a tile has all the tetrahedra around its edge inside the
-/// tile. Merged vertices sit at averages of their members, so they stay inside the shrunk tile
-/// box too, and by induction every merge touches only triangles of tetrahedra inside its tile.
-/// Two tiles' merges then share no triangle and no vertex, and a merge sees only its own tile,
-/// whose triangles depend only on the samples of the tile's closed box. Merge order inside a
-/// tile (lattice colour, storage order, vertex order) is the same in any box containing the
-/// tile, because [`Tiling::grid_offset`] makes the lattice colours global.
+/// Merged vertices keep their representative's tile, so by induction every merge touches only
+/// triangles of tetrahedra inside its tile: merges of two tiles share no triangle and no vertex,
+/// and a tile's merges see only the tile, whose tetrahedra depend only on the samples of its
+/// closed box. Merge order inside a tile (lattice colour, storage order, vertex order) is the
+/// same in any box containing the tile, because [`Tiling::grid_offset`] makes the lattice colours
+/// global. The price: crossings whose footprint crosses a tile face are never merged (about half
+/// a cell to a cell on each side of every tile face).
 ///
 /// For a sub-box to reproduce the whole volume's triangles bit for bit, its positions must be
 /// computed exactly in both (e.g. unit cell spacing and integer box corners, as the terrain
 /// world does), and it must contain each tile it keeps triangles of plus one cell of halo.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct Tiling {
-    /// Tile edge in cells per axis (>= 1; tiles of 2 cells or fewer allow no merge at all).
+    /// Tile edge in cells per axis (>= 1).
     pub size: [usize; 3],
     /// Global cell index of this grid's cell (0, 0, 0): a sub-box of a larger volume passes its
     /// offset so that tiles and lattice colours line up with the whole volume's.
@@ -227,41 +226,9 @@ pub struct Tiling {
 }
 
 impl Tiling {
-    /// How far inside a tile's faces (in cells) merged vertices must lie.
-    pub const MARGIN: f32 = 1.0;
-
     /// Tiles of `size` cells for a grid that starts at global cell `grid_offset`.
     pub fn new(size: [usize; 3], grid_offset: [usize; 3]) -> Self {
         Self { size, grid_offset }
-    }
-
-    /// The tile whose shrunk box (inset by [`Tiling::MARGIN`] cells) holds `p`, a position in
-    /// `grid`'s world coordinates; `None` near tile faces.
-    pub fn tile_of(&self, grid: &Grid, p: Vec3) -> Option<[i64; 3]> {
-        let spacing = grid.spacing();
-        let mut tile = [0i64; 3];
-        for a in 0..3 {
-            let u = (p[a] - grid.min[a]) / spacing[a] + self.grid_offset[a] as f32;
-            let size = self.size[a] as f32;
-            let t = (u / size).floor();
-            let local = u - t * size;
-            if !(local >= Self::MARGIN && local <= size - Self::MARGIN) {
-                return None;
-            }
-            tile[a] = t as i64;
-        }
-        Some(tile)
-    }
-
-    /// Whether all of `points` lie in the shrunk box of one tile (true for no points).
-    pub fn allows(&self, grid: &Grid, mut points: impl Iterator<Item = Vec3>) -> bool {
-        let Some(first) = points.next() else {
-            return true;
-        };
-        match self.tile_of(grid, first) {
-            None => false,
-            Some(t) => points.all(|p| self.tile_of(grid, p) == Some(t)),
-        }
     }
 }
 
@@ -349,23 +316,6 @@ impl ExtractSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn tiles_accept_points_one_cell_inside_their_faces_only() {
-        // Grid cells of edge 0.5 starting at global cell 3; tiles of 8 cells.
-        let grid = Grid::new([10, 10, 10], Vec3::splat(1.0), Vec3::splat(6.0));
-        let t = Tiling::new([8; 3], [3, 3, 3]);
-        // Local cell 5 = global cell 8: on a tile face.
-        let at = |c: f32| Vec3::splat(1.0 + c * 0.5);
-        assert_eq!(t.tile_of(&grid, at(5.0)), None);
-        assert_eq!(t.tile_of(&grid, at(5.5)), None);
-        assert_eq!(t.tile_of(&grid, at(6.0)), Some([1; 3]));
-        assert_eq!(t.tile_of(&grid, at(4.0)), Some([0; 3]));
-        assert_eq!(t.tile_of(&grid, at(4.25)), None);
-        assert!(t.allows(&grid, [at(6.0), at(9.0)].into_iter()));
-        assert!(!t.allows(&grid, [at(4.0), at(6.0)].into_iter()));
-        assert!(t.allows(&grid, std::iter::empty()));
-    }
 
     #[test]
     fn bad_tiles_and_kept_cells_are_refused() {

@@ -108,6 +108,15 @@ fn main() -> Result<()> {
     let all_warm = world.remesh_dirty().context("meshing the chunks")?;
     let (whole, whole_s) = world.extract_whole().context("whole extraction")?;
     let chunked = world.mesh_welded();
+    // The same volume without the tile rule: what the seams cost in triangles.
+    let mut untiled = world.settings().unit_settings();
+    untiled.tiles = None;
+    let mut ex = rmt_extract::Extractor::new();
+    *ex.samples_mut() = world.samples().clone();
+    let mut free = rmt_mesh::Mesh::default();
+    let free_stats = ex
+        .extract_presampled(&untiled, &mut free)
+        .context("untiled extraction")?;
     let same = canonical_triangles(&chunked) == canonical_triangles(&whole);
     println!(
         "world {:?} cells, {} chunks of {}^3, {} threads, field {}, {} {}",
@@ -124,6 +133,11 @@ fn main() -> Result<()> {
         "whole volume at once: {:.1} ms, {} triangles",
         whole_s * 1e3,
         whole.triangle_count()
+    );
+    println!(
+        "whole volume without the tile rule: {:.1} ms, {} triangles",
+        free_stats.t_total_s * 1e3,
+        free.triangle_count()
     );
     println!(
         "all chunks: {:.1} ms cold, {:.1} ms warm, {} triangles; welded == whole: {same}",

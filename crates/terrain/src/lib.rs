@@ -19,11 +19,13 @@
 //!   collapses commit one after another, each seeing the earlier ones, so without a rule a
 //!   decision could depend on far-away ones. Both the whole extraction and the chunks therefore
 //!   run under the tile rule [`rmt_extract::Tiling`] with tiles equal to the chunks: a merge is
-//!   allowed only when all its vertices lie at least one cell inside one chunk. Merges then touch
-//!   only tetrahedra inside their chunk, never interact across chunks, and a chunk's mesh depends
-//!   only on the samples of its cells and halo. The cost: crossings within one cell of a chunk
-//!   face are never clustered (a band two cells wide along every seam is plain marching
-//!   tetrahedra), in the whole extraction as in the chunks.
+//!   allowed only when the tetrahedra around the edges of all its crossings lie inside one
+//!   chunk. Merges then touch only tetrahedra inside their chunk, never interact across chunks,
+//!   and a chunk's mesh depends only on the samples of its cells and halo. The cost: crossings
+//!   whose tetrahedra cross a chunk face are never clustered (a band about one to two cells wide
+//!   along every seam stays plain marching tetrahedra), in the whole extraction as in the
+//!   chunks. On a 48^3 sphere with 32^3 tiles that is +23% triangles (body-centred) and +11%
+//!   (simple) over untiled integrated clustering.
 //! - **Halo.** One cell on each side (clipped at the world box): the tetrahedra of body-centred
 //!   faces on a chunk face need the centre of the neighbouring cell, and cluster proposals of the
 //!   points on a chunk face need all 14 neighbours. Body-centred ghost centres sit on the halo's
@@ -44,7 +46,7 @@
 //! simplifier and is refused ([`TerrainError::Unsupported`]).
 //!
 //! ```
-//! use rmt_terrain::{Brush, World, WorldSettings};
+//! use rmt_terrain::{canonical_triangles, Brush, World, WorldSettings};
 //! use rmt_extract::{Clustering, Lattice};
 //! use rmt_fields::Sphere;
 //!
@@ -52,12 +54,12 @@
 //!     Lattice::BodyCentred, Clustering::Integrated).with_chunk(8);
 //! let mut world = World::new(&Sphere::new(glam::Vec3::ZERO, 0.6), settings).unwrap();
 //! world.remesh_dirty().unwrap();
-//! let before = world.mesh_welded().triangle_count();
+//! let before = canonical_triangles(&world.mesh_welded());
 //! let dirty = world.apply_brush(&Brush::add(glam::Vec3::new(0.6, 0.0, 0.0), 0.2, 5.0), 0.1).unwrap();
 //! assert!(dirty >= 1 && dirty < world.chunk_count());
 //! let stats = world.remesh_dirty().unwrap();
 //! assert_eq!(stats.chunks, dirty);
-//! assert_ne!(world.mesh_welded().triangle_count(), before);
+//! assert_ne!(canonical_triangles(&world.mesh_welded()), before);
 //! ```
 
 mod brush;
