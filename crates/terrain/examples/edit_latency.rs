@@ -5,10 +5,12 @@
 //! cargo run --release -p rmt-terrain --example edit_latency -- \
 //!     [--field svoboda|cave] [--cells 256x64x256] [--chunk 32] [--threads 2] \
 //!     [--lattice bcdl|simple] [--clustering integrated|none|postprocessed|integrated-unchecked|mc] \
-//!     [--strokes 200] [--warmup 20] [--seed 1]
+//!     [--strokes 200] [--warmup 20] [--seed 1] [--ground-cell Y]
 //! ```
 //!
-//! The world spans 8 world units along x (h = 8 / cells_x), y centred on 0.
+//! The world spans 8 world units along x (h = 8 / cells_x); the terrain's base height (y = 0)
+//! sits at cell `Y` of the y axis (default: the middle, which with 32-cell chunks on a 64-cell
+//! axis puts a horizontal seam right through the ground, the worst case for the tile rule).
 
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
@@ -26,6 +28,7 @@ struct Args {
     strokes: usize,
     warmup: usize,
     seed: u64,
+    ground_cell: Option<usize>,
 }
 
 fn parse() -> Result<Args> {
@@ -39,6 +42,7 @@ fn parse() -> Result<Args> {
         strokes: 200,
         warmup: 20,
         seed: 1,
+        ground_cell: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -61,6 +65,7 @@ fn parse() -> Result<Args> {
             "--strokes" => a.strokes = num(&value)?,
             "--warmup" => a.warmup = num(&value)?,
             "--seed" => a.seed = num(&value)? as u64,
+            "--ground-cell" => a.ground_cell = Some(num(&value)?),
             "--lattice" => {
                 a.lattice = match value.as_str() {
                     "bcdl" => Lattice::BodyCentred,
@@ -78,7 +83,8 @@ fn parse() -> Result<Args> {
 fn main() -> Result<()> {
     let a = parse()?;
     let h = 8.0 / a.cells[0] as f32;
-    let origin = Vec3::new(0.0, -0.5 * a.cells[1] as f32 * h, 0.0);
+    let ground = a.ground_cell.unwrap_or(a.cells[1] / 2);
+    let origin = Vec3::new(0.0, -(ground as f32) * h, 0.0);
     let mut settings = match a.clustering.as_str() {
         "mc" => WorldSettings::marching_cubes(a.cells, origin, h),
         c => {
@@ -119,7 +125,7 @@ fn main() -> Result<()> {
         .context("untiled extraction")?;
     let same = canonical_triangles(&chunked) == canonical_triangles(&whole);
     println!(
-        "world {:?} cells, {} chunks of {}^3, {} threads, field {}, {} {}",
+        "world {:?} cells (ground at y cell {ground}), {} chunks of {}^3, {} threads, field {}, {} {}",
         a.cells,
         world.chunk_count(),
         a.chunk,
