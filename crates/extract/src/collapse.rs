@@ -18,6 +18,18 @@ pub fn collapse_short_edges(
     mesh: &mut Mesh,
     max_len: f32,
 ) -> (usize, usize) {
+    collapse_short_edges_tiled(merge, mesh, max_len, None)
+}
+
+/// [`collapse_short_edges`] under the tile rule ([`crate::Tiling`]): with `tile_keys = Some(keys)`
+/// (one key per vertex of `mesh`) an edge is collapsed only when both its end points carry the
+/// same tile key, so collapses in different tiles never interact.
+pub fn collapse_short_edges_tiled(
+    merge: &mut MergeBuffers,
+    mesh: &mut Mesh,
+    max_len: f32,
+    tile_keys: Option<&[u64]>,
+) -> (usize, usize) {
     merge.load(mesh.positions.len(), &mesh.indices);
     let max2 = max_len * max_len;
     let pos = |p: &[[f32; 3]], i: u32| glam::Vec3::from(p[i as usize]);
@@ -44,6 +56,9 @@ pub fn collapse_short_edges(
         // Vertices move as they merge: re-measure.
         let (pa, pb) = (pos(&mesh.positions, ra), pos(&mesh.positions, rb));
         if pa.distance_squared(pb) >= max2 {
+            continue;
+        }
+        if tile_keys.is_some_and(|keys| !crate::tiles::same_tile(keys, &[ra, rb])) {
             continue;
         }
         let k = [ra.min(rb), ra.max(rb)];

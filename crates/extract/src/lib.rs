@@ -40,10 +40,13 @@ pub mod samples;
 pub mod settings;
 pub mod simplify;
 pub mod stats;
+pub mod tiles;
 
 pub use measure::{measure, Measurement};
 pub use samples::Samples;
-pub use settings::{Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode};
+pub use settings::{
+    CellRange, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Tiling,
+};
 pub use stats::Stats;
 
 use rmt_fields::ScalarField;
@@ -107,6 +110,16 @@ impl Extractor {
     /// An extractor with empty buffers.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Runs extractions with `pool.current_num_threads()` threads on `pool` instead of a pool of
+    /// the extractor's own. Callers already running on a rayon pool (e.g. meshing chunks in
+    /// parallel) pass it, so that the extractor's parallel passes run inline on the calling
+    /// worker and its siblings instead of being handed to other threads and back.
+    pub fn set_pool(&mut self, pool: std::sync::Arc<rayon::ThreadPool>) {
+        let threads = pool.current_num_threads();
+        self.pools.retain(|(n, _)| *n != threads);
+        self.pools.push((threads, pool));
     }
 
     /// The thread pool for `threads` workers, built once and kept.

@@ -118,7 +118,17 @@ pub fn extract(
     let slabs: Vec<Slab> = pool.install(|| {
         (0..nz)
             .into_par_iter()
-            .map(|z| slab_triangles(samples, tables, iso, z, &edge_vertex, positions))
+            .map(|z| {
+                slab_triangles(
+                    samples,
+                    tables,
+                    iso,
+                    settings.keep_cells,
+                    z,
+                    &edge_vertex,
+                    positions,
+                )
+            })
             .collect()
     });
     let count: usize = slabs.iter().map(|s| s.indices.len()).sum();
@@ -198,6 +208,7 @@ fn slab_triangles(
     samples: &Samples,
     tables: &CaseTables,
     iso: f32,
+    keep: Option<crate::CellRange>,
     z: usize,
     edge_vertex: &[u32],
     positions: &[[f32; 3]],
@@ -209,6 +220,9 @@ fn slab_triangles(
     let mut crossed = 0;
     for y in 0..ny {
         for x in 0..nx {
+            if keep.is_some_and(|r| !r.contains([x, y, z])) {
+                continue;
+            }
             let corner_index = |c: usize| {
                 let [ox, oy, oz] = CORNERS[c];
                 samples.simple_index(x + ox as usize, y + oy as usize, z + oz as usize)

@@ -31,7 +31,7 @@ use rmt_mesh::Mesh;
 use crate::cluster::{self, Candidate, ProposalCounts, FULL};
 use crate::lattice::{self, LatticeTables, Offset};
 use crate::merge::MergeBuffers;
-use crate::{Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
+use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
 
 /// Per-point working arrays kept between extractions.
 #[derive(Default)]
@@ -269,6 +269,17 @@ pub fn extract(
         clustering,
         Clustering::Integrated | Clustering::IntegratedUnchecked
     );
+    // Tile rule (chunked extraction): lattice colours in global coordinates, and merges only
+    // inside one tile (`Tiling`).
+    let colour_shift: Offset = settings.tiles.map_or([0; 3], |t| {
+        let scale = if lattice == Lattice::BodyCentred {
+            2
+        } else {
+            1
+        };
+        t.grid_offset.map(|o| (o * scale) as i32)
+    });
+    let mut keys: Vec<u64> = Vec::new();
 
     // Allocation: per-slot tables sized to the sample array.
     let t = std::time::Instant::now();
@@ -293,6 +304,7 @@ pub fn extract(
                     iso,
                     propose,
                     clustering == Clustering::Integrated,
+                    colour_shift,
                     owned,
                 )
             })
@@ -347,6 +359,13 @@ pub fn extract(
                 .sum::<usize>()
         });
     }
+    if let Some(tiling) = &settings.tiles {
+        if propose || clustering == Clustering::Postprocessed {
+            crate::tiles::crossing_keys(samples, tiling, &buf.owned, &mut keys);
+        }
+    }
+    let tiled = settings.tiles.is_some();
+    let allowed = |k: &[u32], keys: &[u64]| !tiled || crate::tiles::same_tile(keys, k);
     stats.t_vertex_s += t.elapsed().as_secs_f64();
 
     // Geometry pass.
@@ -361,7 +380,16 @@ pub fn extract(
             .into_par_iter()
             .map(|k| {
                 let mut out = Vec::new();
-                let processed = geometry_layer(&layout, k, iso, owned, base, positions, &mut out);
+                let processed = geometry_layer(
+                    &layout,
+                    k,
+                    iso,
+                    settings.keep_cells,
+                    owned,
+                    base,
+                    positions,
+                    &mut out,
+                );
                 (out, processed)
             })
             .collect()
@@ -419,7 +447,9 @@ pub fn extract(
                         |(scratch, k), c| {
                             let mut try_island = |island: u16| {
                                 let centre = members(c, island, positions, k);
-                                !check || merge_ref.check(scratch, positions, k, centre).is_ok()
+                                allowed(k, &keys)
+                                    && (!check
+                                        || merge_ref.check(scratch, positions, k, centre).is_ok())
                             };
                             if try_island(c.island) {
                                 return Some(c.island);
@@ -471,7 +501,7 @@ pub fn extract(
                 let target = near
                     .iter()
                     .map(|&u| (u, merge.member_count(u)))
-                    .filter(|&(_, n)| n > 1)
+                    .filter(|&(u, n)| n > 1 && allowed(&[u, x], &keys))
                     .min_by(|a, b| {
                         let da =
                             px.distance_squared(glam::Vec3::from(mesh.positions[a.0 as usize]));
@@ -496,12 +526,19 @@ pub fn extract(
             stats.discarded += dropped;
         }
         merge.finish(&mut mesh.positions, &mut mesh.indices);
-        if check && near_points > 0 {
+        if tiled {
+            crate::tiles::compact_keys(merge, &mut keys, buf.triangles.len() / 3);
+        }
+        if check && (near_points > 0 || tiled) {
             // Surfaces through sample points leave crossings on top of each other where a
             // cluster could not take them (near the box, or refused): weld those, under the same
             // check, so no flat triangle is left inside the box.
-            let (welds, dropped) =
-                crate::collapse::collapse_short_edges(merge, mesh, WELD * settings.grid.h());
+            let (welds, dropped) = crate::collapse::collapse_short_edges_tiled(
+                merge,
+                mesh,
+                WELD * settings.grid.h(),
+                tiled.then_some(&keys[..]),
+            );
             stats.collapses += welds;
             stats.discarded += dropped;
         }
@@ -515,8 +552,12 @@ pub fn extract(
     if clustering == Clustering::Postprocessed {
         let t = std::time::Instant::now();
         let h = settings.grid.h();
-        let (collapses, dropped) =
-            crate::collapse::collapse_short_edges(merge, mesh, settings.collapse_threshold * h);
+        let (collapses, dropped) = crate::collapse::collapse_short_edges_tiled(
+            merge,
+            mesh,
+            settings.collapse_threshold * h,
+            tiled.then_some(&keys[..]),
+        );
         stats.collapses = collapses;
         stats.discarded += dropped;
         stats.t_geometry_s += t.elapsed().as_secs_f64();
@@ -549,6 +590,7 @@ fn vertex_plane(
     iso: f32,
     propose: bool,
     pinch_rule: bool,
+    colour_shift: Offset,
     owned: &mut [u16],
 ) -> (PlaneCounts, Vec<Candidate>) {
     let v = &l.s.values;
@@ -610,7 +652,7 @@ fn vertex_plane(
             counts.crossings += own.count_ones() as usize;
             counts.edges += valid.count_ones() as usize;
             if propose && own.count_ones() >= 2 {
-                let colour = lattice::colour(l.lattice, p) as u8;
+                let colour = lattice::colour(l.lattice, add(p, colour_shift)) as u8;
                 counts.proposals.add(cluster::propose(
                     l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands,
                 ));
@@ -666,10 +708,12 @@ fn number_plane(
 }
 
 /// Geometry pass over one z-layer; returns the tetrahedra processed.
+#[allow(clippy::too_many_arguments)]
 fn geometry_layer(
     l: &Layout,
     k: usize,
     iso: f32,
+    keep: Option<CellRange>,
     owned: &[u16],
     base: &[u32],
     positions: &[[f32; 3]],
@@ -717,6 +761,9 @@ fn geometry_layer(
             let s = l.s;
             for j in 0..ny {
                 for i in 0..nx {
+                    if keep.is_some_and(|r| !r.contains([i, j, k])) {
+                        continue;
+                    }
                     let c = s.simple_index(i, j, k);
                     // Corner 0 is a neighbour of the other 7: no crossed edge there, no
                     // surface in this cube.
@@ -733,6 +780,14 @@ fn geometry_layer(
             let k = k as i32;
             // Faces perpendicular to z at plane k, then (inside layer k) to x and to y.
             let mut face = |a: Offset, axis: usize, out: &mut Vec<u32>| {
+                if let Some(r) = keep {
+                    // Anchor cell: above the face along `axis` (clamped into the grid).
+                    let mut c = a.map(|x| ((x - 1) / 2) as usize);
+                    c[axis] = (((a[axis] + 1) / 2) as usize).min(l.s.cells[axis] - 1);
+                    if !r.contains(c) {
+                        return;
+                    }
+                }
                 let anchor = l.s.bcdl_index(a);
                 let tpls = &l.tets[4 * axis..4 * axis + 4];
                 // B and the 4 face corners are neighbours of A: no crossed edge at A, no

@@ -184,6 +184,74 @@ pub struct ExtractSettings {
     pub threads: usize,
     /// How vertex normals are computed.
     pub normals: NormalMode,
+    /// Tile rule for chunked extraction: merges (clusters, lone absorption, welds, edge
+    /// collapses) only inside one tile. `None` (the default) leaves the output unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tiles: Option<Tiling>,
+    /// Keep only the triangles anchored in these grid cells (chunked extraction); `None` keeps
+    /// all.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keep_cells: Option<CellRange>,
+}
+
+/// The tile rule of chunked extraction (see `crates/terrain` for the world that uses it).
+///
+/// The integrated clustering commits clusters one lattice colour at a time, each after a check
+/// that sees the earlier commits; lone crossings, welds and edge collapses are sequential too.
+/// Without a rule, a decision may depend on decisions arbitrarily far away, so a sub-box cannot
+/// reproduce the whole volume's mesh and a local edit may change clusters anywhere. With a
+/// tiling, space is cut into tiles of `size` cells (global cell coordinates: tile `t` covers
+/// cells `t * size .. (t + 1) * size` per axis), and a merge is allowed only when every crossing
+/// it involves has its *footprint* (the tetrahedra around its lattice edge, where all triangles
+/// touching it come from) inside one and the same tile ([`crate::tiles`]).
+///
+/// Merged vertices keep their representative's tile, so by induction every merge touches only
+/// triangles of tetrahedra inside its tile: merges of two tiles share no triangle and no vertex,
+/// and a tile's merges see only the tile, whose tetrahedra depend only on the samples of its
+/// closed box. Merge order inside a tile (lattice colour, storage order, vertex order) is the
+/// same in any box containing the tile, because [`Tiling::grid_offset`] makes the lattice colours
+/// global. The price: crossings whose footprint crosses a tile face are never merged (about half
+/// a cell to a cell on each side of every tile face).
+///
+/// For a sub-box to reproduce the whole volume's triangles bit for bit, its positions must be
+/// computed exactly in both (e.g. unit cell spacing and integer box corners, as the terrain
+/// world does), and it must contain each tile it keeps triangles of plus one cell of halo.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Tiling {
+    /// Tile edge in cells per axis (>= 1).
+    pub size: [usize; 3],
+    /// Global cell index of this grid's cell (0, 0, 0): a sub-box of a larger volume passes its
+    /// offset so that tiles and lattice colours line up with the whole volume's.
+    pub grid_offset: [usize; 3],
+}
+
+impl Tiling {
+    /// Tiles of `size` cells for a grid that starts at global cell `grid_offset`.
+    pub fn new(size: [usize; 3], grid_offset: [usize; 3]) -> Self {
+        Self { size, grid_offset }
+    }
+}
+
+/// A box of grid cells `lo .. hi` per axis (grid-local indices, `hi` exclusive).
+///
+/// A triangle's anchor cell is the cube it comes from (simple lattice, marching cubes), or for
+/// the body-centred lattice the cell on the upper side of the cube face its tetrahedron stands
+/// on, clamped into the grid (the faces on the grid's upper faces belong to the last cell). Every
+/// triangle has exactly one anchor, so boxes that partition a volume partition its triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct CellRange {
+    /// First cell per axis.
+    pub lo: [usize; 3],
+    /// One past the last cell per axis.
+    pub hi: [usize; 3],
+}
+
+impl CellRange {
+    /// Whether cell `c` is in the range.
+    #[inline]
+    pub fn contains(&self, c: [usize; 3]) -> bool {
+        (0..3).all(|a| c[a] >= self.lo[a] && c[a] < self.hi[a])
+    }
 }
 
 impl ExtractSettings {
@@ -199,6 +267,8 @@ impl ExtractSettings {
             iso: 0.0,
             threads: 1,
             normals: NormalMode::AreaWeighted,
+            tiles: None,
+            keep_cells: None,
         }
     }
 
@@ -223,6 +293,50 @@ impl ExtractSettings {
                 self.collapse_threshold
             )));
         }
+        if let Some(t) = self.tiles {
+            if t.size.contains(&0) {
+                return Err(ExtractError::InvalidSettings(format!(
+                    "tile size must be at least 1 cell per axis, got {:?}",
+                    t.size
+                )));
+            }
+        }
+        if let Some(k) = self.keep_cells {
+            if (0..3).any(|a| k.lo[a] >= k.hi[a] || k.hi[a] > self.grid.cells[a]) {
+                return Err(ExtractError::InvalidSettings(format!(
+                    "kept cells {:?}..{:?} must be a non-empty box inside the grid's {:?} cells",
+                    k.lo, k.hi, self.grid.cells
+                )));
+            }
+        }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_tiles_and_kept_cells_are_refused() {
+        let mut s = ExtractSettings::new(Grid::cube(8, 1.0), Lattice::Simple, Clustering::None);
+        s.tiles = Some(Tiling::new([0, 4, 4], [0; 3]));
+        assert!(s.check().unwrap_err().to_string().contains("tile size"));
+        s.tiles = None;
+        s.keep_cells = Some(CellRange {
+            lo: [0; 3],
+            hi: [9, 8, 8],
+        });
+        assert!(s.check().unwrap_err().to_string().contains("kept cells"));
+        s.keep_cells = Some(CellRange {
+            lo: [2; 3],
+            hi: [2, 8, 8],
+        });
+        assert!(s.check().is_err());
+        s.keep_cells = Some(CellRange {
+            lo: [2; 3],
+            hi: [8; 3],
+        });
+        assert!(s.check().is_ok());
     }
 }

@@ -272,3 +272,52 @@ fn bad_settings_and_non_finite_fields_are_errors_not_panics() {
         assert!(err.to_string().contains("not finite"), "{err}");
     }
 }
+
+/// Kept cells split the triangles: two halves of the box give the whole mesh's triangles, for
+/// both lattices and marching cubes (no merging, so nothing else can differ).
+#[test]
+fn kept_cells_partition_the_triangles() {
+    use rmt_extract::{CellRange, ExtractSettings, Lattice, Method};
+    let sphere = Sphere::new(Vec3::new(0.1, -0.05, 0.02), 0.7);
+    for (mc, lattice) in [
+        (false, Lattice::BodyCentred),
+        (false, Lattice::Simple),
+        (true, Lattice::Simple),
+    ] {
+        let mut s = ExtractSettings::new(Grid::cube(12, 1.0), lattice, Clustering::None);
+        if mc {
+            s.method = Method::Mc;
+        }
+        let (whole, _, _) = run_settings(&sphere, &s);
+        let mut total = 0;
+        for (lo, hi) in [(0, 5), (5, 12)] {
+            s.keep_cells = Some(CellRange {
+                lo: [lo, 0, 0],
+                hi: [hi, 12, 12],
+            });
+            let (part, _, _) = run_settings(&sphere, &s);
+            assert!(part.triangle_count() > 0);
+            total += part.triangle_count();
+        }
+        assert_eq!(total, whole.triangle_count(), "mc={mc} {lattice:?}");
+    }
+}
+
+/// A tiling keeps the mesh closed and manifold and only removes merges: integrated clustering
+/// under tiles leaves at least as many triangles as without, fewer than plain MT.
+#[test]
+fn tiles_keep_clustering_closed_and_local() {
+    use rmt_extract::{ExtractSettings, Tiling};
+    let sphere = Sphere::new(Vec3::new(0.1, -0.05, 0.02), 0.7);
+    for lattice in LATTICES {
+        let grid = Grid::cube(24, 1.0);
+        let (_, plain, _) = run(&sphere, grid, lattice, Clustering::None);
+        let (_, free, _) = run(&sphere, grid, lattice, Clustering::Integrated);
+        let mut s = ExtractSettings::new(grid, lattice, Clustering::Integrated);
+        s.tiles = Some(Tiling::new([8; 3], [0; 3]));
+        let (_, tiled, r) = run_settings(&sphere, &s);
+        assert_clean(&format!("{lattice:?} tiled"), &r);
+        assert!(tiled.triangles >= free.triangles, "{lattice:?}");
+        assert!(tiled.triangles < plain.triangles * 7 / 10, "{lattice:?}");
+    }
+}

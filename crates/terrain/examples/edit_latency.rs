@@ -1,0 +1,178 @@
+//! Per-edit latency of brush strokes on a chunked terrain, and whole-volume vs chunked
+//! extraction time.
+//!
+//! ```text
+//! cargo run --release -p rmt-terrain --example edit_latency -- \
+//!     [--field svoboda|cave] [--cells 256x64x256] [--chunk 32] [--threads 2] \
+//!     [--lattice bcdl|simple] [--clustering integrated|none|postprocessed|integrated-unchecked|mc] \
+//!     [--strokes 200] [--warmup 20] [--seed 1] [--ground-cell Y]
+//! ```
+//!
+//! The world spans 8 world units along x (h = 8 / cells_x); the terrain's base height (y = 0)
+//! sits at cell `Y` of the y axis (default: the middle, which with 32-cell chunks on a 64-cell
+//! axis puts a horizontal seam right through the ground, the worst case for the tile rule).
+
+use anyhow::{bail, Context, Result};
+use glam::Vec3;
+use rmt_extract::{Clustering, Lattice};
+use rmt_fields::{CaveParams, CaveTerrain, ScalarField, SvobodaParams, SvobodaTerrain};
+use rmt_terrain::{canonical_triangles, run_strokes, StrokeParams, World, WorldSettings};
+
+struct Args {
+    field: String,
+    cells: [usize; 3],
+    chunk: usize,
+    threads: usize,
+    lattice: Lattice,
+    clustering: String,
+    strokes: usize,
+    warmup: usize,
+    seed: u64,
+    ground_cell: Option<usize>,
+}
+
+fn parse() -> Result<Args> {
+    let mut a = Args {
+        field: "svoboda".into(),
+        cells: [256, 64, 256],
+        chunk: 32,
+        threads: 2,
+        lattice: Lattice::BodyCentred,
+        clustering: "integrated".into(),
+        strokes: 200,
+        warmup: 20,
+        seed: 1,
+        ground_cell: None,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        let value = it.next().with_context(|| format!("{flag} needs a value"))?;
+        let num = |v: &str| -> Result<usize> {
+            v.parse()
+                .with_context(|| format!("{flag}: not a whole number: {v:?}"))
+        };
+        match flag.as_str() {
+            "--field" => a.field = value,
+            "--cells" => {
+                let parts: Vec<usize> = value.split('x').map(num).collect::<Result<_>>()?;
+                let [x, y, z] = parts[..] else {
+                    bail!("--cells wants XxYxZ, got {value:?}");
+                };
+                a.cells = [x, y, z];
+            }
+            "--chunk" => a.chunk = num(&value)?,
+            "--threads" => a.threads = num(&value)?,
+            "--strokes" => a.strokes = num(&value)?,
+            "--warmup" => a.warmup = num(&value)?,
+            "--seed" => a.seed = num(&value)? as u64,
+            "--ground-cell" => a.ground_cell = Some(num(&value)?),
+            "--lattice" => {
+                a.lattice = match value.as_str() {
+                    "bcdl" => Lattice::BodyCentred,
+                    "simple" => Lattice::Simple,
+                    _ => bail!("--lattice wants bcdl or simple, got {value:?}"),
+                }
+            }
+            "--clustering" => a.clustering = value,
+            _ => bail!("unknown flag {flag:?}"),
+        }
+    }
+    Ok(a)
+}
+
+fn main() -> Result<()> {
+    let a = parse()?;
+    let h = 8.0 / a.cells[0] as f32;
+    let ground = a.ground_cell.unwrap_or(a.cells[1] / 2);
+    let origin = Vec3::new(0.0, -(ground as f32) * h, 0.0);
+    let mut settings = match a.clustering.as_str() {
+        "mc" => WorldSettings::marching_cubes(a.cells, origin, h),
+        c => {
+            let clustering = match c {
+                "none" => Clustering::None,
+                "integrated" => Clustering::Integrated,
+                "integrated-unchecked" => Clustering::IntegratedUnchecked,
+                "postprocessed" => Clustering::Postprocessed,
+                _ => bail!("unknown clustering {c:?}"),
+            };
+            WorldSettings::new(a.cells, origin, h, a.lattice, clustering)
+        }
+    };
+    settings = settings.with_chunk(a.chunk).with_threads(a.threads);
+    let field: Box<dyn ScalarField> = match a.field.as_str() {
+        "svoboda" => Box::new(SvobodaTerrain::new(SvobodaParams::default())),
+        "cave" => Box::new(CaveTerrain::new(CaveParams::default())),
+        f => bail!("--field wants svoboda or cave, got {f:?}"),
+    };
+
+    let t = std::time::Instant::now();
+    let mut world = World::new(&*field, settings).context("building the world")?;
+    let sampling = t.elapsed().as_secs_f64();
+    let all = world.remesh_dirty().context("meshing the chunks")?;
+    // Second full pass with warm extractors (what a re-mesh of everything costs in steady state).
+    world.mark_all_dirty();
+    let all_warm = world.remesh_dirty().context("meshing the chunks")?;
+    let (whole, whole_s) = world.extract_whole().context("whole extraction")?;
+    let chunked = world.mesh_welded();
+    // The same volume without the tile rule: what the seams cost in triangles.
+    let mut untiled = world.settings().unit_settings();
+    untiled.tiles = None;
+    let mut ex = rmt_extract::Extractor::new();
+    *ex.samples_mut() = world.samples().clone();
+    let mut free = rmt_mesh::Mesh::default();
+    let free_stats = ex
+        .extract_presampled(&untiled, &mut free)
+        .context("untiled extraction")?;
+    let same = canonical_triangles(&chunked) == canonical_triangles(&whole);
+    println!(
+        "world {:?} cells (ground at y cell {ground}), {} chunks of {}^3, {} threads, field {}, {} {}",
+        a.cells,
+        world.chunk_count(),
+        a.chunk,
+        a.threads,
+        a.field,
+        a.lattice.name(),
+        a.clustering
+    );
+    println!("sampling: {:.1} ms", sampling * 1e3);
+    println!(
+        "whole volume at once: {:.1} ms, {} triangles",
+        whole_s * 1e3,
+        whole.triangle_count()
+    );
+    println!(
+        "whole volume without the tile rule: {:.1} ms, {} triangles",
+        free_stats.t_total_s * 1e3,
+        free.triangle_count()
+    );
+    println!(
+        "all chunks: {:.1} ms cold, {:.1} ms warm, {} triangles; welded == whole: {same}",
+        all.seconds * 1e3,
+        all_warm.seconds * 1e3,
+        chunked.triangle_count()
+    );
+
+    let params = StrokeParams::for_cells(h, a.warmup, a.seed.wrapping_add(1_000_003));
+    run_strokes(&mut world, &params).context("warm-up strokes")?;
+    let params = StrokeParams::for_cells(h, a.strokes, a.seed);
+    let r = run_strokes(&mut world, &params).context("strokes")?;
+    let n = r.chunks.len().max(1) as f64;
+    let per_chunk: Vec<f64> = r.triangles_per_chunk();
+    println!(
+        "{} strokes (radius {:.3}, {} warm-up): latency p50 {:.2} ms, p90 {:.2} ms, p99 {:.2} ms, max {:.2} ms",
+        a.strokes,
+        params.radius,
+        a.warmup,
+        r.latency_quantile(0.5) * 1e3,
+        r.latency_quantile(0.9) * 1e3,
+        r.latency_quantile(0.99) * 1e3,
+        r.latency_quantile(1.0) * 1e3
+    );
+    println!(
+        "chunks re-meshed per edit: mean {:.2}, max {}; triangles per re-meshed chunk: mean {:.0}",
+        r.chunks.iter().sum::<usize>() as f64 / n,
+        r.chunks.iter().max().unwrap_or(&0),
+        per_chunk.iter().sum::<f64>() / n
+    );
+    Ok(())
+}

@@ -1,0 +1,96 @@
+//! Chunked, deformable terrain: one sampled volume meshed chunk by chunk, brush edits on the
+//! samples, and re-meshing of only the chunks an edit touches.
+//!
+//! A [`World`] keeps the field values of its whole lattice (sampled once from a
+//! [`rmt_fields::ScalarField`]) and one mesh per chunk of `C^3` cells. Each chunk is extracted on
+//! its own (chunks in parallel, rayon) from a copy of the world's samples over its cells plus a
+//! halo of [`HALO`] cell, keeping only the triangles it *owns*; the chunk meshes, welded by
+//! position ([`World::mesh_welded`]), are exactly the mesh of the whole volume extracted at once
+//! ([`World::extract_whole`]) with the same settings: same triangles, bit for bit.
+//!
+//! # How chunks reproduce the whole
+//!
+//! - **Ownership.** A triangle belongs to the cell it is anchored in
+//!   ([`rmt_extract::CellRange`]: the cube of a simple-lattice tetrahedron or of marching cubes,
+//!   the cell above the face of a body-centred tetrahedron), and a chunk keeps the triangles of its
+//!   own cells. Every chunk applies the same rule in global cells, so every triangle is kept by
+//!   exactly one chunk.
+//! - **Tiles = chunks.** Integrated clustering, lone-crossing absorption, welds and edge
+//!   collapses commit one after another, each seeing the earlier ones, so without a rule a
+//!   decision could depend on far-away ones. Both the whole extraction and the chunks therefore
+//!   run under the tile rule [`rmt_extract::Tiling`] with tiles equal to the chunks: a merge is
+//!   allowed only when the tetrahedra around the edges of all its crossings lie inside one
+//!   chunk. Merges then touch only tetrahedra inside their chunk, never interact across chunks,
+//!   and a chunk's mesh depends only on the samples of its cells and halo. The cost: crossings
+//!   whose tetrahedra cross a chunk face are never clustered (a band about one to two cells wide
+//!   along every seam stays plain marching tetrahedra), in the whole extraction as in the
+//!   chunks. On a 48^3 sphere with 32^3 tiles that is +23% triangles (body-centred) and +11%
+//!   (simple) over untiled integrated clustering.
+//! - **Halo.** One cell on each side (clipped at the world box): the tetrahedra of body-centred
+//!   faces on a chunk face need the centre of the neighbouring cell, and cluster proposals of the
+//!   points on a chunk face need all 14 neighbours. Body-centred ghost centres sit on the halo's
+//!   outer faces, where they only shape halo triangles, which are dropped.
+//! - **Exact positions.** Extraction runs in lattice units (cell edge 1, chunk boxes at integer
+//!   corners), where every lattice point is an exact float, so a crossing or cluster centre is
+//!   computed from the same numbers in a chunk as in the whole; world coordinates
+//!   (`origin + p * h`) are applied after welding. Welding by exact position then joins exactly
+//!   the vertices the chunks share (plus, in plain MT, distinct crossings that coincide because
+//!   the surface passes through a sample point).
+//! - **Edits.** A brush changes sample values; every chunk whose input (cells plus halo, ghost
+//!   slots included) holds a changed value is marked dirty, and [`World::remesh_dirty`]
+//!   re-extracts only those. Since a chunk depends on nothing else, the incrementally updated
+//!   world equals a full re-extraction of the edited volume.
+//!
+//! Supported: marching tetrahedra on both lattices with clustering none, integrated,
+//! integrated-unchecked and post-processed, and marching cubes. The meshopt mode is a global
+//! simplifier and is refused ([`TerrainError::Unsupported`]).
+//!
+//! ```
+//! use rmt_terrain::{canonical_triangles, Brush, World, WorldSettings};
+//! use rmt_extract::{Clustering, Lattice};
+//! use rmt_fields::Sphere;
+//!
+//! let settings = WorldSettings::new([16, 16, 16], glam::Vec3::splat(-1.0), 0.125,
+//!     Lattice::BodyCentred, Clustering::Integrated).with_chunk(8);
+//! let mut world = World::new(&Sphere::new(glam::Vec3::ZERO, 0.6), settings).unwrap();
+//! world.remesh_dirty().unwrap();
+//! let before = canonical_triangles(&world.mesh_welded());
+//! let dirty = world.apply_brush(&Brush::add(glam::Vec3::new(0.6, 0.0, 0.0), 0.2, 5.0), 0.1).unwrap();
+//! assert!(dirty >= 1 && dirty < world.chunk_count());
+//! let stats = world.remesh_dirty().unwrap();
+//! assert_eq!(stats.chunks, dirty);
+//! assert_ne!(canonical_triangles(&world.mesh_welded()), before);
+//! ```
+
+mod brush;
+mod strokes;
+mod world;
+
+pub use brush::{Brush, BrushMode};
+pub use strokes::{run_strokes, StrokeParams, StrokeReport};
+pub use world::{canonical_triangles, weld, RemeshStats, World, WorldSettings, HALO};
+
+/// Why a world could not be built, edited or meshed.
+#[derive(Debug, thiserror::Error)]
+pub enum TerrainError {
+    /// Bad world settings (chunk size, cell size, origin, ...).
+    #[error("invalid world settings: {0}")]
+    InvalidSettings(String),
+    /// Bad brush or time step.
+    #[error("invalid brush: {0}")]
+    InvalidBrush(String),
+    /// A mode that chunks cannot reproduce.
+    #[error("unsupported for chunked worlds: {0}")]
+    Unsupported(String),
+    /// The extractor refused (bad grid, non-finite field value, ...).
+    #[error("extraction failed: {0}")]
+    Extract(#[from] rmt_extract::ExtractError),
+    /// The worker thread pool could not be created.
+    #[error("could not start {threads} worker threads: {message}")]
+    ThreadPool {
+        /// Requested threads.
+        threads: usize,
+        /// The error from rayon.
+        message: String,
+    },
+}

@@ -1,0 +1,577 @@
+//! The chunked world: samples of the whole volume, one mesh per chunk, dirty flags.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use rmt_extract::samples::sampled_lattice;
+use rmt_extract::{
+    CellRange, Clustering, ExtractError, ExtractSettings, Extractor, Grid, Lattice, Method,
+    NormalMode, Samples, Stats, Tiling,
+};
+use rmt_fields::ScalarField;
+use rmt_mesh::Mesh;
+
+use crate::{Brush, TerrainError};
+
+/// Cells of halo around a chunk's own cells (clipped at the world box): enough for the
+/// body-centred tetrahedra on the chunk's faces and for the cluster proposals of the points on
+/// them (see the crate doc).
+pub const HALO: usize = 1;
+
+/// What a world is and how it is meshed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorldSettings {
+    /// Cells per axis of the whole volume (each >= 1).
+    pub cells: [usize; 3],
+    /// World position of the corner of cell (0, 0, 0).
+    pub origin: Vec3,
+    /// Cell edge length in world units (> 0; the same on every axis).
+    pub h: f32,
+    /// Chunk edge in cells (>= 1; the last chunk along an axis may be shorter).
+    pub chunk: usize,
+    /// Marching tetrahedra or marching cubes.
+    pub method: Method,
+    /// Lattice of marching tetrahedra (ignored by marching cubes).
+    pub lattice: Lattice,
+    /// Vertex merging (meshopt is not supported).
+    pub clustering: Clustering,
+    /// Edge-collapse threshold in cells (post-processed mode).
+    pub collapse_threshold: f32,
+    /// The isovalue (inside is f < iso).
+    pub iso: f32,
+    /// Worker threads: chunks are meshed in parallel on this many threads.
+    pub threads: usize,
+}
+
+impl WorldSettings {
+    /// Marching tetrahedra on `lattice` with `clustering`, chunks of 32 cells, one thread.
+    pub fn new(
+        cells: [usize; 3],
+        origin: Vec3,
+        h: f32,
+        lattice: Lattice,
+        clustering: Clustering,
+    ) -> Self {
+        let defaults = ExtractSettings::new(Grid::cube(1, 1.0), lattice, clustering);
+        Self {
+            cells,
+            origin,
+            h,
+            chunk: 32,
+            method: Method::Mt,
+            lattice,
+            clustering,
+            collapse_threshold: defaults.collapse_threshold,
+            iso: 0.0,
+            threads: 1,
+        }
+    }
+
+    /// Marching cubes, chunks of 32 cells, one thread.
+    pub fn marching_cubes(cells: [usize; 3], origin: Vec3, h: f32) -> Self {
+        Self {
+            method: Method::Mc,
+            ..Self::new(cells, origin, h, Lattice::Simple, Clustering::None)
+        }
+    }
+
+    /// The same settings with chunks of `chunk` cells.
+    pub fn with_chunk(mut self, chunk: usize) -> Self {
+        self.chunk = chunk;
+        self
+    }
+
+    /// The same settings with `threads` worker threads.
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = threads;
+        self
+    }
+
+    /// The whole volume's box in world coordinates.
+    pub fn world_grid(&self) -> Grid {
+        let n = Vec3::new(
+            self.cells[0] as f32,
+            self.cells[1] as f32,
+            self.cells[2] as f32,
+        );
+        Grid::new(self.cells, self.origin, self.origin + n * self.h)
+    }
+
+    /// Chunks per axis.
+    pub fn chunk_counts(&self) -> [usize; 3] {
+        self.cells.map(|n| n.div_ceil(self.chunk.max(1)))
+    }
+
+    /// Checks the settings: chunk size, cell size, origin, mode, and the extractor's own checks.
+    pub fn check(&self) -> Result<(), TerrainError> {
+        let bad = |m: String| Err(TerrainError::InvalidSettings(m));
+        if self.chunk == 0 {
+            return bad("chunk size must be at least 1 cell, got 0".into());
+        }
+        if !(self.h.is_finite() && self.h > 0.0) {
+            return bad(format!(
+                "cell size h must be finite and > 0, got {}",
+                self.h
+            ));
+        }
+        if !self.origin.is_finite() {
+            return bad(format!("origin must be finite, got {}", self.origin));
+        }
+        // Lattice coordinates are exact floats only up to 2^23 half cells.
+        if self.cells.iter().any(|&n| n > 1 << 22) {
+            return bad(format!(
+                "at most {} cells per axis, got {:?}",
+                1 << 22,
+                self.cells
+            ));
+        }
+        if self.method == Method::Mt && self.clustering == Clustering::Meshopt {
+            return Err(TerrainError::Unsupported(
+                "the meshopt mode simplifies the whole mesh at once, so chunks cannot reproduce \
+                 it; use integrated or post-processed clustering"
+                    .into(),
+            ));
+        }
+        self.world_grid().check()?;
+        self.unit_settings().check()?;
+        Ok(())
+    }
+
+    /// Extraction settings of the whole volume in lattice units (cell edge 1, box from 0 to
+    /// `cells`), under the tile rule with tiles equal to the chunks.
+    pub fn unit_settings(&self) -> ExtractSettings {
+        let n = Vec3::new(
+            self.cells[0] as f32,
+            self.cells[1] as f32,
+            self.cells[2] as f32,
+        );
+        let mut s = ExtractSettings::new(
+            Grid::new(self.cells, Vec3::ZERO, n),
+            self.lattice,
+            self.clustering,
+        );
+        s.method = self.method;
+        s.collapse_threshold = self.collapse_threshold;
+        s.iso = self.iso;
+        s.threads = self.threads;
+        s.normals = NormalMode::Skip;
+        s.tiles = Some(Tiling::new([self.chunk; 3], [0; 3]));
+        s
+    }
+}
+
+/// What one [`World::remesh_dirty`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RemeshStats {
+    /// Chunks re-extracted.
+    pub chunks: usize,
+    /// Triangles of the re-extracted chunks (after the update).
+    pub triangles: usize,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+/// One re-meshing job: chunk index, its own cells, its input box, its mesh (reused).
+type Job = (usize, CellRange, ([usize; 3], [usize; 3]), Mesh);
+
+/// A sampled volume meshed in chunks; see the crate doc.
+pub struct World {
+    settings: WorldSettings,
+    unit: ExtractSettings,
+    samples: Samples,
+    counts: [usize; 3],
+    /// Chunk meshes in lattice units, chunk `(cx, cy, cz)` at `cx + nx * (cy + ny * cz)`.
+    chunks: Vec<Mesh>,
+    dirty: Vec<bool>,
+    pool: Arc<rayon::ThreadPool>,
+    extractors: Mutex<Vec<Extractor>>,
+}
+
+impl World {
+    /// Samples `field` over the world box (in parallel) and marks every chunk dirty; call
+    /// [`World::remesh_dirty`] to mesh them.
+    pub fn new(field: &dyn ScalarField, settings: WorldSettings) -> Result<Self, TerrainError> {
+        settings.check()?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(settings.threads)
+            .build()
+            .map_err(|e| TerrainError::ThreadPool {
+                threads: settings.threads,
+                message: e.to_string(),
+            })?;
+        let pool = Arc::new(pool);
+        let unit = settings.unit_settings();
+        let mut sampling = unit;
+        sampling.grid = settings.world_grid();
+        let mut samples = Samples::default();
+        samples.sample(field, &sampling, &pool, &mut Stats::default())?;
+        // Same layout and values, positions in lattice units.
+        samples.prepare(&unit);
+        let counts = settings.chunk_counts();
+        let n = counts.iter().product();
+        Ok(Self {
+            settings,
+            unit,
+            samples,
+            counts,
+            chunks: (0..n).map(|_| Mesh::default()).collect(),
+            dirty: vec![true; n],
+            pool,
+            extractors: Mutex::new(Vec::new()),
+        })
+    }
+
+    /// The settings the world was built with.
+    pub fn settings(&self) -> &WorldSettings {
+        &self.settings
+    }
+
+    /// The world's samples (positions in lattice units).
+    pub fn samples(&self) -> &Samples {
+        &self.samples
+    }
+
+    /// Number of chunks.
+    pub fn chunk_count(&self) -> usize {
+        self.chunks.len()
+    }
+
+    /// Chunks per axis.
+    pub fn chunk_counts(&self) -> [usize; 3] {
+        self.counts
+    }
+
+    /// Chunks waiting for [`World::remesh_dirty`].
+    pub fn dirty_count(&self) -> usize {
+        self.dirty.iter().filter(|&&d| d).count()
+    }
+
+    /// Marks every chunk dirty (the next [`World::remesh_dirty`] re-meshes the whole world,
+    /// chunk by chunk).
+    pub fn mark_all_dirty(&mut self) {
+        self.dirty.iter_mut().for_each(|d| *d = true);
+    }
+
+    /// The mesh of chunk `i` in lattice units (cell edge 1, world corner at 0): its own
+    /// triangles, vertices it does not use removed.
+    pub fn chunk_mesh(&self, i: usize) -> Option<&Mesh> {
+        self.chunks.get(i)
+    }
+
+    /// The cells `lo .. hi` of chunk `i`.
+    pub fn chunk_cells(&self, i: usize) -> CellRange {
+        let [nx, ny, _] = self.counts;
+        let c = [i % nx, (i / nx) % ny, i / (nx * ny)];
+        let size = self.settings.chunk;
+        let lo = c.map(|c| c * size);
+        let hi = [0, 1, 2].map(|a| (lo[a] + size).min(self.settings.cells[a]));
+        CellRange { lo, hi }
+    }
+
+    /// Applies `brush` for a frame of `dt` seconds to the samples and marks the chunks whose
+    /// input (cells plus halo) holds a changed value. Returns how many chunks it marked (some may
+    /// have been dirty already).
+    pub fn apply_brush(&mut self, brush: &Brush, dt: f32) -> Result<usize, TerrainError> {
+        brush.check(dt)?;
+        let s = &self.settings;
+        let lattice = sampled_lattice(&self.unit);
+        // Lattice coordinates: half cells on the body-centred lattice, cells on the simple one.
+        let scale = if lattice == Lattice::BodyCentred {
+            2.0
+        } else {
+            1.0
+        };
+        let cu = (brush.centre - s.origin) / s.h * scale;
+        let ru = brush.radius / s.h * scale;
+        let mut lo = [0i64; 3];
+        let mut hi = [0i64; 3];
+        for a in 0..3 {
+            let (min, max) = if lattice == Lattice::BodyCentred {
+                (-1.0, 2.0 * s.cells[a] as f32 + 1.0)
+            } else {
+                (0.0, s.cells[a] as f32)
+            };
+            // One extra point each side: ghosts sit on the box faces, off their lattice spot.
+            lo[a] = ((cu[a] - ru).floor() - 1.0).clamp(min, max) as i64;
+            hi[a] = ((cu[a] + ru).ceil() + 1.0).clamp(min, max) as i64;
+        }
+        let (mut clo, mut chi) = ([i64::MAX; 3], [i64::MIN; 3]);
+        let samples = &mut self.samples;
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let p = [x as i32, y as i32, z as i32];
+                    let (index, pos) = match lattice {
+                        Lattice::BodyCentred => {
+                            if !samples.bcdl_exists(p) {
+                                continue;
+                            }
+                            (samples.bcdl_index(p), samples.bcdl_position(p))
+                        }
+                        Lattice::Simple => {
+                            let [x, y, z] = p.map(|c| c as usize);
+                            (
+                                samples.simple_index(x, y, z),
+                                samples.simple_position(x, y, z),
+                            )
+                        }
+                    };
+                    let d = (s.origin + pos * s.h).distance(brush.centre);
+                    let old = samples.values[index];
+                    let new = brush.apply(old, d, dt);
+                    if new != old {
+                        samples.values[index] = new;
+                        let q = [x, y, z];
+                        for a in 0..3 {
+                            clo[a] = clo[a].min(q[a]);
+                            chi[a] = chi[a].max(q[a]);
+                        }
+                    }
+                }
+            }
+        }
+        if clo[0] > chi[0] {
+            return Ok(0);
+        }
+        let mut marked = 0;
+        for i in 0..self.chunks.len() {
+            let (s0, s1) = self.input_box(i);
+            let (ilo, ihi) = match lattice {
+                Lattice::BodyCentred => {
+                    (s0.map(|c| 2 * c as i64 - 1), s1.map(|c| 2 * c as i64 + 1))
+                }
+                Lattice::Simple => (s0.map(|c| c as i64), s1.map(|c| c as i64)),
+            };
+            if (0..3).all(|a| clo[a] <= ihi[a] && chi[a] >= ilo[a]) {
+                self.dirty[i] = true;
+                marked += 1;
+            }
+        }
+        Ok(marked)
+    }
+
+    /// The cells `s0 .. s1` chunk `i` is extracted from: its own plus the halo, clipped.
+    fn input_box(&self, i: usize) -> ([usize; 3], [usize; 3]) {
+        let r = self.chunk_cells(i);
+        let s0 = r.lo.map(|c| c.saturating_sub(HALO));
+        let s1 = [0, 1, 2].map(|a| (r.hi[a] + HALO).min(self.settings.cells[a]));
+        (s0, s1)
+    }
+
+    /// Re-extracts the dirty chunks, in parallel on the world's threads.
+    pub fn remesh_dirty(&mut self) -> Result<RemeshStats, TerrainError> {
+        let start = Instant::now();
+        let ids: Vec<usize> = (0..self.dirty.len()).filter(|&i| self.dirty[i]).collect();
+        let mut jobs: Vec<Job> = ids
+            .iter()
+            .map(|&i| {
+                (
+                    i,
+                    self.chunk_cells(i),
+                    self.input_box(i),
+                    std::mem::take(&mut self.chunks[i]),
+                )
+            })
+            .collect();
+        let (samples, unit, extractors, pool) =
+            (&self.samples, &self.unit, &self.extractors, &self.pool);
+        let results: Vec<Result<(), ExtractError>> = self.pool.install(|| {
+            jobs.par_iter_mut()
+                .map(|(_, own, input, mesh)| {
+                    let mut ex = extractors
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .pop()
+                        .unwrap_or_else(|| {
+                            let mut ex = Extractor::new();
+                            ex.set_pool(pool.clone());
+                            ex
+                        });
+                    let r = extract_chunk(samples, unit, *own, *input, &mut ex, mesh);
+                    extractors
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .push(ex);
+                    r
+                })
+                .collect()
+        });
+        let mut triangles = 0;
+        for (i, _, _, mesh) in jobs {
+            triangles += mesh.triangle_count();
+            self.chunks[i] = mesh;
+        }
+        for r in results {
+            r?;
+        }
+        for &i in &ids {
+            self.dirty[i] = false;
+        }
+        Ok(RemeshStats {
+            chunks: ids.len(),
+            triangles,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The chunk meshes welded into one, in world coordinates, with area-weighted normals.
+    /// Chunks not meshed yet (dirty) contribute their last mesh.
+    pub fn mesh_welded(&self) -> Mesh {
+        let mut mesh = weld(self.chunks.iter());
+        self.to_world(&mut mesh);
+        mesh
+    }
+
+    /// The whole volume extracted at once from the current samples (same settings and tile rule
+    /// as the chunks), in world coordinates, welded like [`World::mesh_welded`] (so the two can be
+    /// compared), and the extraction's wall time in seconds (without the copy of the samples and
+    /// the weld).
+    pub fn extract_whole(&self) -> Result<(Mesh, f64), TerrainError> {
+        let mut ex = Extractor::new();
+        ex.set_pool(self.pool.clone());
+        *ex.samples_mut() = self.samples.clone();
+        let mut raw = Mesh::default();
+        let stats = ex.extract_presampled(&self.unit, &mut raw)?;
+        let mut mesh = weld(std::iter::once(&raw));
+        self.to_world(&mut mesh);
+        Ok((mesh, stats.t_total_s))
+    }
+
+    /// Height of the highest inside sample in the lattice column nearest to world `(x, z)`
+    /// (scanning cube corners from the top), in world units: where a brush meets the ground.
+    pub fn column_surface(&self, x: f32, z: f32) -> Option<f32> {
+        let s = &self.settings;
+        let ix = ((x - s.origin.x) / s.h).round();
+        let iz = ((z - s.origin.z) / s.h).round();
+        if !(ix >= 0.0 && iz >= 0.0 && ix <= s.cells[0] as f32 && iz <= s.cells[2] as f32) {
+            return None;
+        }
+        let (ix, iz) = (ix as usize, iz as usize);
+        let lattice = sampled_lattice(&self.unit);
+        (0..=s.cells[1]).rev().find_map(|iy| {
+            let v = match lattice {
+                Lattice::BodyCentred => {
+                    let p = [2 * ix as i32, 2 * iy as i32, 2 * iz as i32];
+                    self.samples.values[self.samples.bcdl_index(p)]
+                }
+                Lattice::Simple => self.samples.values[self.samples.simple_index(ix, iy, iz)],
+            };
+            (v < s.iso).then_some(s.origin.y + iy as f32 * s.h)
+        })
+    }
+
+    fn to_world(&self, mesh: &mut Mesh) {
+        let (o, h) = (self.settings.origin, self.settings.h);
+        for p in &mut mesh.positions {
+            *p = (o + Vec3::from(*p) * h).to_array();
+        }
+        mesh.compute_area_weighted_normals();
+    }
+}
+
+/// Extracts chunk `own` from the world's `samples` over its input box `s0 .. s1`.
+fn extract_chunk(
+    samples: &Samples,
+    unit: &ExtractSettings,
+    own: CellRange,
+    (s0, s1): ([usize; 3], [usize; 3]),
+    ex: &mut Extractor,
+    mesh: &mut Mesh,
+) -> Result<(), ExtractError> {
+    let cells = [0, 1, 2].map(|a| s1[a] - s0[a]);
+    let corner = |c: [usize; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+    let mut st = *unit;
+    st.grid = Grid::new(cells, corner(s0), corner(s1));
+    let size = unit.tiles.map_or([usize::MAX; 3], |t| t.size);
+    st.tiles = Some(Tiling::new(size, s0));
+    st.keep_cells = Some(CellRange {
+        lo: [0, 1, 2].map(|a| own.lo[a] - s0[a]),
+        hi: [0, 1, 2].map(|a| own.hi[a] - s0[a]),
+    });
+    // The world's pool (see `Extractor::set_pool`): nested passes run on the same workers.
+    let dst = ex.samples_mut();
+    dst.prepare(&st);
+    let (wd, ld) = (samples.dims, dst.dims);
+    // Storage offsets of the box corner: slots shift by s0 per axis, body-centred planes by 2 s0.
+    let zoff = match sampled_lattice(&st) {
+        Lattice::BodyCentred => 2 * s0[2],
+        Lattice::Simple => s0[2],
+    };
+    for z in 0..ld[2] {
+        for y in 0..ld[1] {
+            let src = ((z + zoff) * wd[1] + y + s0[1]) * wd[0] + s0[0];
+            let dst_at = (z * ld[1] + y) * ld[0];
+            dst.values[dst_at..dst_at + ld[0]].copy_from_slice(&samples.values[src..src + ld[0]]);
+        }
+    }
+    ex.extract_presampled(&st, mesh)?;
+    compact(mesh);
+    Ok(())
+}
+
+/// Drops the vertices no triangle uses (keeping the order of the others) and the normals.
+fn compact(mesh: &mut Mesh) {
+    let mut id = vec![u32::MAX; mesh.positions.len()];
+    for &v in &mesh.indices {
+        id[v as usize] = 0;
+    }
+    let mut next = 0;
+    for (v, slot) in id.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = next;
+            mesh.positions[next as usize] = mesh.positions[v];
+            next += 1;
+        }
+    }
+    mesh.positions.truncate(next as usize);
+    for v in &mut mesh.indices {
+        *v = id[*v as usize];
+    }
+    mesh.normals.clear();
+}
+
+/// Bit pattern of a position, with -0.0 taken as 0.0.
+fn key(p: [f32; 3]) -> [u32; 3] {
+    p.map(|c| (c + 0.0).to_bits())
+}
+
+/// Concatenates `meshes` and joins vertices at exactly the same position (first occurrence
+/// first, so the result depends only on the order of the meshes). No normals.
+pub fn weld<'a>(meshes: impl Iterator<Item = &'a Mesh>) -> Mesh {
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut out = Mesh::default();
+    let mut map = Vec::new();
+    for m in meshes {
+        map.clear();
+        for &p in &m.positions {
+            let next = out.positions.len() as u32;
+            let id = *ids.entry(key(p)).or_insert_with(|| {
+                out.positions.push(p);
+                next
+            });
+            map.push(id);
+        }
+        out.indices
+            .extend(m.indices.iter().map(|&v| map[v as usize]));
+    }
+    out
+}
+
+/// The triangles of `mesh` as position bit patterns, each rotated to start at its smallest
+/// corner (orientation kept), sorted: equal for two meshes exactly when they have the same
+/// triangles, whatever their vertex numbering.
+pub fn canonical_triangles(mesh: &Mesh) -> Vec<[[u32; 3]; 3]> {
+    let mut out: Vec<[[u32; 3]; 3]> = mesh
+        .triangles()
+        .map(|t| {
+            let k = t.map(|v| key(mesh.positions[v as usize]));
+            let r = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+            [k[r], k[(r + 1) % 3], k[(r + 2) % 3]]
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
