@@ -66,6 +66,12 @@ pub struct Args {
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     pub json: bool,
+    /// Extract chunk by chunk, C^3 cells per chunk (in parallel, merges never cross a chunk
+    /// face), weld the chunks and compare with the whole volume extracted at once. Needs cubic
+    /// cells; adds the keys `chunk_size`, `chunks`, `t_chunked_s`, `t_whole_s`,
+    /// `whole_triangles`, `chunked_equals_whole`.
+    #[arg(long, value_name = "C")]
+    pub chunks: Option<usize>,
 }
 
 /// Threads to use when not told: every core the process may use.
@@ -142,11 +148,26 @@ pub fn run(args: Args) -> Result<()> {
         )
         .with_context(|| format!("building object {}", e.object.kind))?;
     let settings = e.settings(threads);
-    let mut extractor = Extractor::new();
     let mut mesh = Mesh::default();
-    let stats = extractor
-        .extract(field.as_ref(), &settings, &mut mesh)
-        .with_context(|| format!("extracting {}", e.object.kind))?;
+    let mut chunked = None;
+    let stats = match args.chunks {
+        None => Extractor::new()
+            .extract(field.as_ref(), &settings, &mut mesh)
+            .with_context(|| format!("extracting {}", e.object.kind))?,
+        Some(c) => {
+            let (_, mut result) = crate::edit::extract_chunked(field.as_ref(), &e, c, threads)
+                .with_context(|| format!("extracting {} in chunks of {c}", e.object.kind))?;
+            mesh = std::mem::take(&mut result.mesh);
+            let stats = rmt_extract::Stats {
+                vertices: mesh.vertex_count(),
+                triangles: mesh.triangle_count(),
+                t_total_s: result.t_chunked_s,
+                ..Default::default()
+            };
+            chunked = Some((c, result));
+            stats
+        }
+    };
     let m = rmt_extract::measure(&mesh, &stats, Some(field.as_ref()), &settings);
     if let Some(out) = &args.out {
         rmt_mesh::io::save_ply(out, &mesh, !args.ascii)
@@ -159,9 +180,28 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         let mut map = config_json(&e, threads);
         map.extend(measurement_json(&m)?);
+        if let Some((c, r)) = &chunked {
+            map.insert("chunk_size".into(), (*c).into());
+            map.insert("chunks".into(), r.chunks.into());
+            map.insert("t_chunked_s".into(), serde_json::json!(r.t_chunked_s));
+            map.insert("t_whole_s".into(), serde_json::json!(r.t_whole_s));
+            map.insert("whole_triangles".into(), r.whole_triangles.into());
+            map.insert("chunked_equals_whole".into(), r.identical.into());
+        }
         println!("{}", serde_json::to_string_pretty(&Value::Object(map))?);
     } else {
         print!("{}", summary(&e, threads, &m));
+        if let Some((c, r)) = &chunked {
+            println!(
+                "  chunks:   {} chunks of {c}^3 cells in {:.3} ms; the whole volume at once {:.3} ms, \
+                 {} triangles: {}",
+                r.chunks,
+                r.t_chunked_s * 1e3,
+                r.t_whole_s * 1e3,
+                r.whole_triangles,
+                if r.identical { "identical" } else { "DIFFERENT" }
+            );
+        }
         if let Some(out) = &args.out {
             println!("mesh saved to {}", out.display());
         }

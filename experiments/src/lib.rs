@@ -9,6 +9,7 @@
 //! - [`runner`]: runs a manifest's configurations N times into raw and summary CSV files,
 //!   crash-safe and resumable; [`provenance`] records where and how;
 //! - [`cmd_run`]: the `run` subcommand;
+//! - [`edit`]: chunked terrain (`rmt-terrain`): `extract --chunks` and the `edit` workload;
 //! - [`cmd_render`], [`cmd_questionnaire`]: turntable GIFs of a run's meshes and the questionnaire
 //!   built from them (`rmt-render`);
 //! - [`cmd_analyse`]: the questionnaire analysis (`rmt-analysis`);
@@ -24,6 +25,7 @@ pub mod cmd_render;
 pub mod cmd_report;
 pub mod cmd_run;
 pub mod config;
+pub mod edit;
 pub mod manifest;
 pub mod objects;
 pub mod provenance;

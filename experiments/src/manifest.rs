@@ -40,6 +40,14 @@
 //! [sweep]                   # every configuration for each value (cross product)
 //! resolution = [16, 32, 64]
 //! collapse_threshold = [0.3, 0.5]
+//!
+//! workload = "edit"         # instead of repeated extractions: a chunked terrain session
+//! [edit]                    # (see `crate::edit`; every key optional)
+//! chunk = 32                # chunk edge in cells
+//! strokes = 200             # timed brush strokes per configuration
+//! warmup = 20               # untimed strokes first
+//! seed = 1                  # stroke positions and modes
+//! radius = 4.0              # brush radius in cells
 //! ```
 //!
 //! **Naming rule** (reproduces the dissertation's ids): object code, `_`, lattice letter (`b`
@@ -176,6 +184,13 @@ pub struct Manifest {
     /// Save the last repetition's mesh of each configuration.
     #[serde(default = "yes")]
     pub save_meshes: bool,
+    /// What to run per configuration: `extract` (default: repeated extractions) or `edit` (a
+    /// chunked terrain session of random brush strokes, see [`crate::edit`]).
+    #[serde(default)]
+    pub workload: Option<String>,
+    /// Parameters of the `edit` workload.
+    #[serde(default)]
+    pub edit: Option<EditEntry>,
     /// The dissertation's benchmark table to compare with.
     #[serde(default)]
     pub paper_benchmark: Option<PathBuf>,
@@ -303,6 +318,42 @@ fn default_methods() -> Vec<Method> {
     vec![Method::Mt]
 }
 
+/// `[edit]`: parameters of the `edit` workload (each optional; defaults in [`EditPlan`]).
+#[derive(Clone, Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EditEntry {
+    /// Chunk edge in cells.
+    #[serde(default)]
+    pub chunk: Option<usize>,
+    /// Timed strokes per configuration.
+    #[serde(default)]
+    pub strokes: Option<usize>,
+    /// Untimed strokes first.
+    #[serde(default)]
+    pub warmup: Option<usize>,
+    /// Seed of the stroke positions and modes.
+    #[serde(default)]
+    pub seed: Option<u64>,
+    /// Brush radius in cells.
+    #[serde(default)]
+    pub radius: Option<f32>,
+}
+
+/// The checked `edit` workload of a plan.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct EditPlan {
+    /// Chunk edge in cells (default 32).
+    pub chunk: usize,
+    /// Timed strokes per configuration (default 200).
+    pub strokes: usize,
+    /// Untimed strokes first (default 20).
+    pub warmup: usize,
+    /// Seed of the strokes (default 1).
+    pub seed: u64,
+    /// Brush radius in cells (default 4).
+    pub radius: f32,
+}
+
 /// `[matrix]`: objects x methods x lattices x clustering.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -409,6 +460,9 @@ pub struct Plan {
     pub sweep_variables: Vec<String>,
     /// The configurations, in execution order.
     pub configurations: Vec<Configuration>,
+    /// `Some` for the `edit` workload: a terrain session per configuration instead of
+    /// repeated extractions.
+    pub edit: Option<EditPlan>,
 }
 
 /// Reads and parses a manifest file (no expansion yet).
@@ -765,6 +819,59 @@ impl Manifest {
             }
         }
 
+        let edit = match (self.workload.as_deref(), &self.edit) {
+            (None | Some("extract"), None) => None,
+            (None | Some("extract"), Some(_)) => {
+                return Err(invalid(
+                    "edit",
+                    "an [edit] table needs `workload = \"edit\"`".into(),
+                ))
+            }
+            (Some("edit"), entry) => {
+                let e = entry.clone().unwrap_or_default();
+                let plan = EditPlan {
+                    chunk: e.chunk.unwrap_or(32),
+                    strokes: e.strokes.unwrap_or(200),
+                    warmup: e.warmup.unwrap_or(20),
+                    seed: e.seed.unwrap_or(1),
+                    radius: e.radius.unwrap_or(4.0),
+                };
+                if !(1..=4096).contains(&plan.chunk) {
+                    return Err(invalid(
+                        "edit.chunk",
+                        format!("must be 1 to 4096 cells, got {}", plan.chunk),
+                    ));
+                }
+                if plan.strokes == 0 {
+                    return Err(invalid("edit.strokes", "must be at least 1".into()));
+                }
+                if !(plan.radius.is_finite() && plan.radius > 0.0) {
+                    return Err(invalid(
+                        "edit.radius",
+                        format!("must be finite and > 0 (cells), got {}", plan.radius),
+                    ));
+                }
+                if let Some(c) = configurations.iter().find(|c| {
+                    c.extraction.method == Method::Mt
+                        && c.extraction.clustering == Clustering::Meshopt
+                }) {
+                    return Err(invalid(
+                        &format!("configuration {}", c.id),
+                        "the edit workload cannot use meshopt (a global simplifier: chunks \
+                         cannot reproduce it)"
+                            .into(),
+                    ));
+                }
+                Some(plan)
+            }
+            (Some(other), _) => {
+                return Err(invalid(
+                    "workload",
+                    format!("unknown workload `{other}` (expected `extract` or `edit`)"),
+                ))
+            }
+        };
+
         Ok(Plan {
             name: self.name.clone(),
             repetitions,
@@ -779,6 +886,7 @@ impl Manifest {
             search,
             sweep_variables,
             configurations,
+            edit,
         })
     }
 }

@@ -205,6 +205,7 @@ const PROGRESS_JSON: &str = "progress.json";
 const SUMMARY_CSV: &str = "summary.csv";
 const PAPER_CSV: &str = "paper_comparison.csv";
 const MESHES: &str = "meshes";
+const EDITS_CSV: &str = "edits.csv";
 
 /// Starts a run of the manifest at `manifest_path` in `out` (which must be new or empty) or in
 /// `<output>/<name>-<UTC timestamp>`. Every check happens before the folder is created.
@@ -248,6 +249,11 @@ pub fn start(
         &folder.join(CONFIGURATIONS_CSV),
         &configurations_csv(&plan)?,
     )?;
+    if let Some(edit) = plan.edit {
+        let provenance = Provenance::collect();
+        let record = run_record(&plan, manifest_path, provenance.clone(), &run_id)?;
+        return execute_edits(&folder, &plan, &fields, record, provenance, &edit, opts);
+    }
     let header = csv_bytes(&[raw_header()])?;
     write_atomic(&folder.join(RAW_CSV), &header)?;
     let progress = Progress {
@@ -258,13 +264,25 @@ pub fn start(
         &folder.join(PROGRESS_JSON),
         &serde_json::to_vec_pretty(&progress)?,
     )?;
+    let provenance = Provenance::collect();
+    let record = run_record(&plan, manifest_path, provenance.clone(), &run_id)?;
+    // run.json last: its presence means the folder is initialised and resumable.
+    execute(&folder, &plan, &fields, record, progress, provenance, opts)
+}
+
+/// The run record of a new run folder (status running, no session yet).
+fn run_record(
+    plan: &Plan,
+    manifest_path: &Path,
+    provenance: Provenance,
+    run_id: &str,
+) -> Result<RunRecord> {
     let base_dir = manifest_path
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_default();
-    let provenance = Provenance::collect();
-    let record = RunRecord {
-        run_id,
+    Ok(RunRecord {
+        run_id: run_id.to_string(),
         name: plan.name.clone(),
         status: Status::Running,
         provenance: provenance.clone(),
@@ -285,9 +303,7 @@ pub fn start(
         configurations: serde_json::to_value(&plan.configurations)?,
         sessions: Vec::new(),
         files: Vec::new(),
-    };
-    // run.json last: its presence means the folder is initialised and resumable.
-    execute(&folder, &plan, &fields, record, progress, provenance, opts)
+    })
 }
 
 /// Continues the run in `folder`: skips finished configurations, drops rows that were not
@@ -303,6 +319,13 @@ pub fn resume(folder: &Path, opts: &RunOptions) -> Result<RunReport> {
     let record: RunRecord = serde_json::from_slice(&bytes)
         .with_context(|| format!("parsing {}", record_path.display()))?;
     let progress_path = folder.join(PROGRESS_JSON);
+    if !progress_path.exists() {
+        bail!(
+            "{} has no progress.json: runs of the `edit` workload are not resumable (they are \
+             short; start the run again)",
+            folder.display()
+        );
+    }
     let progress: Progress = serde_json::from_slice(
         &fs::read(&progress_path)
             .with_context(|| format!("reading {}", progress_path.display()))?,
@@ -502,6 +525,107 @@ fn execute(
         status,
         configurations_run: ran,
         configurations_done: progress.completed.len(),
+        configurations_total: plan.configurations.len(),
+    })
+}
+
+/// Runs the `edit` workload: one chunked terrain session per configuration
+/// ([`crate::edit::run_edit_session`]), written to `edits.csv` (one row per stroke) and
+/// `summary.csv` (latency quantiles, chunks per edit, triangles per chunk, whole-volume vs
+/// chunked time). Both are written once at the end, atomically; an interrupted edit run leaves no
+/// CSV and is started again rather than resumed.
+fn execute_edits(
+    folder: &Path,
+    plan: &Plan,
+    fields: &manifest::Fields,
+    mut record: RunRecord,
+    provenance: Provenance,
+    edit: &manifest::EditPlan,
+    opts: &RunOptions,
+) -> Result<RunReport> {
+    use crate::edit::{
+        edit_rows, edit_summary_row, run_edit_session, EDITS_HEADER, EDIT_SUMMARY_HEADER,
+    };
+    record.sessions.push(Session {
+        provenance,
+        ended: None,
+        configurations_run: 0,
+        status: Status::Running,
+    });
+    write_json(&folder.join(RUN_JSON), &record)?;
+    let bar = if opts.quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(plan.configurations.len() as u64);
+        let style = ProgressStyle::with_template(
+            "{msg:>16} [{bar:30}] {pos}/{len} edit sessions, {elapsed} elapsed",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
+        bar.set_style(style);
+        bar
+    };
+    let mut edits = vec![EDITS_HEADER.map(String::from).to_vec()];
+    let mut summary = vec![EDIT_SUMMARY_HEADER.map(String::from).to_vec()];
+    let mut status = Status::Finished;
+    let mut ran = 0;
+    for (k, c) in plan.configurations.iter().enumerate() {
+        if opts.stop_after.is_some_and(|limit| k >= limit) {
+            status = Status::Stopped;
+            break;
+        }
+        bar.set_message(c.id.clone());
+        let field = fields
+            .get(&c.object)
+            .with_context(|| format!("no field built for object {}", c.object))?;
+        let session = run_edit_session(field, &c.extraction, edit, plan.threads)
+            .with_context(|| format!("edit session of configuration {}", c.id))?;
+        edits.extend(edit_rows(&c.id, &session));
+        summary.push(edit_summary_row(
+            &c.id,
+            &c.extraction,
+            edit,
+            plan.threads,
+            &session,
+        ));
+        if plan.save_meshes {
+            fs::create_dir_all(folder.join(MESHES))
+                .with_context(|| format!("creating {}", folder.join(MESHES).display()))?;
+            let path = folder.join(MESHES).join(format!("{}.ply", c.id));
+            rmt_mesh::io::save_ply(&path, &session.initial.mesh, true)
+                .with_context(|| format!("saving {}", path.display()))?;
+        }
+        ran += 1;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    if status == Status::Finished {
+        write_atomic(&folder.join(EDITS_CSV), &csv_bytes(&edits)?)?;
+        write_atomic(&folder.join(SUMMARY_CSV), &csv_bytes(&summary)?)?;
+        let mut files = vec![
+            MANIFEST_COPY,
+            RUN_JSON,
+            CONFIGURATIONS_CSV,
+            EDITS_CSV,
+            SUMMARY_CSV,
+        ];
+        if plan.save_meshes {
+            files.push(MESHES);
+        }
+        record.files = files.into_iter().map(String::from).collect();
+    }
+    record.status = status;
+    if let Some(s) = record.sessions.last_mut() {
+        s.ended = Some(provenance::utc_now_iso());
+        s.configurations_run = ran;
+        s.status = status;
+    }
+    write_json(&folder.join(RUN_JSON), &record)?;
+    Ok(RunReport {
+        folder: folder.to_path_buf(),
+        status,
+        configurations_run: ran,
+        configurations_done: ran,
         configurations_total: plan.configurations.len(),
     })
 }

@@ -263,3 +263,35 @@ fn repeated_extractions_give_identical_meshes() {
         }
     }
 }
+
+#[test]
+fn extract_in_chunks_equals_the_whole_volume_and_refuses_non_cubic_cells() {
+    let o = experiments(&[
+        "extract",
+        "--object",
+        "asteroid",
+        "--resolution",
+        "24",
+        "--chunks",
+        "8",
+        "--threads",
+        "2",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["chunks"], 27);
+    assert_eq!(v["chunk_size"], 8);
+    assert_eq!(v["chunked_equals_whole"], true);
+    assert_eq!(v["triangles"], v["whole_triangles"]);
+    assert_eq!(v["boundary_edges_interior"], 0);
+    assert_eq!(v["non_manifold_edges"], 0);
+
+    let o = experiments(&["extract", "--resolution", "24,12,24", "--chunks", "8"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("cubic cells") && !err.contains("panicked"),
+        "{err}"
+    );
+}

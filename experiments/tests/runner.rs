@@ -386,3 +386,92 @@ fn paper_bunny_is_one_closed_manifold_sphere_on_the_bcdl_lattice() {
         assert_eq!(r.euler, 2, "{what}");
     }
 }
+
+/// The `edit` workload: one terrain session per configuration, every stroke in edits.csv, one
+/// summary row each, and the chunks equal to the whole volume before and after the strokes.
+#[test]
+fn edit_workload_writes_one_row_per_stroke_and_a_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("edit.toml");
+    fs::write(
+        &manifest,
+        r#"
+name = "edit-test"
+workload = "edit"
+threads = 2
+save_meshes = false
+
+[[objects]]
+name = "terrain"
+resolution = [24, 16, 24]
+bounds = [-1.5, -1.0, -1.5, 1.5, 1.0, 1.5]
+
+[[configurations]]
+object = "terrain"
+lattice = "bcdl"
+clustering = "integrated"
+
+[[configurations]]
+object = "terrain"
+method = "mc"
+
+[edit]
+chunk = 8
+strokes = 5
+warmup = 1
+radius = 2.0
+"#,
+    )
+    .unwrap();
+    let folder = dir.path().join("run");
+    let report = runner::start(&manifest, &Overrides::default(), Some(&folder), &quiet()).unwrap();
+    assert_eq!(report.status, Status::Finished);
+    assert_eq!(report.configurations_run, 2);
+    let edits = Table::read(&folder.join("edits.csv")).unwrap();
+    assert_eq!(edits.header, experiments::edit::EDITS_HEADER);
+    assert_eq!(edits.rows.len(), 10);
+    let summary = Table::read(&folder.join("summary.csv")).unwrap();
+    assert_eq!(summary.header, experiments::edit::EDIT_SUMMARY_HEADER);
+    assert_eq!(summary.rows.len(), 2);
+    for r in 0..2 {
+        assert_eq!(summary.get(r, "chunked_equals_whole"), Some("true"));
+        assert_eq!(summary.get(r, "strokes"), Some("5"));
+        let p50: f64 = summary.get(r, "latency_p50_ms").unwrap().parse().unwrap();
+        let max: f64 = summary.get(r, "latency_max_ms").unwrap().parse().unwrap();
+        assert!(p50 > 0.0 && p50 <= max);
+        assert_eq!(summary.get(r, "chunks"), Some("18"));
+    }
+    assert!(!folder.join("raw.csv").exists());
+}
+
+#[test]
+fn edit_workload_refuses_meshopt_and_an_edit_table_without_the_workload() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        fs::write(&p, text).unwrap();
+        p
+    };
+    let base = "name = \"e\"\n[[objects]]\nname = \"sphere\"\nresolution = 8\n";
+    let meshopt = write(
+        "meshopt.toml",
+        &format!("workload = \"edit\"\n{base}[[configurations]]\nobject = \"sphere\"\nclustering = \"meshopt\"\n"),
+    );
+    let err = manifest::load(&meshopt, &Overrides::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("meshopt") && err.contains("meshopt.toml"),
+        "{err}"
+    );
+    let stray = write(
+        "stray.toml",
+        &format!("{base}[[configurations]]\nobject = \"sphere\"\n[edit]\nchunk = 8\n"),
+    );
+    let err = manifest::load(&stray, &Overrides::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("workload"), "{err}");
+}

@@ -96,10 +96,14 @@ pub fn aspect_ratio(a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> f32 {
 ///
 /// Slivers come from crossings that no cluster could take: a refused cluster near a point where
 /// the surface nearly touches the lattice, or a lone crossing squeezed between two clusters.
+///
+/// With `tile_keys = Some(keys)` (the tile rule, [`crate::Tiling`]) only edges whose endpoints
+/// have the same tile key are collapsed, as in [`collapse_short_edges_tiled`].
 pub fn collapse_slivers(
     merge: &mut MergeBuffers,
     positions: &mut [[f32; 3]],
     max_ar: f32,
+    tile_keys: Option<&[u64]>,
 ) -> (usize, usize) {
     let pos = |p: &[[f32; 3]], i: u32| glam::Vec3::from(p[i as usize]);
     let (mut collapses, mut dropped) = (0, 0);
@@ -123,6 +127,9 @@ pub fn collapse_slivers(
                 x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2))
             });
             for &(_, u, v) in &edges {
+                if tile_keys.is_some_and(|keys| !crate::tiles::same_tile(keys, &[u, v])) {
+                    continue;
+                }
                 let (pu, pv) = (pos(positions, u), pos(positions, v));
                 let (nu, nv) = (merge.member_count(u), merge.member_count(v));
                 let target = match nu.cmp(&nv) {
@@ -192,7 +199,7 @@ mod tests {
             })
             .count();
         assert!(bad > 0);
-        let (collapses, dropped) = collapse_slivers(&mut merge, &mut positions, 4.0);
+        let (collapses, dropped) = collapse_slivers(&mut merge, &mut positions, 4.0, None);
         assert!(collapses >= 1);
         assert_eq!(dropped, 2 * collapses);
         let mut indices_out = Vec::new();

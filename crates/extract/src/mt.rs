@@ -520,8 +520,12 @@ pub fn extract(
             }
         }
         if check {
-            let (slivers, dropped) =
-                crate::collapse::collapse_slivers(merge, &mut mesh.positions, SLIVER_AR);
+            let (slivers, dropped) = crate::collapse::collapse_slivers(
+                merge,
+                &mut mesh.positions,
+                SLIVER_AR,
+                tiled.then_some(&keys[..]),
+            );
             stats.slivers_collapsed += slivers;
             stats.discarded += dropped;
         }
