@@ -24,7 +24,7 @@ pub fn world_settings(e: &Extraction, chunk: usize, threads: usize) -> Result<Wo
     let settings = e.settings(threads);
     let spacing = settings.grid.spacing();
     let (lo, hi) = (spacing.min_element(), spacing.max_element());
-    if !(hi <= lo * (1.0 + 1e-4)) {
+    if hi > lo * (1.0 + 1e-4) || !hi.is_finite() {
         bail!(
             "a chunked world needs cubic cells, but the box and resolution give cell edges \
              {:.6} x {:.6} x {:.6}: choose bounds proportional to the resolution",
