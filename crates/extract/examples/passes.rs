@@ -21,7 +21,11 @@ fn main() {
         ("asteroid", &asteroid),
     ] {
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
-            for clustering in [Clustering::None, Clustering::Integrated] {
+            for clustering in [
+                Clustering::None,
+                Clustering::Integrated,
+                Clustering::IntegratedUnchecked,
+            ] {
                 let mut s = ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);
                 s.threads = threads;
                 s.normals = NormalMode::Skip;

@@ -36,6 +36,9 @@ pub struct LatticeTables {
     /// around one face for each axis, relative to the centre `A` below the face
     /// (`tetrahedra[4 * axis + m]`); simple: the 6 tetrahedra of the cube at the origin.
     pub tetrahedra: Vec<[Offset; 4]>,
+    /// For every 14-bit mask, its island holding the lowest set bit (0 for the empty mask):
+    /// [`LatticeTables::islands`] is a few table lookups (computed once, 32 KiB).
+    first_island: Vec<u16>,
 }
 
 impl LatticeTables {
@@ -65,11 +68,15 @@ impl LatticeTables {
             }
             reverse[i] = index_of(neg(offsets[i])).map_or(u8::MAX, |r| r as u8);
         }
+        let first_island = (0..=cluster_mask())
+            .map(|mask| grow_island(&link_masks, mask))
+            .collect();
         Self {
             offsets,
             link_masks,
             reverse,
             tetrahedra,
+            first_island,
         }
     }
 
@@ -87,25 +94,12 @@ impl LatticeTables {
     /// assert_eq!(t.islands(0b11).count(), 2);
     /// ```
     pub fn islands(&self, mask: u16) -> impl Iterator<Item = u16> + '_ {
-        let mut rest = mask;
+        let mut rest = mask & cluster_mask();
         std::iter::from_fn(move || {
             if rest == 0 {
                 return None;
             }
-            let mut island = rest & rest.wrapping_neg();
-            loop {
-                let mut grown = island;
-                let mut bits = island;
-                while bits != 0 {
-                    let i = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    grown |= self.link_masks[i] & rest;
-                }
-                if grown == island {
-                    break;
-                }
-                island = grown;
-            }
+            let island = self.first_island[rest as usize];
             rest &= !island;
             Some(island)
         })
@@ -114,6 +108,32 @@ impl LatticeTables {
     /// Whether `mask` is non-empty and connected in the link graph.
     pub fn is_connected(&self, mask: u16) -> bool {
         mask != 0 && self.islands(mask).nth(1).is_none()
+    }
+}
+
+/// The 14 neighbour bits.
+const fn cluster_mask() -> u16 {
+    (1 << 14) - 1
+}
+
+/// The island of `mask` (in the link graph `link_masks`) holding its lowest set bit.
+fn grow_island(link_masks: &[u16; 14], mask: u16) -> u16 {
+    if mask == 0 {
+        return 0;
+    }
+    let mut island = mask & mask.wrapping_neg();
+    loop {
+        let mut grown = island;
+        let mut bits = island;
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            grown |= link_masks[i] & mask;
+        }
+        if grown == island {
+            return island;
+        }
+        island = grown;
     }
 }
 
@@ -247,6 +267,39 @@ mod tests {
 
     fn both() -> [(Lattice, &'static LatticeTables); 2] {
         [Lattice::BodyCentred, Lattice::Simple].map(|l| (l, LatticeTables::get(l)))
+    }
+
+    #[test]
+    fn island_table_partitions_every_mask_into_connected_parts() {
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            let t = LatticeTables::get(lattice);
+            for mask in 0..=cluster_mask() {
+                let parts: Vec<u16> = t.islands(mask).collect();
+                // Disjoint, covering the mask, each connected, none adjacent to another.
+                assert_eq!(parts.iter().fold(0, |a, &p| a | p), mask);
+                assert_eq!(
+                    parts.iter().map(|p| p.count_ones()).sum::<u32>(),
+                    mask.count_ones()
+                );
+                for (i, &p) in parts.iter().enumerate() {
+                    assert_eq!(
+                        grow_island(&t.link_masks, p),
+                        p,
+                        "{mask:#x}: {p:#x} not connected"
+                    );
+                    let touching = (0..14)
+                        .filter(|&b| p & (1 << b) != 0)
+                        .fold(0u16, |a, b| a | t.link_masks[b]);
+                    for &q in &parts[i + 1..] {
+                        assert_eq!(
+                            touching & q,
+                            0,
+                            "{mask:#x}: islands {p:#x} and {q:#x} touch"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]

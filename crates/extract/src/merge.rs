@@ -46,6 +46,70 @@ pub struct Scratch {
     verts: Vec<u32>,
     boundary: Vec<(u32, u32)>,
     used: Vec<bool>,
+    local: LocalIds,
+}
+
+/// Most regions have at most this many vertices: their check runs on bit sets.
+const SMALL: usize = 64;
+
+/// Slots of the small hash map from vertex ids to local ids (twice [`SMALL`]).
+const SLOTS: usize = 128;
+
+/// Local ids 0.. for the vertices of one region: an open-addressing map of [`SLOTS`] slots,
+/// cleared slot by slot, so a check allocates nothing.
+struct LocalIds {
+    keys: [u32; SLOTS],
+    vals: [u8; SLOTS],
+    filled: Vec<u8>,
+}
+
+impl Default for LocalIds {
+    fn default() -> Self {
+        Self {
+            keys: [NONE; SLOTS],
+            vals: [0; SLOTS],
+            filled: Vec::with_capacity(SMALL),
+        }
+    }
+}
+
+impl LocalIds {
+    fn clear(&mut self) {
+        for &s in &self.filled {
+            self.keys[s as usize] = NONE;
+        }
+        self.filled.clear();
+    }
+
+    fn slot(&self, v: u32) -> usize {
+        let mut s = (v.wrapping_mul(0x9E37_79B1) >> 25) as usize;
+        while self.keys[s] != NONE && self.keys[s] != v {
+            s = (s + 1) & (SLOTS - 1);
+        }
+        s
+    }
+
+    /// The local id of `v`, numbering it if new; `None` when the region has more than
+    /// [`SMALL`] vertices.
+    fn get_or_insert(&mut self, v: u32) -> Option<usize> {
+        let s = self.slot(v);
+        if self.keys[s] == v {
+            return Some(self.vals[s] as usize);
+        }
+        let id = self.filled.len();
+        if id >= SMALL {
+            return None;
+        }
+        self.keys[s] = v;
+        self.vals[s] = id as u8;
+        self.filled.push(s as u8);
+        Some(id)
+    }
+
+    fn get(&self, v: u32) -> Option<usize> {
+        let s = self.slot(v);
+        (self.keys[s] == v).then(|| self.vals[s] as usize)
+    }
 }
 
 /// A triangle mesh prepared for merges, with buffers kept between extractions.
@@ -256,6 +320,179 @@ impl MergeBuffers {
         k: &[u32],
         new_pos: [f32; 3],
     ) -> Result<(), Reject> {
+        match self.check_small_region(sc, positions, k, new_pos) {
+            Some(verdict) => verdict,
+            None => self.check_any_region(sc, positions, k, new_pos),
+        }
+    }
+
+    /// Conditions 2 and 3 for one triangle of R with exactly one vertex `x` in K, far edge
+    /// `u w`: the new triangle `v u w` keeps the old one's facing and is not flat (one that was
+    /// already flat may stay flat, or open up facing like the region).
+    fn cone_triangle_geometry(
+        positions: &[[f32; 3]],
+        [x, u, w]: [u32; 3],
+        p: glam::Vec3,
+        region_normal: glam::Vec3,
+    ) -> Result<(), Reject> {
+        let [pu, pw, px] = [u, w, x].map(|i| glam::Vec3::from(positions[i as usize]));
+        let mut old = (pu - px).cross(pw - px);
+        let new = (pu - p).cross(pw - p);
+        let longest = (pu - p)
+            .length_squared()
+            .max((pw - p).length_squared())
+            .max((pw - pu).length_squared());
+        let old_longest = (pu - px)
+            .length_squared()
+            .max((pw - px).length_squared())
+            .max((pw - pu).length_squared());
+        let was_flat = old.length() <= 1e-6 * old_longest;
+        let is_flat = new.length() <= 1e-6 * longest;
+        if was_flat {
+            // Already flat (crossings on top of each other where the surface passes through
+            // sample points): staying flat is no worse, and lets such spots be welded one
+            // pair at a time; if it opens up, it must face like the region.
+            if is_flat {
+                return Ok(());
+            }
+            old = region_normal;
+        }
+        if old.dot(new) <= 0.0 || is_flat {
+            return Err(Reject::Flip);
+        }
+        Ok(())
+    }
+
+    /// The facing of the whole region (sum of its triangles' area vectors).
+    fn region_normal(&self, region: &[u32], positions: &[[f32; 3]]) -> glam::Vec3 {
+        let mut n = glam::Vec3::ZERO;
+        for &t in region {
+            let [a, b, c] = self.tris[t as usize].map(|i| glam::Vec3::from(positions[i as usize]));
+            n += (b - a).cross(c - a);
+        }
+        n
+    }
+
+    /// The exact check on bit sets, for regions of at most [`SMALL`] vertices (almost all):
+    /// vertices get local ids, directed edges become one bit set per start vertex. Decides
+    /// exactly as [`MergeBuffers::check_any_region`]; `None` when the region is larger.
+    fn check_small_region(
+        &self,
+        sc: &mut Scratch,
+        positions: &[[f32; 3]],
+        k: &[u32],
+        new_pos: [f32; 3],
+    ) -> Option<Result<(), Reject>> {
+        let ids = &mut sc.local;
+        ids.clear();
+        let mut out = [0u64; SMALL];
+        let mut directed = 0usize;
+        for &t in &sc.region {
+            let tri = self.tris[t as usize];
+            let l = [
+                ids.get_or_insert(tri[0])?,
+                ids.get_or_insert(tri[1])?,
+                ids.get_or_insert(tri[2])?,
+            ];
+            for e in 0..3 {
+                let (a, b) = (l[e], l[(e + 1) % 3]);
+                if out[a] & (1 << b) != 0 {
+                    // Two triangles traverse one edge the same way: already broken.
+                    return Some(Err(Reject::NotADisc));
+                }
+                out[a] |= 1 << b;
+                directed += 1;
+            }
+        }
+        let n = ids.filled.len();
+        let mut kmask = 0u64;
+        for &c in k {
+            if let Some(l) = ids.get(c) {
+                kmask |= 1 << l;
+            }
+        }
+        // Reverse edges, then boundary edges (no reverse) per start vertex.
+        let mut incoming = [0u64; SMALL];
+        for (b, &o) in out.iter().enumerate().take(n) {
+            let mut bits = o;
+            while bits != 0 {
+                let a = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                incoming[a] |= 1 << b;
+            }
+        }
+        let mut bnd = [0u64; SMALL];
+        let mut boundary = 0usize;
+        for a in 0..n {
+            bnd[a] = out[a] & !incoming[a];
+            let c = bnd[a].count_ones() as usize;
+            if c == 0 {
+                continue;
+            }
+            // The boundary avoids K, and each vertex starts at most one boundary edge.
+            if c > 1 || kmask & (1 << a) != 0 || bnd[a] & kmask != 0 {
+                return Some(Err(Reject::NotADisc));
+            }
+            boundary += 1;
+        }
+        let euler = n as i64 - (directed + boundary) as i64 / 2 + sc.region.len() as i64;
+        if euler != 1 || boundary < 3 {
+            return Some(Err(Reject::NotADisc));
+        }
+        // One simple cycle: walking from any boundary edge visits all of them.
+        let start = (0..n).find(|&a| bnd[a] != 0)?;
+        let (mut cur, mut steps) = (start, 0usize);
+        loop {
+            if bnd[cur] == 0 {
+                return Some(Err(Reject::NotADisc));
+            }
+            cur = bnd[cur].trailing_zeros() as usize;
+            steps += 1;
+            if cur == start || steps > boundary {
+                break;
+            }
+        }
+        if cur != start || steps != boundary {
+            return Some(Err(Reject::NotADisc));
+        }
+        // The surviving triangles must be exactly the cone over the boundary cycle.
+        let p = glam::Vec3::from(new_pos);
+        let region_normal = self.region_normal(&sc.region, positions);
+        let mut used = [0u64; SMALL];
+        let mut cone = 0;
+        for &t in &sc.region {
+            let tri = self.tris[t as usize];
+            let l = tri.map(|v| ids.get(v).unwrap_or(0));
+            let in_k = l.map(|x| kmask & (1 << x) != 0);
+            if in_k.iter().filter(|&&b| b).count() != 1 {
+                continue;
+            }
+            let r = in_k.iter().position(|&b| b).unwrap_or(0);
+            let (u, w) = (l[(r + 1) % 3], l[(r + 2) % 3]);
+            if bnd[u] & (1 << w) == 0 || used[u] & (1 << w) != 0 {
+                return Some(Err(Reject::NotACone));
+            }
+            used[u] |= 1 << w;
+            cone += 1;
+            let rotated = [tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]];
+            if let Err(e) = Self::cone_triangle_geometry(positions, rotated, p, region_normal) {
+                return Some(Err(e));
+            }
+        }
+        if cone != boundary {
+            return Some(Err(Reject::NotACone));
+        }
+        Some(Ok(()))
+    }
+
+    /// The exact check for a region of any size, on sorted edge lists.
+    fn check_any_region(
+        &self,
+        sc: &mut Scratch,
+        positions: &[[f32; 3]],
+        k: &[u32],
+        new_pos: [f32; 3],
+    ) -> Result<(), Reject> {
         // Directed edges and vertices of R.
         sc.edges.clear();
         sc.verts.clear();
@@ -324,11 +561,7 @@ impl MergeBuffers {
         let mut cone = 0;
         let p = glam::Vec3::from(new_pos);
         // Facing of the whole region, for triangles that were flat before the merge.
-        let mut region_normal = glam::Vec3::ZERO;
-        for &t in &sc.region {
-            let [a, b, c] = self.tris[t as usize].map(|i| glam::Vec3::from(positions[i as usize]));
-            region_normal += (b - a).cross(c - a);
-        }
+        let region_normal = self.region_normal(&sc.region, positions);
         for &t in &sc.region {
             let tri = self.tris[t as usize];
             let inside = tri.iter().filter(|x| k.contains(x)).count();
@@ -346,31 +579,7 @@ impl MergeBuffers {
             }
             cone += 1;
             // Geometry: the new triangle keeps the old one's facing and is not flat.
-            let [pu, pw, px] = [u, w, x].map(|i| glam::Vec3::from(positions[i as usize]));
-            let mut old = (pu - px).cross(pw - px);
-            let new = (pu - p).cross(pw - p);
-            let longest = (pu - p)
-                .length_squared()
-                .max((pw - p).length_squared())
-                .max((pw - pu).length_squared());
-            let old_longest = (pu - px)
-                .length_squared()
-                .max((pw - px).length_squared())
-                .max((pw - pu).length_squared());
-            let was_flat = old.length() <= 1e-6 * old_longest;
-            let is_flat = new.length() <= 1e-6 * longest;
-            if was_flat {
-                // Already flat (crossings on top of each other where the surface passes through
-                // sample points): staying flat is no worse, and lets such spots be welded one
-                // pair at a time; if it opens up, it must face like the region.
-                if is_flat {
-                    continue;
-                }
-                old = region_normal;
-            }
-            if old.dot(new) <= 0.0 || is_flat {
-                return Err(Reject::Flip);
-            }
+            Self::cone_triangle_geometry(positions, [x, u, w], p, region_normal)?;
         }
         if cone != sc.boundary.len() {
             return Err(Reject::NotACone);

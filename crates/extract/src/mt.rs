@@ -44,6 +44,37 @@ pub struct MtBuffers {
     candidates: Vec<Candidate>,
     /// Triangles of the geometry pass, as crossing ids.
     triangles: Vec<u32>,
+    /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
+    /// of padding: 64 points are tested for crossings at once with a few word operations.
+    inside: Vec<u64>,
+}
+
+/// The 64 bits of `words` starting at bit `pos` (bit k = slot `pos + k`); `words` has one word
+/// of padding past the last slot.
+#[inline(always)]
+fn bits_at(words: &[u64], pos: usize) -> u64 {
+    let (w, s) = (pos >> 6, pos & 63);
+    let lo = words[w] >> s;
+    if s == 0 {
+        lo
+    } else {
+        lo | (words[w + 1] << (64 - s))
+    }
+}
+
+/// Which of the `len` (<= 64) points from slot `i` on have a crossed edge: the inside bits of the
+/// points against those of each neighbour (all 14 must exist: the fast path of a row).
+#[inline(always)]
+fn crossed_points(inside: &[u64], i: usize, delta: &[isize; 14], len: usize) -> u64 {
+    let own = bits_at(inside, i);
+    let mut any = 0u64;
+    for &off in delta {
+        any |= own ^ bits_at(inside, (i as isize + off) as usize);
+    }
+    if len < 64 {
+        any &= (1u64 << len) - 1;
+    }
+    any
 }
 
 /// Edges shorter than this many grid spacings are welded after clustering (coincident crossings).
@@ -288,11 +319,36 @@ pub fn extract(
     buf.base.resize(slots, 0);
     buf.candidates.clear();
     buf.triangles.clear();
+    let words = slots.div_ceil(64);
+    buf.inside.resize(words + 1, 0);
     stats.t_allocation_s += t.elapsed().as_secs_f64();
 
-    // Vertex pass, step 1: owned crossings and proposals per plane.
+    // Vertex pass, step 0: the inside bits.
     let t = std::time::Instant::now();
+    {
+        let values = &samples.values;
+        pool.install(|| {
+            buf.inside[..words]
+                .par_chunks_mut(1024)
+                .enumerate()
+                .for_each(|(c, chunk)| {
+                    for (j, word) in chunk.iter_mut().enumerate() {
+                        let start = (c * 1024 + j) * 64;
+                        let end = (start + 64).min(slots);
+                        let mut x = 0u64;
+                        for (k, &f) in values[start..end].iter().enumerate() {
+                            x |= u64::from(f < iso) << k;
+                        }
+                        *word = x;
+                    }
+                });
+        });
+        buf.inside[words] = 0;
+    }
+
+    // Vertex pass, step 1: owned crossings and proposals per plane.
     let plane = samples.dims[0] * samples.dims[1];
+    let inside = &buf.inside;
     let per_plane: Vec<(PlaneCounts, Vec<Candidate>)> = pool.install(|| {
         buf.owned
             .par_chunks_mut(plane)
@@ -300,6 +356,7 @@ pub fn extract(
             .map(|(z, owned)| {
                 vertex_plane(
                     &layout,
+                    inside,
                     z,
                     iso,
                     propose,
@@ -581,15 +638,17 @@ pub fn extract(
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     }
 
-    stats.bytes_edges = (buf.owned.len() * 2 + buf.base.len() * 4)
+    stats.bytes_edges = (buf.owned.len() * 2 + buf.base.len() * 4 + buf.inside.len() * 8)
         + buf.candidates.len() * std::mem::size_of::<Candidate>()
         + if propose { merge.bytes() } else { 0 };
     Ok(())
 }
 
 /// Vertex pass over one storage plane: owned crossings, counts, cluster proposals.
+#[allow(clippy::too_many_arguments)]
 fn vertex_plane(
     l: &Layout,
+    inside_bits: &[u64],
     z: usize,
     iso: f32,
     propose: bool,
@@ -614,12 +673,24 @@ fn vertex_plane(
         let (lo, hi) = if row_regular { (lo, hi) } else { (dx, dx) };
         let row = z * dx * dy + sy * dx;
         let delta = &l.delta[odd];
+        // Fast path, 64 points at a time: which of them have a crossed edge at all.
+        let (mut block_start, mut block_end, mut block) = (0usize, 0usize, 0u64);
         for sx in 0..dx {
             let local = sy * dx + sx;
             let i = row + sx;
             let f = v[i];
             let inside = f < iso;
             let (p, valid) = if sx >= lo && sx < hi {
+                if sx >= block_end {
+                    block_start = sx;
+                    block_end = (sx + 64).min(hi);
+                    block = crossed_points(inside_bits, i, delta, block_end - sx);
+                }
+                if (block >> (sx - block_start)) & 1 == 0 {
+                    owned[local] = 0;
+                    counts.edges += 14;
+                    continue;
+                }
                 // Fast path: all 14 edges exist.
                 let mut crossed = 0u16;
                 for (d, &off) in delta.iter().enumerate() {
