@@ -441,18 +441,11 @@ fn execute(
         .filter(|c| !progress.completed.contains(&c.id))
         .collect();
     let per_config = (plan.warmup + plan.repetitions) as u64;
-    let bar = if opts.quiet {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(per_config * todo.len() as u64);
-        let style = ProgressStyle::with_template(
-            "{msg:>16} [{bar:30}] {pos}/{len} extractions, {elapsed} elapsed, ETA {eta}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
-        bar.set_style(style);
-        bar
-    };
+    let bar = progress_bar(
+        opts.quiet,
+        per_config * todo.len() as u64,
+        "{msg:>16} [{bar:30}] {pos}/{len} extractions, {elapsed} elapsed, ETA {eta}",
+    );
 
     let mut ran = 0;
     let mut status = Status::Finished;
@@ -513,13 +506,7 @@ fn execute(
         }
         record.files = files.into_iter().map(String::from).collect();
     }
-    record.status = status;
-    if let Some(s) = record.sessions.last_mut() {
-        s.ended = Some(provenance::utc_now_iso());
-        s.configurations_run = ran;
-        s.status = status;
-    }
-    write_json(&folder.join(RUN_JSON), &record)?;
+    close_session(folder, &mut record, status, ran)?;
     Ok(RunReport {
         folder: folder.to_path_buf(),
         status,
@@ -553,18 +540,11 @@ fn execute_edits(
         status: Status::Running,
     });
     write_json(&folder.join(RUN_JSON), &record)?;
-    let bar = if opts.quiet {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(plan.configurations.len() as u64);
-        let style = ProgressStyle::with_template(
-            "{msg:>16} [{bar:30}] {pos}/{len} edit sessions, {elapsed} elapsed",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
-        bar.set_style(style);
-        bar
-    };
+    let bar = progress_bar(
+        opts.quiet,
+        plan.configurations.len() as u64,
+        "{msg:>16} [{bar:30}] {pos}/{len} edit sessions, {elapsed} elapsed",
+    );
     let mut edits = vec![EDITS_HEADER.map(String::from).to_vec()];
     let mut summary = vec![EDIT_SUMMARY_HEADER.map(String::from).to_vec()];
     let mut status = Status::Finished;
@@ -614,13 +594,7 @@ fn execute_edits(
         }
         record.files = files.into_iter().map(String::from).collect();
     }
-    record.status = status;
-    if let Some(s) = record.sessions.last_mut() {
-        s.ended = Some(provenance::utc_now_iso());
-        s.configurations_run = ran;
-        s.status = status;
-    }
-    write_json(&folder.join(RUN_JSON), &record)?;
+    close_session(folder, &mut record, status, ran)?;
     Ok(RunReport {
         folder: folder.to_path_buf(),
         status,
@@ -628,6 +602,30 @@ fn execute_edits(
         configurations_done: ran,
         configurations_total: plan.configurations.len(),
     })
+}
+
+/// A progress bar of `len` steps drawn with `template` (hidden when `quiet`).
+fn progress_bar(quiet: bool, len: u64, template: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len);
+    let style = ProgressStyle::with_template(template)
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
+    bar.set_style(style);
+    bar
+}
+
+/// Records the end of the current session (status, configurations run) in run.json.
+fn close_session(folder: &Path, record: &mut RunRecord, status: Status, ran: usize) -> Result<()> {
+    record.status = status;
+    if let Some(s) = record.sessions.last_mut() {
+        s.ended = Some(provenance::utc_now_iso());
+        s.configurations_run = ran;
+        s.status = status;
+    }
+    write_json(&folder.join(RUN_JSON), record)
 }
 
 /// What one configuration produced.

@@ -176,17 +176,7 @@ mod tests {
     fn a_cap_in_a_closed_mesh_is_collapsed_and_the_mesh_stays_closed() {
         // An octahedron with one vertex pushed almost onto the opposite edge's plane: its
         // triangles there are caps. The collapse removes one vertex and keeps the surface closed.
-        let mut positions = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let indices: Vec<u32> = vec![
-            0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5,
-        ];
+        let (mut positions, indices) = crate::merge::tests::octahedron();
         // Make triangle 0-2-4 a needle: 4 nearly on the segment 0-2... but keep it convex-ish.
         positions[4] = [0.5, 0.5, 0.002];
         let mut merge = MergeBuffers::default();

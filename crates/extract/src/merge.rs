@@ -620,11 +620,11 @@ impl MergeBuffers {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// An octahedron: 6 vertices, 8 outward triangles.
-    fn octahedron() -> (Vec<[f32; 3]>, Vec<u32>) {
+    pub(crate) fn octahedron() -> (Vec<[f32; 3]>, Vec<u32>) {
         let p = vec![
             [1.0, 0.0, 0.0],
             [-1.0, 0.0, 0.0],
