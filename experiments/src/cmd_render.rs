@@ -10,7 +10,7 @@ use std::path::PathBuf;
 /// Arguments of `render`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The run folder (holds configurations.csv and meshes/<id>.ply).
+    /// The run folder (holds `configurations.csv` and `meshes/<id>.ply`).
     pub run: PathBuf,
     /// Seed of the anonymous animation names (keep it as secret as key.csv).
     #[arg(long, default_value_t = 1)]

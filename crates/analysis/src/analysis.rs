@@ -1,7 +1,7 @@
 //! The whole analysis: the dissertation's tables, per-question statistics, Bradley-Terry-Davidson
 //! strengths, position bias and agreement, with participant-bootstrap intervals.
 //!
-//! Point estimates and every bootstrap resample go through the same function ([`estimate`]) on
+//! Point estimates and every bootstrap resample go through the same function (`estimate`) on
 //! per-question counts, so an interval always describes exactly the statistic next to it.
 
 use polars::prelude::*;
