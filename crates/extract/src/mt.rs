@@ -142,6 +142,26 @@ struct Layout<'a> {
     /// Storage-index delta of neighbour d, for even (`[0]`) and odd (`[1]`) points.
     delta: [[isize; 14]; 2],
     tets: Vec<TetTemplate>,
+    /// Existence (bit 16) and valid-neighbour mask (bits 0..14) of a point by the boundary
+    /// class of each coordinate ([`boundary_class`]) and its parity; empty for grids too small
+    /// for the classes to be apart (then computed point by point).
+    border_table: Vec<u32>,
+}
+
+/// Boundary classes per axis: the coordinates -1..=3, max-3..=max+1, and everything between.
+const CLASSES: usize = 11;
+
+/// The class of lattice coordinate `c` on an axis whose largest coordinate is `max`: points of
+/// one class see the same neighbours exist (offsets reach at most 2 lattice units).
+#[inline(always)]
+fn boundary_class(c: i32, max: i32) -> usize {
+    if c <= 3 {
+        (c + 1).max(0) as usize
+    } else if c >= max - 3 {
+        (5 + (c - (max - 3))).min(9) as usize
+    } else {
+        10
+    }
 }
 
 impl<'a> Layout<'a> {
@@ -193,26 +213,102 @@ impl<'a> Layout<'a> {
                 tpl
             })
             .collect();
-        Self {
+        let mut layout = Self {
             s,
             lattice,
             t,
             delta,
             tets,
+            border_table: Vec::new(),
+        };
+        layout.border_table = layout.build_border_table();
+        layout
+    }
+
+    /// The table behind [`Layout::border_info`]: one representative point per class triple
+    /// and parity (the coordinate itself for the border classes, 4 or 5 for the middle one).
+    fn build_border_table(&self) -> Vec<u32> {
+        // The middle class needs coordinates of either parity clear of both border classes.
+        if (0..3).any(|a| self.max_coord(a) < 10) {
+            return Vec::new();
+        }
+        let mut table = vec![0u32; CLASSES * CLASSES * CLASSES * 2];
+        let rep = |class: usize, odd: i32, max: i32| -> Option<i32> {
+            let c = match class {
+                0..=4 => class as i32 - 1,
+                5..=9 => max - 3 + (class as i32 - 5),
+                _ => 4 + odd,
+            };
+            ((c & 1) == odd || self.lattice == Lattice::Simple).then_some(c)
+        };
+        for cx in 0..CLASSES {
+            for cy in 0..CLASSES {
+                for cz in 0..CLASSES {
+                    for odd in 0..2 {
+                        let (Some(x), Some(y), Some(z)) = (
+                            rep(cx, odd, self.max_coord(0)),
+                            rep(cy, odd, self.max_coord(1)),
+                            rep(cz, odd, self.max_coord(2)),
+                        ) else {
+                            continue;
+                        };
+                        let p = [x, y, z];
+                        let exists = match self.lattice {
+                            Lattice::BodyCentred => self.s.bcdl_exists(p),
+                            Lattice::Simple => true,
+                        };
+                        let entry = if exists {
+                            (1 << 16) | u32::from(self.valid_neighbours(p))
+                        } else {
+                            0
+                        };
+                        table[((cx * CLASSES + cy) * CLASSES + cz) * 2 + odd as usize] = entry;
+                    }
+                }
+            }
+        }
+        table
+    }
+
+    /// Whether point `p` exists, and its valid-neighbour mask (0 if it does not exist).
+    #[inline]
+    fn border_info(&self, p: Offset) -> (bool, u16) {
+        if self.border_table.is_empty() {
+            let exists = match self.lattice {
+                Lattice::BodyCentred => self.s.bcdl_exists(p),
+                Lattice::Simple => true,
+            };
+            return (exists, if exists { self.valid_neighbours(p) } else { 0 });
+        }
+        let class = |a: usize| boundary_class(p[a], self.max_coord(a));
+        let odd = match self.lattice {
+            Lattice::BodyCentred => (p[0] & 1) as usize,
+            Lattice::Simple => 0,
+        };
+        let e = self.border_table[((class(0) * CLASSES + class(1)) * CLASSES + class(2)) * 2 + odd];
+        (e >> 16 != 0, e as u16)
+    }
+
+    /// Lattice coordinates of storage slot (sx, sy) of plane z.
+    #[inline]
+    fn coords(&self, sx: usize, sy: usize, z: usize) -> Offset {
+        match self.lattice {
+            Lattice::Simple => [sx as i32, sy as i32, z as i32],
+            Lattice::BodyCentred => {
+                let zz = z as i32 - 1;
+                let odd = zz & 1;
+                [2 * sx as i32 - odd, 2 * sy as i32 - odd, zz]
+            }
         }
     }
 
     /// Lattice coordinates of storage slot (sx, sy) of plane z, and whether the point exists.
     #[inline]
     fn point(&self, sx: usize, sy: usize, z: usize) -> (Offset, bool) {
+        let p = self.coords(sx, sy, z);
         match self.lattice {
-            Lattice::Simple => ([sx as i32, sy as i32, z as i32], true),
-            Lattice::BodyCentred => {
-                let zz = z as i32 - 1;
-                let odd = zz & 1;
-                let p = [2 * sx as i32 - odd, 2 * sy as i32 - odd, zz];
-                (p, self.s.bcdl_exists(p))
-            }
+            Lattice::Simple => (p, true),
+            Lattice::BodyCentred => (p, self.s.bcdl_exists(p)),
         }
     }
 
@@ -701,14 +797,15 @@ fn vertex_plane(
                     counts.edges += 14;
                     continue;
                 }
-                (l.point(sx, sy, z).0, FULL)
+                (l.coords(sx, sy, z), FULL)
             } else {
-                let (p, exists) = l.point(sx, sy, z);
+                let p = l.coords(sx, sy, z);
+                let (exists, valid) = l.border_info(p);
                 if !exists {
                     owned[local] = 0;
                     continue;
                 }
-                (p, l.valid_neighbours(p))
+                (p, valid)
             };
             let (mut own, mut crossed) = (0u16, 0u16);
             let mut bits = valid;
@@ -762,7 +859,7 @@ fn number_plane(
             }
             base[local] = next;
             next += own.count_ones();
-            let (p, _) = l.point(sx, sy, z);
+            let p = l.coords(sx, sy, z);
             let i = z * dx * dy + local;
             let f = v[i];
             let pp = l.position(p);
@@ -874,21 +971,26 @@ fn geometry_layer(
                     tet(anchor, tpl, out);
                 }
             };
-            for j in 0..ny as i32 {
-                for i in 0..nx as i32 {
-                    face([2 * i + 1, 2 * j + 1, 2 * k - 1], 2, out);
+            // The anchors of one row of faces are consecutive storage slots: scan their flags
+            // and visit only the faces whose anchor has a crossed edge.
+            // (Along x, a face anchor moves by one storage slot.)
+            let mut row = |first: Offset, len: usize, axis: usize, out: &mut Vec<u32>| {
+                let start = l.s.bcdl_index(first);
+                for (n, &o) in owned[start..start + len].iter().enumerate() {
+                    if o & HAS_CROSSING != 0 {
+                        face([first[0] + 2 * n as i32, first[1], first[2]], axis, out);
+                    }
                 }
+            };
+            for j in 0..ny as i32 {
+                row([1, 2 * j + 1, 2 * k - 1], nx, 2, out);
             }
             if (k as usize) < nz {
                 for j in 0..ny as i32 {
-                    for f in 0..=nx as i32 {
-                        face([2 * f - 1, 2 * j + 1, 2 * k + 1], 0, out);
-                    }
+                    row([-1, 2 * j + 1, 2 * k + 1], nx + 1, 0, out);
                 }
                 for f in 0..=ny as i32 {
-                    for i in 0..nx as i32 {
-                        face([2 * i + 1, 2 * f - 1, 2 * k + 1], 1, out);
-                    }
+                    row([1, 2 * f - 1, 2 * k + 1], nx, 1, out);
                 }
             }
         }
@@ -899,6 +1001,38 @@ fn geometry_layer(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn border_table_agrees_with_the_point_by_point_rules() {
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[4, 5, 6], [5, 5, 5], [6, 11, 7], [12, 10, 13], [17, 16, 5]] {
+                let settings = crate::ExtractSettings::new(
+                    crate::Grid::new(cells, glam::Vec3::ZERO, glam::Vec3::ONE),
+                    lattice,
+                    crate::Clustering::None,
+                );
+                let mut samples = Samples::default();
+                samples.prepare(&settings);
+                let l = Layout::new(&samples, lattice);
+                let big = (0..3).all(|a| l.max_coord(a) >= 10);
+                assert_eq!(l.border_table.is_empty(), !big, "{cells:?}");
+                let [dx, dy, dz] = samples.dims;
+                for z in 0..dz {
+                    for sy in 0..dy {
+                        for sx in 0..dx {
+                            let (p, exists) = l.point(sx, sy, z);
+                            let valid = if exists { l.valid_neighbours(p) } else { 0 };
+                            assert_eq!(
+                                l.border_info(p),
+                                (exists, valid),
+                                "{lattice:?} {cells:?} at {p:?}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     /// A tiny deterministic generator for the table test (no dependency needed).
     fn lcg(state: &mut u64) -> f32 {
