@@ -47,6 +47,8 @@ pub struct Scratch {
     boundary: Vec<(u32, u32)>,
     used: Vec<bool>,
     local: LocalIds,
+    /// Local ids of the region's triangles, in region order (small-region check).
+    tri_local: Vec<[u8; 3]>,
 }
 
 /// Most regions have at most this many vertices: their check runs on bit sets.
@@ -218,6 +220,14 @@ impl MergeBuffers {
 
     /// Collects the live triangles touching any vertex of `k` into `region`, sorted.
     fn collect_region(&self, k: &[u32], region: &mut Vec<u32>) {
+        self.collect_region_with_repeats(k, region);
+        region.sort_unstable();
+        region.dedup();
+    }
+
+    /// The live triangles touching `k`, unsorted; a triangle with several vertices in `k`
+    /// appears once per such vertex.
+    fn collect_region_with_repeats(&self, k: &[u32], region: &mut Vec<u32>) {
         region.clear();
         for &c in k {
             let mut m = c;
@@ -230,8 +240,6 @@ impl MergeBuffers {
                 m = self.next_member[m as usize];
             }
         }
-        region.sort_unstable();
-        region.dedup();
     }
 
     /// Merges the current vertices `k` (at least two, connected through mesh edges) into `k[0]`,
@@ -278,11 +286,16 @@ impl MergeBuffers {
         new_pos: [f32; 3],
         region: &mut Vec<u32>,
     ) -> usize {
-        self.collect_region(k, region);
+        // Repeats need no sorting out: a repeated triangle has two vertices in `k`, so it dies
+        // the first time and is skipped after.
+        self.collect_region_with_repeats(k, region);
         let v = k[0];
         positions[v as usize] = new_pos;
         let mut dropped = 0;
         for &t in region.iter() {
+            if !self.alive[t as usize] {
+                continue;
+            }
             let tri = &mut self.tris[t as usize];
             let mut inside = 0;
             for x in tri.iter_mut() {
@@ -329,11 +342,14 @@ impl MergeBuffers {
     /// Conditions 2 and 3 for one triangle of R with exactly one vertex `x` in K, far edge
     /// `u w`: the new triangle `v u w` keeps the old one's facing and is not flat (one that was
     /// already flat may stay flat, or open up facing like the region).
+    /// `region_normal` is computed on first need (rarely: only for triangles already flat).
     fn cone_triangle_geometry(
+        &self,
+        region: &[u32],
         positions: &[[f32; 3]],
         [x, u, w]: [u32; 3],
         p: glam::Vec3,
-        region_normal: glam::Vec3,
+        region_normal: &mut Option<glam::Vec3>,
     ) -> Result<(), Reject> {
         let [pu, pw, px] = [u, w, x].map(|i| glam::Vec3::from(positions[i as usize]));
         let mut old = (pu - px).cross(pw - px);
@@ -355,7 +371,7 @@ impl MergeBuffers {
             if is_flat {
                 return Ok(());
             }
-            old = region_normal;
+            old = *region_normal.get_or_insert_with(|| self.region_normal(region, positions));
         }
         if old.dot(new) <= 0.0 || is_flat {
             return Err(Reject::Flip);
@@ -385,6 +401,7 @@ impl MergeBuffers {
     ) -> Option<Result<(), Reject>> {
         let ids = &mut sc.local;
         ids.clear();
+        sc.tri_local.clear();
         let mut out = [0u64; SMALL];
         let mut directed = 0usize;
         for &t in &sc.region {
@@ -394,6 +411,7 @@ impl MergeBuffers {
                 ids.get_or_insert(tri[1])?,
                 ids.get_or_insert(tri[2])?,
             ];
+            sc.tri_local.push(l.map(|x| x as u8));
             for e in 0..3 {
                 let (a, b) = (l[e], l[(e + 1) % 3]);
                 if out[a] & (1 << b) != 0 {
@@ -457,12 +475,12 @@ impl MergeBuffers {
         }
         // The surviving triangles must be exactly the cone over the boundary cycle.
         let p = glam::Vec3::from(new_pos);
-        let region_normal = self.region_normal(&sc.region, positions);
+        let mut region_normal = None;
         let mut used = [0u64; SMALL];
         let mut cone = 0;
-        for &t in &sc.region {
+        for (&t, l) in sc.region.iter().zip(&sc.tri_local) {
             let tri = self.tris[t as usize];
-            let l = tri.map(|v| ids.get(v).unwrap_or(0));
+            let l = l.map(usize::from);
             let in_k = l.map(|x| kmask & (1 << x) != 0);
             if in_k.iter().filter(|&&b| b).count() != 1 {
                 continue;
@@ -475,7 +493,9 @@ impl MergeBuffers {
             used[u] |= 1 << w;
             cone += 1;
             let rotated = [tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]];
-            if let Err(e) = Self::cone_triangle_geometry(positions, rotated, p, region_normal) {
+            if let Err(e) =
+                self.cone_triangle_geometry(&sc.region, positions, rotated, p, &mut region_normal)
+            {
                 return Some(Err(e));
             }
         }
@@ -561,7 +581,7 @@ impl MergeBuffers {
         let mut cone = 0;
         let p = glam::Vec3::from(new_pos);
         // Facing of the whole region, for triangles that were flat before the merge.
-        let region_normal = self.region_normal(&sc.region, positions);
+        let mut region_normal = None;
         for &t in &sc.region {
             let tri = self.tris[t as usize];
             let inside = tri.iter().filter(|x| k.contains(x)).count();
@@ -579,7 +599,7 @@ impl MergeBuffers {
             }
             cone += 1;
             // Geometry: the new triangle keeps the old one's facing and is not flat.
-            Self::cone_triangle_geometry(positions, [x, u, w], p, region_normal)?;
+            self.cone_triangle_geometry(&sc.region, positions, [x, u, w], p, &mut region_normal)?;
         }
         if cone != sc.boundary.len() {
             return Err(Reject::NotACone);
