@@ -9,10 +9,14 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-fn main() {
+fn main() -> Result<(), rmt_extract::ExtractError> {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(64);
-    let reps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(20);
+    let reps: usize = args
+        .get(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20)
+        .max(1);
     let threads: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
     let sphere = Sphere::new(glam::Vec3::ZERO, 0.8);
     let asteroid = Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default());
@@ -31,10 +35,10 @@ fn main() {
                 s.normals = NormalMode::Skip;
                 let mut ex = Extractor::new();
                 let mut mesh = Mesh::default();
-                let first = ex.extract(field, &s, &mut mesh).expect("extracts");
+                let first = ex.extract(field, &s, &mut mesh)?;
                 let (mut v, mut g, mut t) = (Vec::new(), Vec::new(), Vec::new());
                 for _ in 0..reps {
-                    let st = ex.extract_presampled(&s, &mut mesh).expect("extracts");
+                    let st = ex.extract_presampled(&s, &mut mesh)?;
                     v.push(st.t_vertex_s);
                     g.push(st.t_geometry_s);
                     t.push(st.t_total_s);
@@ -54,4 +58,5 @@ fn main() {
             }
         }
     }
+    Ok(())
 }

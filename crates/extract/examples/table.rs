@@ -11,9 +11,13 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-fn main() {
+fn main() -> Result<(), rmt_extract::ExtractError> {
     let args: Vec<String> = std::env::args().collect();
-    let reps: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(20);
+    let reps: usize = args
+        .get(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20)
+        .max(1);
     let threads: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1);
     let sphere = Sphere::new(glam::Vec3::ZERO, 1.0);
     let asteroid = Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default());
@@ -38,7 +42,7 @@ fn main() {
                 let mut mesh = Mesh::default();
                 let mut runs: Vec<Stats> = Vec::new();
                 for _ in 0..reps {
-                    runs.push(ex.extract(field, &settings, &mut mesh).expect("extracts"));
+                    runs.push(ex.extract(field, &settings, &mut mesh)?);
                 }
                 let m = measure(&mesh, &runs[0], Some(field), &settings);
                 if clustering == Clustering::None {
@@ -70,4 +74,5 @@ fn main() {
             }
         }
     }
+    Ok(())
 }
