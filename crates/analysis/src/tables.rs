@@ -54,7 +54,9 @@ impl Cell {
     }
 }
 
-fn number(x: f64, decimals: usize) -> String {
+/// `x` with a fixed number of decimals, trailing zeros kept (`0.50`), never `-0.000`; empty for
+/// non-finite values. Shared with the report crate so that every table prints numbers alike.
+pub fn number(x: f64, decimals: usize) -> String {
     if x.is_finite() {
         // Avoid "-0.000000".
         let text = format!("{x:.decimals$}");
@@ -70,6 +72,23 @@ fn number(x: f64, decimals: usize) -> String {
     } else {
         String::new()
     }
+}
+
+/// CSV text of `header` and `rows` (RFC 4180 quoting, `\n` line ends).
+pub fn csv_text<R, C>(header: &[String], rows: impl IntoIterator<Item = R>) -> Vec<u8>
+where
+    R: IntoIterator<Item = C>,
+    C: AsRef<[u8]>,
+{
+    let mut writer = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    // Writing to a Vec cannot fail; a failure would only drop the record.
+    let _ = writer.write_record(header);
+    for row in rows {
+        let _ = writer.write_record(row);
+    }
+    writer.into_inner().unwrap_or_default()
 }
 
 fn markdown_number(x: f64) -> String {
@@ -109,15 +128,10 @@ pub struct Table {
 impl Table {
     /// The CSV text (RFC 4180 quoting, `\n` line ends).
     pub fn to_csv(&self) -> Vec<u8> {
-        let mut writer = csv::WriterBuilder::new()
-            .terminator(csv::Terminator::Any(b'\n'))
-            .from_writer(Vec::new());
-        // Writing to a Vec cannot fail; a failure would only drop the record.
-        let _ = writer.write_record(&self.csv.header);
-        for row in &self.csv.rows {
-            let _ = writer.write_record(row.iter().map(Cell::csv));
-        }
-        writer.into_inner().unwrap_or_default()
+        csv_text(
+            &self.csv.header,
+            self.csv.rows.iter().map(|row| row.iter().map(Cell::csv)),
+        )
     }
 
     /// The Markdown text.

@@ -690,14 +690,7 @@ pub fn extract(
             // Surfaces through sample points leave crossings on top of each other where a
             // cluster could not take them (near the box, or refused): weld those, under the same
             // check, so no flat triangle is left inside the box.
-            let (welds, dropped) = crate::collapse::collapse_short_edges_tiled(
-                merge,
-                mesh,
-                WELD * settings.grid.h(),
-                tiled.then_some(&keys[..]),
-            );
-            stats.collapses += welds;
-            stats.discarded += dropped;
+            weld_coincident(merge, mesh, settings, tiled.then_some(&keys[..]), stats);
         }
         stats.t_vertex_s += t.elapsed().as_secs_f64();
     } else {
@@ -724,10 +717,7 @@ pub fn extract(
             // meshoptimizer tells vertices apart by index: crossings on top of each other (the
             // surface through sample points) would look like seams and open holes. Weld them
             // first, under the exact check, as integrated clustering does.
-            let (welds, dropped) =
-                crate::collapse::collapse_short_edges(merge, mesh, WELD * settings.grid.h());
-            stats.collapses += welds;
-            stats.discarded += dropped;
+            weld_coincident(merge, mesh, settings, None, stats);
         }
         stats.discarded +=
             crate::simplify::meshopt_simplify(mesh, settings.grid.h(), settings.collapse_threshold);
@@ -738,6 +728,26 @@ pub fn extract(
         + buf.candidates.len() * std::mem::size_of::<Candidate>()
         + if propose { merge.bytes() } else { 0 };
     Ok(())
+}
+
+/// Welds crossings closer than `WELD` grid spacings (crossings on top of each other where the
+/// surface passes through sample points) under the exact check, following the tile rule when
+/// `tile_keys` is given; counted as collapses.
+fn weld_coincident(
+    merge: &mut MergeBuffers,
+    mesh: &mut Mesh,
+    settings: &ExtractSettings,
+    tile_keys: Option<&[u64]>,
+    stats: &mut Stats,
+) {
+    let (welds, dropped) = crate::collapse::collapse_short_edges_tiled(
+        merge,
+        mesh,
+        WELD * settings.grid.h(),
+        tile_keys,
+    );
+    stats.collapses += welds;
+    stats.discarded += dropped;
 }
 
 /// Vertex pass over one storage plane: owned crossings, counts, cluster proposals.

@@ -31,22 +31,10 @@ fn trim_zeros(text: &str) -> String {
     }
 }
 
-/// `v` with a fixed number of decimals, trailing zeros kept (`0.50`), empty for non-finite.
+/// `v` with a fixed number of decimals, trailing zeros kept (`0.50`), empty for non-finite (the
+/// questionnaire tables' rule, [`rmt_analysis::tables::number`]).
 pub fn fixed(v: f64, decimals: usize) -> String {
-    if v.is_finite() {
-        let text = format!("{v:.decimals$}");
-        if text
-            .trim_start_matches('-')
-            .chars()
-            .all(|c| c == '0' || c == '.')
-        {
-            text.trim_start_matches('-').to_string()
-        } else {
-            text
-        }
-    } else {
-        String::new()
-    }
+    rmt_analysis::tables::number(v, decimals)
 }
 
 /// A count with thousands separators (`101,720`); empty for non-finite.

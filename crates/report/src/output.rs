@@ -56,15 +56,7 @@ pub struct TextTable {
 impl TextTable {
     /// The CSV text (RFC 4180 quoting, `\n` line ends).
     pub fn to_csv(&self) -> Vec<u8> {
-        let mut writer = csv::WriterBuilder::new()
-            .terminator(csv::Terminator::Any(b'\n'))
-            .from_writer(Vec::new());
-        // Writing to a Vec cannot fail.
-        let _ = writer.write_record(&self.csv_header);
-        for row in &self.csv_rows {
-            let _ = writer.write_record(row);
-        }
-        writer.into_inner().unwrap_or_default()
+        rmt_analysis::tables::csv_text(&self.csv_header, &self.csv_rows)
     }
 
     /// The Markdown text: a level-2 heading, the notes, then each block.
