@@ -49,6 +49,21 @@ pub struct Scratch {
     local: LocalIds,
     /// Local ids of the region's triangles, in region order (small-region check).
     tri_local: Vec<[u8; 3]>,
+    /// Whether the last check ran on bit sets (then `tri_local` and `kmask` describe `region`).
+    small: bool,
+    /// Local ids of the merged vertices (small-region check).
+    kmask: u64,
+}
+
+/// One triangle's change under a checked merge: its new vertices and whether it dies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TriangleEdit {
+    /// The triangle (original numbering).
+    pub t: u32,
+    /// Its vertices after the merge.
+    pub tri: [u32; 3],
+    /// It had two or more vertices in the merged set and is dropped.
+    pub dead: bool,
 }
 
 /// Most regions have at most this many vertices: their check runs on bit sets.
@@ -126,7 +141,11 @@ pub struct MergeBuffers {
     next_member: Vec<u32>,
     /// The vertex an original vertex has been merged into (itself if none).
     rep: Vec<u32>,
+    /// Original vertices merged into each current vertex (meaningful where `rep[v] == v`).
+    count: Vec<u32>,
     scratch: Scratch,
+    /// The edits of the last checked merge (working memory of [`MergeBuffers::merge`]).
+    edits: Vec<TriangleEdit>,
 }
 
 impl MergeBuffers {
@@ -158,13 +177,20 @@ impl MergeBuffers {
         self.next_member.resize(vertex_count, NONE);
         self.rep.clear();
         self.rep.extend(0..vertex_count as u32);
+        self.count.clear();
+        self.count.resize(vertex_count, 1);
     }
 
     /// Bytes held by the adjacency structures.
     pub fn bytes(&self) -> usize {
         self.tris.len() * 12
             + self.alive.len()
-            + (self.inc_start.len() + self.inc.len() + self.next_member.len() + self.rep.len()) * 4
+            + (self.inc_start.len()
+                + self.inc.len()
+                + self.next_member.len()
+                + self.rep.len()
+                + self.count.len())
+                * 4
     }
 
     /// The vertex that original vertex `v` now belongs to.
@@ -174,6 +200,9 @@ impl MergeBuffers {
 
     /// Number of original vertices merged into current vertex `v` (1 for an unmerged vertex).
     pub fn member_count(&self, v: u32) -> u32 {
+        if self.rep[v as usize] == v {
+            return self.count[v as usize];
+        }
         let mut n = 0;
         let mut m = v;
         while m != NONE {
@@ -255,13 +284,122 @@ impl MergeBuffers {
     ) -> Result<usize, Reject> {
         let mut scratch = std::mem::take(&mut self.scratch);
         let result = if check {
-            self.check(&mut scratch, positions, k, new_pos)
+            let mut edits = std::mem::take(&mut self.edits);
+            edits.clear();
+            let r = self
+                .check_and_record(&mut scratch, positions, k, new_pos, &mut edits)
+                .map(|()| self.apply_recorded(positions, k, new_pos, &edits));
+            self.edits = edits;
+            r
         } else {
-            Ok(())
+            Ok(self.apply(positions, k, new_pos, &mut scratch.region))
         };
-        let result = result.map(|()| self.apply(positions, k, new_pos, &mut scratch.region));
         self.scratch = scratch;
         result
+    }
+
+    /// [`MergeBuffers::check`], and when it passes, appends to `edits` what the merge changes,
+    /// for [`MergeBuffers::apply_recorded`]. Reads only, like `check`: clusters that share no
+    /// triangle can be checked and recorded in parallel and applied afterwards in any order.
+    pub fn check_and_record(
+        &self,
+        scratch: &mut Scratch,
+        positions: &[[f32; 3]],
+        k: &[u32],
+        new_pos: [f32; 3],
+        edits: &mut Vec<TriangleEdit>,
+    ) -> Result<(), Reject> {
+        self.check(scratch, positions, k, new_pos)?;
+        self.record(scratch, k, edits);
+        Ok(())
+    }
+
+    /// Appends to `edits` what merging `k` changes, without any check (the unchecked mode):
+    /// to be applied with [`MergeBuffers::apply_recorded`].
+    pub fn record_unchecked(
+        &self,
+        scratch: &mut Scratch,
+        k: &[u32],
+        edits: &mut Vec<TriangleEdit>,
+    ) {
+        self.collect_region(k, &mut scratch.region);
+        scratch.small = false;
+        self.record(scratch, k, edits);
+    }
+
+    /// The edits of merging `k` for the region in `scratch` (sorted live triangles touching `k`).
+    fn record(&self, scratch: &Scratch, k: &[u32], edits: &mut Vec<TriangleEdit>) {
+        let v = k[0];
+        // `region` is the sorted set of live triangles touching `k`: exactly those `apply`
+        // changes, in the same way.
+        for (i, &t) in scratch.region.iter().enumerate() {
+            let mut tri = self.tris[t as usize];
+            let mut inside = 0;
+            if scratch.small {
+                let l = scratch.tri_local[i];
+                for (x, &lx) in tri.iter_mut().zip(&l) {
+                    if scratch.kmask & (1 << lx) != 0 {
+                        *x = v;
+                        inside += 1;
+                    }
+                }
+            } else {
+                for x in tri.iter_mut() {
+                    if k.contains(x) {
+                        *x = v;
+                        inside += 1;
+                    }
+                }
+            }
+            if inside > 0 {
+                edits.push(TriangleEdit {
+                    t,
+                    tri,
+                    dead: inside >= 2,
+                });
+            }
+        }
+    }
+
+    /// Applies a merge recorded by [`MergeBuffers::check_and_record`] on the mesh as it was
+    /// checked: same result as [`MergeBuffers::apply`]. Returns the triangles dropped.
+    pub fn apply_recorded(
+        &mut self,
+        positions: &mut [[f32; 3]],
+        k: &[u32],
+        new_pos: [f32; 3],
+        edits: &[TriangleEdit],
+    ) -> usize {
+        positions[k[0] as usize] = new_pos;
+        let mut dropped = 0;
+        for e in edits {
+            self.tris[e.t as usize] = e.tri;
+            if e.dead {
+                self.alive[e.t as usize] = false;
+                dropped += 1;
+            }
+        }
+        self.chain_members(k);
+        dropped
+    }
+
+    /// Chains every member of `k[1..]` behind `k[0]` and counts them there.
+    fn chain_members(&mut self, k: &[u32]) {
+        let v = k[0];
+        let mut tail = v;
+        while self.next_member[tail as usize] != NONE {
+            tail = self.next_member[tail as usize];
+        }
+        for &c in &k[1..] {
+            self.count[v as usize] += self.count[c as usize];
+            self.next_member[tail as usize] = c;
+            let mut m = c;
+            while m != NONE {
+                self.rep[m as usize] = v;
+                tail = m;
+                m = self.next_member[m as usize];
+            }
+        }
     }
 
     /// The exact check alone. It only reads, so clusters that share no triangle can be checked in
@@ -309,20 +447,7 @@ impl MergeBuffers {
                 dropped += 1;
             }
         }
-        // Chain every member of k[1..] behind v.
-        let mut tail = v;
-        while self.next_member[tail as usize] != NONE {
-            tail = self.next_member[tail as usize];
-        }
-        for &c in &k[1..] {
-            self.next_member[tail as usize] = c;
-            let mut m = c;
-            while m != NONE {
-                self.rep[m as usize] = v;
-                tail = m;
-                m = self.next_member[m as usize];
-            }
-        }
+        self.chain_members(k);
         dropped
     }
 
@@ -333,8 +458,12 @@ impl MergeBuffers {
         k: &[u32],
         new_pos: [f32; 3],
     ) -> Result<(), Reject> {
+        sc.small = false;
         match self.check_small_region(sc, positions, k, new_pos) {
-            Some(verdict) => verdict,
+            Some(verdict) => {
+                sc.small = true;
+                verdict
+            }
             None => self.check_any_region(sc, positions, k, new_pos),
         }
     }
@@ -429,6 +558,7 @@ impl MergeBuffers {
                 kmask |= 1 << l;
             }
         }
+        sc.kmask = kmask;
         // Reverse edges, then boundary edges (no reverse) per start vertex.
         let mut incoming = [0u64; SMALL];
         for (b, &o) in out.iter().enumerate().take(n) {

@@ -47,6 +47,71 @@ pub struct MtBuffers {
     /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
     /// of padding: 64 points are tested for crossings at once with a few word operations.
     inside: Vec<u64>,
+    /// Working memory of the cluster commit, one per block of candidates.
+    commits: Vec<CommitBlock>,
+    /// One bit per storage slot, set where the point has a crossed edge (owned or not), in
+    /// [`plane_words`] words per storage plane (the last one padding): the numbering and the
+    /// geometry pass visit only these points.
+    crossed: Vec<u64>,
+}
+
+/// Words of the crossed-point bit set per storage plane of `plane` slots: one bit per slot plus
+/// a zero word of padding, so that 64 bits can be read from any slot of the plane.
+fn plane_words(plane: usize) -> usize {
+    plane.div_ceil(64) + 1
+}
+
+/// Calls `visit(n)` for each set bit `n < len` of the bit set `words` counted from bit `start`.
+#[inline(always)]
+fn for_each_bit(words: &[u64], start: usize, len: usize, mut visit: impl FnMut(usize)) {
+    let mut n = 0;
+    while n < len {
+        let take = (len - n).min(64);
+        let mut bits = bits_at(words, start + n);
+        if take < 64 {
+            bits &= (1u64 << take) - 1;
+        }
+        while bits != 0 {
+            visit(n + bits.trailing_zeros() as usize);
+            bits &= bits - 1;
+        }
+        n += take;
+    }
+}
+
+/// Candidates of one colour are checked in blocks of this many, in parallel.
+const COMMIT_BLOCK: usize = 64;
+
+/// A cluster that passed its check, waiting to be applied.
+struct Accepted {
+    /// Its crossings, in [`CommitBlock::members`].
+    members: std::ops::Range<u32>,
+    /// What the merge changes, in [`CommitBlock::edits`].
+    edits: std::ops::Range<u32>,
+    centre: [f32; 3],
+    /// Accepted without one of its proposed crossings.
+    reduced: bool,
+}
+
+/// Checks and records of one block of cluster candidates (kept between extractions).
+#[derive(Default)]
+struct CommitBlock {
+    scratch: crate::merge::Scratch,
+    /// Members of the cluster being tried.
+    k: Vec<u32>,
+    accepted: Vec<Accepted>,
+    members: Vec<u32>,
+    edits: Vec<crate::merge::TriangleEdit>,
+    rejected: usize,
+}
+
+impl CommitBlock {
+    fn clear(&mut self) {
+        self.accepted.clear();
+        self.members.clear();
+        self.edits.clear();
+        self.rejected = 0;
+    }
 }
 
 /// The 64 bits of `words` starting at bit `pos` (bit k = slot `pos + k`); `words` has one word
@@ -417,6 +482,10 @@ pub fn extract(
     buf.triangles.clear();
     let words = slots.div_ceil(64);
     buf.inside.resize(words + 1, 0);
+    let plane = samples.dims[0] * samples.dims[1];
+    let wpp = plane_words(plane);
+    buf.crossed.clear();
+    buf.crossed.resize(wpp * samples.dims[2], 0);
     stats.t_allocation_s += t.elapsed().as_secs_f64();
 
     // Vertex pass, step 0: the inside bits.
@@ -443,13 +512,13 @@ pub fn extract(
     }
 
     // Vertex pass, step 1: owned crossings and proposals per plane.
-    let plane = samples.dims[0] * samples.dims[1];
     let inside = &buf.inside;
     let per_plane: Vec<(PlaneCounts, Vec<Candidate>)> = pool.install(|| {
         buf.owned
             .par_chunks_mut(plane)
+            .zip(buf.crossed.par_chunks_mut(wpp))
             .enumerate()
-            .map(|(z, owned)| {
+            .map(|(z, (owned, crossed))| {
                 vertex_plane(
                     &layout,
                     inside,
@@ -459,6 +528,7 @@ pub fn extract(
                     clustering == Clustering::Integrated,
                     colour_shift,
                     owned,
+                    crossed,
                 )
             })
             .collect()
@@ -492,7 +562,7 @@ pub fn extract(
             chunks.push(head);
             rest = tail;
         }
-        let owned = &buf.owned;
+        let (owned, crossed) = (&buf.owned, &buf.crossed);
         near_points = pool.install(|| {
             buf.base
                 .par_chunks_mut(plane)
@@ -504,6 +574,7 @@ pub fn extract(
                         z,
                         iso,
                         &owned[z * plane..(z + 1) * plane],
+                        &crossed[z * wpp..(z + 1) * wpp],
                         starts[z] as u32,
                         base,
                         out,
@@ -527,7 +598,7 @@ pub fn extract(
         Lattice::BodyCentred => samples.cells[2] + 1,
         Lattice::Simple => samples.cells[2],
     };
-    let (owned, base, positions) = (&buf.owned, &buf.base, &mesh.positions);
+    let (owned, base, crossed, positions) = (&buf.owned, &buf.base, &buf.crossed, &mesh.positions);
     let results: Vec<(Vec<u32>, usize)> = pool.install(|| {
         (0..layers)
             .into_par_iter()
@@ -540,6 +611,7 @@ pub fn extract(
                     settings.keep_cells,
                     owned,
                     base,
+                    crossed,
                     positions,
                     &mut out,
                 );
@@ -568,7 +640,14 @@ pub fn extract(
         merge.load(total, &buf.triangles);
         // Clusters grouped by colour, storage order inside a colour.
         buf.candidates.sort_by_key(|c| c.colour);
-        let (owned, base) = (&buf.owned, &buf.base);
+        let MtBuffers {
+            owned,
+            base,
+            candidates,
+            commits,
+            ..
+        } = &mut *buf;
+        let (owned, base): (&[u16], &[u32]) = (owned, base);
         let members =
             |c: &Candidate, island: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
                 k.clear();
@@ -584,60 +663,100 @@ pub fn extract(
                 }
                 (sum / k.len() as f32).to_array()
             };
-        let mut k = Vec::with_capacity(14);
-        let mut region = Vec::new();
-        let mut accepted = Vec::new();
-        for group in buf.candidates.chunk_by(|a, b| a.colour == b.colour) {
+        for group in candidates.chunk_by(|a, b| a.colour == b.colour) {
             // Clusters of one colour share no tetrahedron, hence no triangle: check them in
-            // parallel against the mesh as the earlier colours left it, then apply in order.
+            // parallel against the mesh as the earlier colours left it, recording what each
+            // accepted merge changes, then apply the records in storage order.
+            let blocks = group.len().div_ceil(COMMIT_BLOCK);
+            if commits.len() < blocks {
+                commits.resize_with(blocks, CommitBlock::default);
+            }
             let positions = &mesh.positions;
             let merge_ref = &*merge;
-            pool.install(|| {
-                group
-                    .par_iter()
-                    .map_init(
-                        || (crate::merge::Scratch::default(), Vec::with_capacity(14)),
-                        |(scratch, k), c| {
-                            let mut try_island = |island: u16| {
-                                let centre = members(c, island, positions, k);
-                                allowed(k, &keys)
-                                    && (!check
-                                        || merge_ref.check(scratch, positions, k, centre).is_ok())
-                            };
-                            if try_island(c.island) {
-                                return Some(c.island);
+            let keys = &keys;
+            let try_block = |b: &mut CommitBlock, cands: &[Candidate]| {
+                b.clear();
+                for c in cands {
+                    let try_island = |island: u16, b: &mut CommitBlock| -> bool {
+                        let centre = members(c, island, positions, &mut b.k);
+                        if !allowed(&b.k, keys) {
+                            return false;
+                        }
+                        let first_edit = b.edits.len();
+                        if check {
+                            let k = &b.k;
+                            if merge_ref
+                                .check_and_record(
+                                    &mut b.scratch,
+                                    positions,
+                                    k,
+                                    centre,
+                                    &mut b.edits,
+                                )
+                                .is_err()
+                            {
+                                return false;
                             }
-                            // Refused: try the cluster without one of its crossings, in bit
-                            // order, before giving up (keeps most of the merge where one
-                            // crossing is the trouble).
-                            if c.island.count_ones() > 2 {
-                                let mut bits = c.island;
-                                while bits != 0 {
-                                    let sub = c.island & !(bits & bits.wrapping_neg());
-                                    bits &= bits - 1;
-                                    if try_island(sub) {
-                                        return Some(sub);
-                                    }
-                                }
+                        } else {
+                            merge_ref.record_unchecked(&mut b.scratch, &b.k, &mut b.edits);
+                        }
+                        let first_member = b.members.len();
+                        b.members.extend_from_slice(&b.k);
+                        b.accepted.push(Accepted {
+                            members: first_member as u32..b.members.len() as u32,
+                            edits: first_edit as u32..b.edits.len() as u32,
+                            centre,
+                            reduced: island != c.island,
+                        });
+                        true
+                    };
+                    if try_island(c.island, b) {
+                        continue;
+                    }
+                    // Refused: try the cluster without one of its crossings, in bit order,
+                    // before giving up (keeps most of the merge where one crossing is the
+                    // trouble).
+                    let mut done = false;
+                    if c.island.count_ones() > 2 {
+                        let mut bits = c.island;
+                        while bits != 0 {
+                            let sub = c.island & !(bits & bits.wrapping_neg());
+                            bits &= bits - 1;
+                            if try_island(sub, b) {
+                                done = true;
+                                break;
                             }
-                            None
-                        },
-                    )
-                    .collect_into_vec(&mut accepted)
-            });
-            for (c, island) in group.iter().zip(&accepted) {
-                match *island {
-                    Some(island) => {
-                        let centre = members(c, island, &mesh.positions, &mut k);
-                        stats.discarded +=
-                            merge.apply(&mut mesh.positions, &k, centre, &mut region);
-                        stats.clusters_committed += 1;
-                        if island != c.island {
-                            stats.clusters_reduced += 1;
                         }
                     }
-                    None => stats.clusters_rejected_check += 1,
+                    if !done {
+                        b.rejected += 1;
+                    }
                 }
+            };
+            if pool.current_num_threads() == 1 {
+                for (b, cands) in commits.iter_mut().zip(group.chunks(COMMIT_BLOCK)) {
+                    try_block(b, cands);
+                }
+            } else {
+                pool.install(|| {
+                    commits[..blocks]
+                        .par_iter_mut()
+                        .zip(group.par_chunks(COMMIT_BLOCK))
+                        .for_each(|(b, cands)| try_block(b, cands));
+                });
+            }
+            for b in &commits[..blocks] {
+                for a in &b.accepted {
+                    stats.discarded += merge.apply_recorded(
+                        &mut mesh.positions,
+                        &b.members[a.members.start as usize..a.members.end as usize],
+                        a.centre,
+                        &b.edits[a.edits.start as usize..a.edits.end as usize],
+                    );
+                    stats.clusters_committed += 1;
+                    stats.clusters_reduced += usize::from(a.reduced);
+                }
+                stats.clusters_rejected_check += b.rejected;
             }
         }
         if check {
@@ -750,7 +869,8 @@ fn weld_coincident(
     stats.discarded += dropped;
 }
 
-/// Vertex pass over one storage plane: owned crossings, counts, cluster proposals.
+/// Vertex pass over one storage plane: owned crossings, counts, cluster proposals, and the
+/// plane's crossed-point bits (`crossed`, [`plane_words`] words, all zero on entry).
 #[allow(clippy::too_many_arguments)]
 fn vertex_plane(
     l: &Layout,
@@ -761,6 +881,7 @@ fn vertex_plane(
     pinch_rule: bool,
     colour_shift: Offset,
     owned: &mut [u16],
+    crossed_bits: &mut [u64],
 ) -> (PlaneCounts, Vec<Candidate>) {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
@@ -779,44 +900,18 @@ fn vertex_plane(
         let (lo, hi) = if row_regular { (lo, hi) } else { (dx, dx) };
         let row = z * dx * dy + sy * dx;
         let delta = &l.delta[odd];
-        // Fast path, 64 points at a time: which of them have a crossed edge at all.
-        let (mut block_start, mut block_end, mut block) = (0usize, 0usize, 0u64);
-        for sx in 0..dx {
+        // One point with at least one crossed edge: owned crossings, flags, proposals.
+        let point = |sx: usize,
+                     p: Offset,
+                     valid: u16,
+                     owned: &mut [u16],
+                     crossed_bits: &mut [u64],
+                     counts: &mut PlaneCounts,
+                     cands: &mut Vec<Candidate>| {
             let local = sy * dx + sx;
             let i = row + sx;
             let f = v[i];
             let inside = f < iso;
-            let (p, valid) = if sx >= lo && sx < hi {
-                if sx >= block_end {
-                    block_start = sx;
-                    block_end = (sx + 64).min(hi);
-                    block = crossed_points(inside_bits, i, delta, block_end - sx);
-                }
-                if (block >> (sx - block_start)) & 1 == 0 {
-                    owned[local] = 0;
-                    counts.edges += 14;
-                    continue;
-                }
-                // Fast path: all 14 edges exist.
-                let mut crossed = 0u16;
-                for (d, &off) in delta.iter().enumerate() {
-                    crossed |= (((v[(i as isize + off) as usize] < iso) != inside) as u16) << d;
-                }
-                if crossed == 0 {
-                    owned[local] = 0;
-                    counts.edges += 14;
-                    continue;
-                }
-                (l.coords(sx, sy, z), FULL)
-            } else {
-                let p = l.coords(sx, sy, z);
-                let (exists, valid) = l.border_info(p);
-                if !exists {
-                    owned[local] = 0;
-                    continue;
-                }
-                (p, valid)
-            };
             let (mut own, mut crossed) = (0u16, 0u16);
             let mut bits = valid;
             while bits != 0 {
@@ -831,14 +926,61 @@ fn vertex_plane(
                 }
             }
             owned[local] = own | if crossed != 0 { HAS_CROSSING } else { 0 };
+            if crossed != 0 {
+                crossed_bits[local >> 6] |= 1 << (local & 63);
+            }
             counts.crossings += own.count_ones() as usize;
-            counts.edges += valid.count_ones() as usize;
             if propose && own.count_ones() >= 2 {
                 let colour = lattice::colour(l.lattice, add(p, colour_shift)) as u8;
                 counts.proposals.add(cluster::propose(
-                    l.t, i as u32, colour, valid, own, crossed, pinch_rule, &mut cands,
+                    l.t, i as u32, colour, valid, own, crossed, pinch_rule, cands,
                 ));
             }
+        };
+        // Border points one by one (existence and valid neighbours from the border table).
+        let border = |sx: usize,
+                      owned: &mut [u16],
+                      crossed_bits: &mut [u64],
+                      counts: &mut PlaneCounts,
+                      cands: &mut Vec<Candidate>| {
+            let p = l.coords(sx, sy, z);
+            let (exists, valid) = l.border_info(p);
+            if !exists {
+                owned[sy * dx + sx] = 0;
+                return;
+            }
+            counts.edges += valid.count_ones() as usize;
+            point(sx, p, valid, owned, crossed_bits, counts, cands);
+        };
+        for sx in 0..lo.min(dx) {
+            border(sx, owned, crossed_bits, &mut counts, &mut cands);
+        }
+        if lo < hi {
+            // Regular run, 64 points at a time: only the points with a crossed edge are visited.
+            owned[sy * dx + lo..sy * dx + hi].fill(0);
+            counts.edges += 14 * (hi - lo);
+            let mut sx = lo;
+            while sx < hi {
+                let len = (hi - sx).min(64);
+                let mut block = crossed_points(inside_bits, row + sx, delta, len);
+                while block != 0 {
+                    let x = sx + block.trailing_zeros() as usize;
+                    block &= block - 1;
+                    point(
+                        x,
+                        l.coords(x, sy, z),
+                        FULL,
+                        owned,
+                        crossed_bits,
+                        &mut counts,
+                        &mut cands,
+                    );
+                }
+                sx += len;
+            }
+        }
+        for sx in hi.max(lo.min(dx))..dx {
+            border(sx, owned, crossed_bits, &mut counts, &mut cands);
         }
     }
     (counts, cands)
@@ -846,11 +988,13 @@ fn vertex_plane(
 
 /// Numbers the crossings of one plane from `start` and writes their positions. Returns how many
 /// crossings lie within `WELD` of their owner (surfaces through sample points).
+#[allow(clippy::too_many_arguments)]
 fn number_plane(
     l: &Layout,
     z: usize,
     iso: f32,
     owned: &[u16],
+    crossed: &[u64],
     start: u32,
     base: &mut [u32],
     out: &mut [[f32; 3]],
@@ -860,12 +1004,12 @@ fn number_plane(
     let mut next = start;
     let mut w = 0;
     let mut near_points = 0;
-    for sy in 0..dy {
-        for sx in 0..dx {
-            let local = sy * dx + sx;
+    for_each_bit(crossed, 0, dx * dy, |local| {
+        let (sy, sx) = (local / dx, local % dx);
+        {
             let own = owned[local] & OWNED_BITS;
             if own == 0 {
-                continue;
+                return;
             }
             base[local] = next;
             next += own.count_ones();
@@ -885,7 +1029,7 @@ fn number_plane(
                 w += 1;
             }
         }
-    }
+    });
     near_points
 }
 
@@ -898,11 +1042,14 @@ fn geometry_layer(
     keep: Option<CellRange>,
     owned: &[u16],
     base: &[u32],
+    crossed: &[u64],
     positions: &[[f32; 3]],
     out: &mut Vec<u32>,
 ) -> usize {
     let v = &l.s.values;
     let [nx, ny, nz] = l.s.cells;
+    let plane = l.s.dims[0] * l.s.dims[1];
+    let wpp = plane_words(plane);
     let mut processed = 0;
     let mut tet = |anchor: usize, tpl: &TetTemplate, out: &mut Vec<u32>| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
@@ -986,11 +1133,10 @@ fn geometry_layer(
             // (Along x, a face anchor moves by one storage slot.)
             let mut row = |first: Offset, len: usize, axis: usize, out: &mut Vec<u32>| {
                 let start = l.s.bcdl_index(first);
-                for (n, &o) in owned[start..start + len].iter().enumerate() {
-                    if o & HAS_CROSSING != 0 {
-                        face([first[0] + 2 * n as i32, first[1], first[2]], axis, out);
-                    }
-                }
+                let (z, local) = (start / plane, start % plane);
+                for_each_bit(&crossed[z * wpp..(z + 1) * wpp], local, len, |n| {
+                    face([first[0] + 2 * n as i32, first[1], first[2]], axis, out);
+                });
             };
             for j in 0..ny as i32 {
                 row([1, 2 * j + 1, 2 * k - 1], nx, 2, out);
