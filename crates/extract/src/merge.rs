@@ -39,7 +39,6 @@ pub enum Reject {
 }
 
 /// Working memory of one check; one per thread when checks run in parallel.
-#[derive(Default)]
 pub struct Scratch {
     region: Vec<u32>,
     edges: Vec<(u32, u32)>,
@@ -53,6 +52,12 @@ pub struct Scratch {
     small: bool,
     /// Local ids of the merged vertices (small-region check).
     kmask: u64,
+    /// Directed edges of the region by start vertex, by end vertex, and boundary edges by start
+    /// vertex, as bit sets of local ids (small-region check; entry `a` is cleared when local id
+    /// `a` is handed out, so nothing is cleared per check).
+    out: [u64; SMALL],
+    incoming: [u64; SMALL],
+    bnd: [u64; SMALL],
 }
 
 /// One triangle's change under a checked merge: its new vertices and whether it dies.
@@ -64,6 +69,25 @@ pub struct TriangleEdit {
     pub tri: [u32; 3],
     /// It had two or more vertices in the merged set and is dropped.
     pub dead: bool,
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Self {
+            region: Vec::new(),
+            edges: Vec::new(),
+            verts: Vec::new(),
+            boundary: Vec::new(),
+            used: Vec::new(),
+            local: LocalIds::default(),
+            tri_local: Vec::new(),
+            small: false,
+            kmask: 0,
+            out: [0; SMALL],
+            incoming: [0; SMALL],
+            bnd: [0; SMALL],
+        }
+    }
 }
 
 /// Most regions have at most this many vertices: their check runs on bit sets.
@@ -531,15 +555,20 @@ impl MergeBuffers {
         let ids = &mut sc.local;
         ids.clear();
         sc.tri_local.clear();
-        let mut out = [0u64; SMALL];
+        let (out, incoming, bnd) = (&mut sc.out, &mut sc.incoming, &mut sc.bnd);
         let mut directed = 0usize;
         for &t in &sc.region {
             let tri = self.tris[t as usize];
-            let l = [
-                ids.get_or_insert(tri[0])?,
-                ids.get_or_insert(tri[1])?,
-                ids.get_or_insert(tri[2])?,
-            ];
+            let mut l = [0usize; 3];
+            for (x, &v) in l.iter_mut().zip(&tri) {
+                let before = ids.filled.len();
+                *x = ids.get_or_insert(v)?;
+                if *x == before {
+                    // A new local id: clear its rows.
+                    out[*x] = 0;
+                    incoming[*x] = 0;
+                }
+            }
             sc.tri_local.push(l.map(|x| x as u8));
             for e in 0..3 {
                 let (a, b) = (l[e], l[(e + 1) % 3]);
@@ -548,6 +577,7 @@ impl MergeBuffers {
                     return Some(Err(Reject::NotADisc));
                 }
                 out[a] |= 1 << b;
+                incoming[b] |= 1 << a;
                 directed += 1;
             }
         }
@@ -559,17 +589,7 @@ impl MergeBuffers {
             }
         }
         sc.kmask = kmask;
-        // Reverse edges, then boundary edges (no reverse) per start vertex.
-        let mut incoming = [0u64; SMALL];
-        for (b, &o) in out.iter().enumerate().take(n) {
-            let mut bits = o;
-            while bits != 0 {
-                let a = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                incoming[a] |= 1 << b;
-            }
-        }
-        let mut bnd = [0u64; SMALL];
+        // Boundary edges (no reverse) per start vertex.
         let mut boundary = 0usize;
         for a in 0..n {
             bnd[a] = out[a] & !incoming[a];
@@ -606,7 +626,8 @@ impl MergeBuffers {
         // The surviving triangles must be exactly the cone over the boundary cycle.
         let p = glam::Vec3::from(new_pos);
         let mut region_normal = None;
-        let mut used = [0u64; SMALL];
+        // Each boundary vertex starts one boundary edge: one bit per start vertex marks it used.
+        let mut used = 0u64;
         let mut cone = 0;
         for (&t, l) in sc.region.iter().zip(&sc.tri_local) {
             let tri = self.tris[t as usize];
@@ -617,10 +638,10 @@ impl MergeBuffers {
             }
             let r = in_k.iter().position(|&b| b).unwrap_or(0);
             let (u, w) = (l[(r + 1) % 3], l[(r + 2) % 3]);
-            if bnd[u] & (1 << w) == 0 || used[u] & (1 << w) != 0 {
+            if bnd[u] & (1 << w) == 0 || used & (1 << u) != 0 {
                 return Some(Err(Reject::NotACone));
             }
-            used[u] |= 1 << w;
+            used |= 1 << u;
             cone += 1;
             let rotated = [tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]];
             if let Err(e) =

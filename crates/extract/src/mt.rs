@@ -1108,7 +1108,9 @@ fn geometry_layer(
         Lattice::BodyCentred => {
             let k = k as i32;
             // Faces perpendicular to z at plane k, then (inside layer k) to x and to y.
-            let mut face = |a: Offset, axis: usize, out: &mut Vec<u32>| {
+            // A face whose anchor A has a crossed edge (B and the 4 face corners are
+            // neighbours of A: without one, no surface in the face's 4 tetrahedra).
+            let mut face = |a: Offset, anchor: usize, axis: usize, out: &mut Vec<u32>| {
                 if let Some(r) = keep {
                     // Anchor cell: above the face along `axis` (clamped into the grid).
                     let mut c = a.map(|x| ((x - 1) / 2) as usize);
@@ -1117,14 +1119,7 @@ fn geometry_layer(
                         return;
                     }
                 }
-                let anchor = l.s.bcdl_index(a);
-                let tpls = &l.tets[4 * axis..4 * axis + 4];
-                // B and the 4 face corners are neighbours of A: no crossed edge at A, no
-                // surface in the face's 4 tetrahedra.
-                if owned[anchor] & HAS_CROSSING == 0 {
-                    return;
-                }
-                for tpl in tpls {
+                for tpl in &l.tets[4 * axis..4 * axis + 4] {
                     tet(anchor, tpl, out);
                 }
             };
@@ -1133,9 +1128,16 @@ fn geometry_layer(
             // (Along x, a face anchor moves by one storage slot.)
             let mut row = |first: Offset, len: usize, axis: usize, out: &mut Vec<u32>| {
                 let start = l.s.bcdl_index(first);
-                let (z, local) = (start / plane, start % plane);
+                // Storage plane and slot in the plane (see `Samples::bcdl_index`).
+                let z = (first[2] + 1) as usize;
+                let local = start - z * plane;
                 for_each_bit(&crossed[z * wpp..(z + 1) * wpp], local, len, |n| {
-                    face([first[0] + 2 * n as i32, first[1], first[2]], axis, out);
+                    face(
+                        [first[0] + 2 * n as i32, first[1], first[2]],
+                        start + n,
+                        axis,
+                        out,
+                    );
                 });
             };
             for j in 0..ny as i32 {
