@@ -44,6 +44,8 @@ pub struct MtBuffers {
     candidates: Vec<Candidate>,
     /// Triangles of the geometry pass, as crossing ids.
     triangles: Vec<u32>,
+    /// Triangles of each geometry layer, concatenated in order into `triangles`.
+    layers: Vec<Vec<u32>>,
     /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
     /// of padding: 64 points are tested for crossings at once with a few word operations.
     inside: Vec<u64>,
@@ -598,13 +600,17 @@ pub fn extract(
         Lattice::BodyCentred => samples.cells[2] + 1,
         Lattice::Simple => samples.cells[2],
     };
+    if buf.layers.len() < layers {
+        buf.layers.resize_with(layers, Vec::new);
+    }
     let (owned, base, crossed, positions) = (&buf.owned, &buf.base, &buf.crossed, &mesh.positions);
-    let results: Vec<(Vec<u32>, usize)> = pool.install(|| {
-        (0..layers)
-            .into_par_iter()
-            .map(|k| {
-                let mut out = Vec::new();
-                let processed = geometry_layer(
+    stats.tetrahedra_processed += pool.install(|| {
+        buf.layers[..layers]
+            .par_iter_mut()
+            .enumerate()
+            .map(|(k, out)| {
+                out.clear();
+                geometry_layer(
                     &layout,
                     k,
                     iso,
@@ -613,15 +619,13 @@ pub fn extract(
                     base,
                     crossed,
                     positions,
-                    &mut out,
-                );
-                (out, processed)
+                    out,
+                )
             })
-            .collect()
+            .sum::<usize>()
     });
-    for (tris, processed) in &results {
+    for tris in &buf.layers[..layers] {
         buf.triangles.extend_from_slice(tris);
-        stats.tetrahedra_processed += processed;
     }
     let [nx, ny, nz] = samples.cells;
     stats.tetrahedra_total = match lattice {
@@ -843,9 +847,10 @@ pub fn extract(
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     }
 
-    stats.bytes_edges = (buf.owned.len() * 2 + buf.base.len() * 4 + buf.inside.len() * 8)
-        + buf.candidates.len() * std::mem::size_of::<Candidate>()
-        + if propose { merge.bytes() } else { 0 };
+    stats.bytes_edges =
+        (buf.owned.len() * 2 + buf.base.len() * 4 + buf.inside.len() * 8 + buf.crossed.len() * 8)
+            + buf.candidates.len() * std::mem::size_of::<Candidate>()
+            + if propose { merge.bytes() } else { 0 };
     Ok(())
 }
 
