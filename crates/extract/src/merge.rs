@@ -893,4 +893,93 @@ pub(crate) mod tests {
         m.load(p.len(), &idx);
         assert_eq!(m.merge(&mut p, &[0, 2], [0.5, 0.5, 0.0], false), Ok(2));
     }
+
+    /// The octahedron subdivided `levels` times, on the unit sphere.
+    fn subdivided_octahedron(levels: usize) -> (Vec<[f32; 3]>, Vec<u32>) {
+        let (mut p, mut idx) = octahedron();
+        for _ in 0..levels {
+            let mut mid = std::collections::HashMap::new();
+            let mut next = Vec::new();
+            let mut midpoint = |a: u32, b: u32, p: &mut Vec<[f32; 3]>| -> u32 {
+                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    let m = (glam::Vec3::from(p[a as usize]) + glam::Vec3::from(p[b as usize]))
+                        .normalize();
+                    p.push(m.to_array());
+                    (p.len() - 1) as u32
+                })
+            };
+            for t in idx.chunks_exact(3) {
+                let (a, b, c) = (t[0], t[1], t[2]);
+                let (ab, bc, ca) = (
+                    midpoint(a, b, &mut p),
+                    midpoint(b, c, &mut p),
+                    midpoint(c, a, &mut p),
+                );
+                next.extend([a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca]);
+            }
+            idx = next;
+        }
+        (p, idx)
+    }
+
+    #[test]
+    fn recorded_merges_apply_exactly_like_direct_ones() {
+        // The same sequence of merges (vertex v with its lowest-numbered neighbour, then that
+        // cluster with another neighbour), once checked, recorded and applied from the record,
+        // once applied directly after the same check: identical meshes, counts and members.
+        let (p0, idx) = subdivided_octahedron(2);
+        let (mut recorded, mut direct) = (MergeBuffers::default(), MergeBuffers::default());
+        recorded.load(p0.len(), &idx);
+        direct.load(p0.len(), &idx);
+        let (mut pr, mut pd) = (p0.clone(), p0.clone());
+        let mut scratch = Scratch::default();
+        let (mut edits, mut region, mut near) = (Vec::new(), Vec::new(), Vec::new());
+        let mut merged = 0;
+        for v in 0..p0.len() as u32 {
+            if recorded.rep(v) != v {
+                continue;
+            }
+            recorded.neighbours(v, &mut near);
+            let Some(&u) = near.first() else { continue };
+            let k = [v, u];
+            let centre = ((glam::Vec3::from(pr[v as usize]) + glam::Vec3::from(pr[u as usize]))
+                * 0.5)
+                .to_array();
+            edits.clear();
+            let r = recorded.check_and_record(&mut scratch, &pr, &k, centre, &mut edits);
+            assert_eq!(r, direct.check(&mut scratch, &pd, &k, centre));
+            if r.is_ok() {
+                let a = recorded.apply_recorded(&mut pr, &k, centre, &edits);
+                let b = direct.apply(&mut pd, &k, centre, &mut region);
+                assert_eq!(a, b, "dropped triangles of merge {v}-{u}");
+                merged += 1;
+            }
+            assert_eq!(pr, pd);
+            assert_eq!(recorded.tris, direct.tris);
+            assert_eq!(recorded.alive, direct.alive);
+            assert_eq!(recorded.rep, direct.rep);
+            assert_eq!(recorded.next_member, direct.next_member);
+        }
+        assert!(merged > 10, "only {merged} merges were tried");
+        // Member counts kept per vertex agree with the member chains.
+        for v in 0..p0.len() as u32 {
+            if recorded.rep(v) == v {
+                let mut n = 0;
+                let mut m = v;
+                while m != NONE {
+                    n += 1;
+                    m = recorded.next_member[m as usize];
+                }
+                assert_eq!(recorded.member_count(v), n, "vertex {v}");
+            }
+        }
+        let (mut out_p, mut out_i) = (pr.clone(), Vec::new());
+        let v = recorded.finish(&mut out_p, &mut out_i);
+        let f = out_i.len() / 3;
+        assert_eq!(
+            v as i64 - (3 * f / 2) as i64 + f as i64,
+            2,
+            "still a sphere"
+        );
+    }
 }

@@ -1166,6 +1166,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn for_each_bit_visits_exactly_the_set_bits_from_any_start() {
+        let mut words = vec![0u64; 6];
+        let set: Vec<usize> = (0..320).filter(|i| (i * 7 + i / 3) % 5 == 0).collect();
+        for &i in &set {
+            words[i >> 6] |= 1 << (i & 63);
+        }
+        for start in [0, 1, 13, 63, 64, 65, 200] {
+            for len in [0, 1, 5, 63, 64, 65, 100, 320 - start] {
+                if start + len > 320 {
+                    continue;
+                }
+                let mut seen = Vec::new();
+                for_each_bit(&words, start, len, |n| seen.push(start + n));
+                let want: Vec<usize> = set
+                    .iter()
+                    .copied()
+                    .filter(|&i| i >= start && i < start + len)
+                    .collect();
+                assert_eq!(seen, want, "start {start} len {len}");
+            }
+        }
+    }
+
+    #[test]
     fn border_table_agrees_with_the_point_by_point_rules() {
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             for cells in [[4, 5, 6], [5, 5, 5], [6, 11, 7], [12, 10, 13], [17, 16, 5]] {
