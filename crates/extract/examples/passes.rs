@@ -1,5 +1,14 @@
 //! Median vertex / geometry pass times on pre-sampled values (sampling excluded), per sample
-//! point: `cargo run --release -p rmt-extract --example passes -- [n] [reps] [threads]`.
+//! point, for the sphere and the asteroid on both lattices, clustering none / integrated /
+//! integrated-unchecked:
+//!
+//! ```text
+//! cargo run --release -p rmt-extract --example passes -- [n] [reps] [threads] [filter]
+//! ```
+//!
+//! `filter` keeps the configurations whose name (`field lattice clustering`, e.g.
+//! `asteroid bcdl integrated`) contains it: `passes 64 50 1 "asteroid bcdl integrated"` repeats
+//! one configuration, for a profiler.
 use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode};
 use rmt_fields::{Asteroid, AsteroidParams, ScalarField, Sphere};
 use rmt_mesh::Mesh;
@@ -9,17 +18,33 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-fn main() -> Result<(), rmt_extract::ExtractError> {
+/// Argument `i` parsed, or `default` when it is absent; an error naming it when it is malformed.
+fn arg<T: std::str::FromStr>(
+    args: &[String],
+    i: usize,
+    name: &str,
+    default: T,
+) -> Result<T, Box<dyn std::error::Error>> {
+    match args.get(i) {
+        None => Ok(default),
+        Some(s) => s.parse().map_err(|_| {
+            format!("argument {i} ({name}): expected a whole number, got {s:?}").into()
+        }),
+    }
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(64);
-    let reps: usize = args
-        .get(2)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(20)
-        .max(1);
-    let threads: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
+    let n: usize = arg(&args, 1, "n", 64)?;
+    let reps: usize = arg(&args, 2, "reps", 20)?;
+    let threads: usize = arg(&args, 3, "threads", 1)?;
+    let filter = args.get(4).map_or("", String::as_str);
+    if n == 0 || reps == 0 || threads == 0 {
+        return Err("n, reps and threads must be at least 1".into());
+    }
     let sphere = Sphere::new(glam::Vec3::ZERO, 0.8);
     let asteroid = Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default());
+    let mut shown = 0;
     for (name, field) in [
         ("sphere", &sphere as &dyn ScalarField),
         ("asteroid", &asteroid),
@@ -30,6 +55,11 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                 Clustering::Integrated,
                 Clustering::IntegratedUnchecked,
             ] {
+                let label = format!("{name} {} {}", lattice.name(), clustering.name());
+                if !label.contains(filter) {
+                    continue;
+                }
+                shown += 1;
                 let mut s = ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);
                 s.threads = threads;
                 s.normals = NormalMode::Skip;
@@ -45,11 +75,9 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                 }
                 let pts = first.sample_points as f64;
                 println!(
-                    "{name:8} {:6} {:10} n={n} threads={threads}: vertex {:7.2} ms  geometry {:7.2} ms  total {:7.2} ms  = {:6.1} ns/point ({} points, {} triangles)",
-                    lattice.name(),
-                    clustering.name(),
-                    median(v.clone()) * 1e3,
-                    median(g.clone()) * 1e3,
+                    "{label:36} n={n} threads={threads}: vertex {:.2} ms  geometry {:.2} ms  total {:.2} ms = {:.1} ns/point ({} points, {} triangles)",
+                    median(v) * 1e3,
+                    median(g) * 1e3,
                     median(t.clone()) * 1e3,
                     median(t) * 1e9 / pts,
                     first.sample_points,
@@ -57,6 +85,9 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                 );
             }
         }
+    }
+    if shown == 0 {
+        return Err(format!("no configuration matches {filter:?}").into());
     }
     Ok(())
 }

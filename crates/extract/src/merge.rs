@@ -847,29 +847,7 @@ pub(crate) mod tests {
     #[test]
     fn merging_on_a_fine_sphere_keeps_it_closed() {
         // Subdivide the octahedron once (each triangle into 4), then merge an edge.
-        let (p0, idx0) = octahedron();
-        let mut p = p0.clone();
-        let mut idx = Vec::new();
-        let mut mid = std::collections::HashMap::new();
-        let mut midpoint = |a: u32, b: u32, p: &mut Vec<[f32; 3]>| -> u32 {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let (x, y) = (
-                    glam::Vec3::from(p[a as usize]),
-                    glam::Vec3::from(p[b as usize]),
-                );
-                p.push(((x + y) * 0.5).normalize().to_array());
-                (p.len() - 1) as u32
-            })
-        };
-        for t in idx0.chunks_exact(3) {
-            let (a, b, c) = (t[0], t[1], t[2]);
-            let (ab, bc, ca) = (
-                midpoint(a, b, &mut p),
-                midpoint(b, c, &mut p),
-                midpoint(c, a, &mut p),
-            );
-            idx.extend([a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca]);
-        }
+        let (mut p, idx) = subdivided_octahedron(1);
         let mut m = MergeBuffers::default();
         m.load(p.len(), &idx);
         // Vertex 0 = (1,0,0) and the midpoint toward (0,1,0).
