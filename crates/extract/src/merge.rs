@@ -170,27 +170,41 @@ pub struct MergeBuffers {
     scratch: Scratch,
     /// The edits of the last checked merge (working memory of [`MergeBuffers::merge`]).
     edits: Vec<TriangleEdit>,
+    /// Fill cursors of the incidence lists (working memory of [`MergeBuffers::load_parts`]).
+    fill: Vec<u32>,
 }
 
 impl MergeBuffers {
     /// Loads `vertex_count` vertices and the triangles `indices` (three per triangle).
     pub fn load(&mut self, vertex_count: usize, indices: &[u32]) {
+        self.load_parts(vertex_count, &[indices]);
+    }
+
+    /// Loads `vertex_count` vertices and the triangles of `parts` concatenated in order (three
+    /// indices per triangle in each part), without concatenating them first.
+    pub fn load_parts<P: AsRef<[u32]>>(&mut self, vertex_count: usize, parts: &[P]) {
         self.tris.clear();
-        self.tris
-            .extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+        for part in parts {
+            self.tris
+                .extend(part.as_ref().chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+        }
         self.alive.clear();
         self.alive.resize(self.tris.len(), true);
         self.inc_start.clear();
         self.inc_start.resize(vertex_count + 1, 0);
-        for &v in indices {
-            self.inc_start[v as usize + 1] += 1;
+        for tri in &self.tris {
+            for &v in tri {
+                self.inc_start[v as usize + 1] += 1;
+            }
         }
         for i in 0..vertex_count {
             self.inc_start[i + 1] += self.inc_start[i];
         }
         self.inc.clear();
-        self.inc.resize(indices.len(), 0);
-        let mut fill: Vec<u32> = self.inc_start[..vertex_count].to_vec();
+        self.inc.resize(self.tris.len() * 3, 0);
+        let fill = &mut self.fill;
+        fill.clear();
+        fill.extend_from_slice(&self.inc_start[..vertex_count]);
         for (t, tri) in self.tris.iter().enumerate() {
             for &v in tri {
                 self.inc[fill[v as usize] as usize] = t as u32;

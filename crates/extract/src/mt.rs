@@ -6,8 +6,8 @@
 //! (inside is f < T). The crossing belongs to the nearer end (|f - T| smaller; on a tie, the inside
 //! end), so every crossing has exactly one owner and its vertex id does not depend on processing
 //! order: ids are numbered by owner (storage order), then by neighbour index. A point's owned
-//! crossings are 14 flag bits (`owned`), and `base` holds the id of its first one:
-//! `id(C, d) = base[C] + popcount(owned[C] & ((1 << d) - 1))`. With clustering, the pass also
+//! crossings are 14 flag bits (`owned`), and `FirstIds` gives the id of its first one in 1.25
+//! bytes per slot: `id(C, d) = first(C) + popcount(owned[C] & ((1 << d) - 1))`. With clustering, the pass also
 //! proposes clusters ([`crate::cluster`]).
 //!
 //! **Geometry pass** (parallel over z-layers): every tetrahedron whose corners disagree gives one
@@ -38,13 +38,12 @@ use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Sampl
 pub struct MtBuffers {
     /// Owned crossing flags per storage slot.
     owned: Vec<u16>,
-    /// Id of the first owned crossing per storage slot (meaningful where `owned != 0`).
-    base: Vec<u32>,
+    /// Where each point's crossings are numbered ([`FirstIds`]).
+    ids: FirstIds,
     /// Cluster candidates, in storage order.
     candidates: Vec<Candidate>,
-    /// Triangles of the geometry pass, as crossing ids.
-    triangles: Vec<u32>,
-    /// Triangles of each geometry layer, concatenated in order into `triangles`.
+    /// Triangles of each geometry layer, as crossing ids: the geometry pass's output is their
+    /// concatenation in layer order.
     layers: Vec<Vec<u32>>,
     /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
     /// of padding: 64 points are tested for crossings at once with a few word operations.
@@ -55,6 +54,38 @@ pub struct MtBuffers {
     /// [`plane_words`] words per storage plane (the last one padding): the numbering and the
     /// geometry pass visit only these points.
     crossed: Vec<u64>,
+}
+
+/// Slots per block of [`FirstIds`].
+const ID_BLOCK: usize = 16;
+
+/// The id of each point's first owned crossing, in 1.25 bytes per slot instead of 4: the number
+/// of crossings owned by the slots before each block of [`ID_BLOCK`] slots, and per slot the
+/// number owned by the slots before it in its block (at most 15 x 14 = 210, a byte).
+/// `id(C, d) = first(C) + popcount(owned[C] & ((1 << d) - 1))`.
+#[derive(Default)]
+struct FirstIds {
+    block: Vec<u32>,
+    offset: Vec<u8>,
+}
+
+impl FirstIds {
+    /// Id of the first crossing owned by `slot` (meaningful where it owns one).
+    #[inline(always)]
+    fn first(&self, slot: usize) -> u32 {
+        self.block[slot / ID_BLOCK] + u32::from(self.offset[slot])
+    }
+
+    /// Sized for `slots` storage slots (contents left as they are: numbering overwrites what is
+    /// read).
+    fn resize(&mut self, slots: usize) {
+        self.block.resize(slots.div_ceil(ID_BLOCK), 0);
+        self.offset.resize(slots, 0);
+    }
+
+    fn bytes(&self) -> usize {
+        self.block.len() * 4 + self.offset.len()
+    }
 }
 
 /// Words of the crossed-point bit set per storage plane of `plane` slots: one bit per slot plus
@@ -479,9 +510,8 @@ pub fn extract(
     let t = std::time::Instant::now();
     let slots = samples.values.len();
     buf.owned.resize(slots, 0);
-    buf.base.resize(slots, 0);
+    buf.ids.resize(slots);
     buf.candidates.clear();
-    buf.triangles.clear();
     let words = slots.div_ceil(64);
     buf.inside.resize(words + 1, 0);
     let plane = samples.dims[0] * samples.dims[1];
@@ -564,21 +594,36 @@ pub fn extract(
             chunks.push(head);
             rest = tail;
         }
+        // Plane z numbers the id blocks that start in it.
+        let mut rest: &mut [u32] = &mut buf.ids.block;
+        let mut blocks = Vec::with_capacity(per_plane.len());
+        for z in 0..per_plane.len() {
+            let n = ((z + 1) * plane).div_ceil(ID_BLOCK) - (z * plane).div_ceil(ID_BLOCK);
+            let (head, tail) = rest.split_at_mut(n);
+            blocks.push(head);
+            rest = tail;
+        }
         let (owned, crossed) = (&buf.owned, &buf.crossed);
         near_points = pool.install(|| {
-            buf.base
+            buf.ids
+                .offset
                 .par_chunks_mut(plane)
                 .zip(chunks.into_par_iter())
+                .zip(blocks.into_par_iter())
                 .enumerate()
-                .map(|(z, (base, out))| {
+                .map(|(z, ((offset, out), blocks))| {
                     number_plane(
                         &layout,
                         z,
                         iso,
-                        &owned[z * plane..(z + 1) * plane],
+                        owned,
                         &crossed[z * wpp..(z + 1) * wpp],
-                        starts[z] as u32,
-                        base,
+                        (
+                            starts[z] as u32,
+                            (starts[z] + per_plane[z].0.crossings) as u32,
+                        ),
+                        blocks,
+                        offset,
                         out,
                     )
                 })
@@ -603,7 +648,7 @@ pub fn extract(
     if buf.layers.len() < layers {
         buf.layers.resize_with(layers, Vec::new);
     }
-    let (owned, base, crossed, positions) = (&buf.owned, &buf.base, &buf.crossed, &mesh.positions);
+    let (owned, ids, crossed, positions) = (&buf.owned, &buf.ids, &buf.crossed, &mesh.positions);
     stats.tetrahedra_processed += pool.install(|| {
         buf.layers[..layers]
             .par_iter_mut()
@@ -616,7 +661,7 @@ pub fn extract(
                     iso,
                     settings.keep_cells,
                     owned,
-                    base,
+                    ids,
                     crossed,
                     positions,
                     out,
@@ -624,9 +669,7 @@ pub fn extract(
             })
             .sum::<usize>()
     });
-    for tris in &buf.layers[..layers] {
-        buf.triangles.extend_from_slice(tris);
-    }
+    let layer_tris = &buf.layers[..layers];
     let [nx, ny, nz] = samples.cells;
     stats.tetrahedra_total = match lattice {
         Lattice::BodyCentred => 4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1)),
@@ -641,21 +684,24 @@ pub fn extract(
     if propose {
         let t = std::time::Instant::now();
         let check = clustering == Clustering::Integrated;
-        merge.load(total, &buf.triangles);
+        merge.load_parts(total, layer_tris);
         // Clusters grouped by colour, storage order inside a colour.
         buf.candidates.sort_by_key(|c| c.colour);
         let MtBuffers {
             owned,
-            base,
+            ids,
             candidates,
             commits,
             ..
         } = &mut *buf;
-        let (owned, base): (&[u16], &[u32]) = (owned, base);
+        let (owned, ids): (&[u16], &FirstIds) = (owned, ids);
         let members =
             |c: &Candidate, island: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
                 k.clear();
-                let (o, b) = (owned[c.slot as usize] & OWNED_BITS, base[c.slot as usize]);
+                let (o, b) = (
+                    owned[c.slot as usize] & OWNED_BITS,
+                    ids.first(c.slot as usize),
+                );
                 let mut bits = island;
                 let mut sum = glam::Vec3::ZERO;
                 while bits != 0 {
@@ -807,7 +853,7 @@ pub fn extract(
         }
         merge.finish(&mut mesh.positions, &mut mesh.indices);
         if tiled {
-            crate::tiles::compact_keys(merge, &mut keys, buf.triangles.len() / 3);
+            crate::tiles::compact_keys(merge, &mut keys, merge.triangle_count());
         }
         if check && (near_points > 0 || tiled) {
             // Surfaces through sample points leave crossings on top of each other where a
@@ -817,7 +863,10 @@ pub fn extract(
         }
         stats.t_vertex_s += t.elapsed().as_secs_f64();
     } else {
-        std::mem::swap(&mut mesh.indices, &mut buf.triangles);
+        mesh.indices.clear();
+        for tris in layer_tris {
+            mesh.indices.extend_from_slice(tris);
+        }
     }
     stats.clusters_rejected = stats.clusters_rejected_prefilter + stats.clusters_rejected_check;
 
@@ -848,7 +897,7 @@ pub fn extract(
     }
 
     stats.bytes_edges =
-        (buf.owned.len() * 2 + buf.base.len() * 4 + buf.inside.len() * 8 + buf.crossed.len() * 8)
+        (buf.owned.len() * 2 + buf.ids.bytes() + buf.inside.len() * 8 + buf.crossed.len() * 8)
             + buf.candidates.len() * std::mem::size_of::<Candidate>()
             + if propose { merge.bytes() } else { 0 };
     Ok(())
@@ -991,8 +1040,15 @@ fn vertex_plane(
     (counts, cands)
 }
 
-/// Numbers the crossings of one plane from `start` and writes their positions. Returns how many
-/// crossings lie within `WELD` of their owner (surfaces through sample points).
+/// Numbers the crossings of plane `z` (ids `start..end`), writes their positions, the plane's
+/// per-slot id offsets (`offset`) and the id bases of the blocks that start in the plane
+/// (`blocks`, from block `ceil(z * plane / ID_BLOCK)` on). Returns how many crossings lie within
+/// `WELD` of their owner (surfaces through sample points).
+///
+/// A block's base is written where a slot of the plane owns a crossing in it, and always for a
+/// block that runs on into the next plane (which may need it without owning one here); the
+/// others are never read. `owned` is the whole array: a block that began in an earlier plane
+/// counts that plane's part itself.
 #[allow(clippy::too_many_arguments)]
 fn number_plane(
     l: &Layout,
@@ -1000,23 +1056,53 @@ fn number_plane(
     iso: f32,
     owned: &[u16],
     crossed: &[u64],
-    start: u32,
-    base: &mut [u32],
+    (start, end): (u32, u32),
+    blocks: &mut [u32],
+    offset: &mut [u8],
     out: &mut [[f32; 3]],
 ) -> usize {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
+    let plane = dx * dy;
+    let (p0, p1) = (z * plane, (z + 1) * plane);
+    let first_block = p0.div_ceil(ID_BLOCK);
+    let count = |from: usize, to: usize| -> u32 {
+        owned[from..to]
+            .iter()
+            .map(|&o| (o & OWNED_BITS).count_ones())
+            .sum()
+    };
+    // The block that starts in this plane and runs on into the next one.
+    let last = (p1 - 1) / ID_BLOCK;
+    if last * ID_BLOCK >= p0 && p1 % ID_BLOCK != 0 {
+        blocks[last - first_block] = end - count(last * ID_BLOCK, p1);
+    }
     let mut next = start;
     let mut w = 0;
     let mut near_points = 0;
-    for_each_bit(crossed, 0, dx * dy, |local| {
+    let (mut block, mut in_block) = (usize::MAX, 0u32);
+    for_each_bit(crossed, 0, plane, |local| {
         let (sy, sx) = (local / dx, local % dx);
         {
-            let own = owned[local] & OWNED_BITS;
+            let own = owned[p0 + local] & OWNED_BITS;
             if own == 0 {
                 return;
             }
-            base[local] = next;
+            let b = (p0 + local) / ID_BLOCK;
+            if b != block {
+                block = b;
+                let bs = b * ID_BLOCK;
+                if bs < p0 {
+                    // Began in an earlier plane: its slots there come first.
+                    in_block = count(bs, p0);
+                } else {
+                    // First owning slot of a block of this plane: no crossing before it there.
+                    in_block = 0;
+                    blocks[b - first_block] = next;
+                }
+            }
+            offset[local] = in_block as u8;
+            in_block += own.count_ones();
             next += own.count_ones();
             let p = l.coords(sx, sy, z);
             let i = z * dx * dy + local;
@@ -1046,7 +1132,7 @@ fn geometry_layer(
     iso: f32,
     keep: Option<CellRange>,
     owned: &[u16],
-    base: &[u32],
+    first_ids: &FirstIds,
     crossed: &[u64],
     positions: &[[f32; 3]],
     out: &mut Vec<u32>,
@@ -1077,7 +1163,7 @@ fn geometry_layer(
             } else {
                 (idx[b], tpl.dir[b][a])
             };
-            *slot = base[o] + (owned[o] & ((1u16 << d) - 1)).count_ones();
+            *slot = first_ids.first(o) + (owned[o] & ((1u16 << d) - 1)).count_ones();
         }
         if n == 3 {
             out.extend_from_slice(&ids[..3]);
@@ -1164,6 +1250,69 @@ fn geometry_layer(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn first_ids_count_the_crossings_owned_before_each_point() {
+        // Grids whose storage planes hold fewer slots than an id block, about as many, and many
+        // more, so that blocks start, end and span whole planes everywhere.
+        let field = rmt_fields::FnField(|p: glam::Vec3| {
+            (p.x * 7.1).sin() + (p.y * 5.3).cos() * (p.z * 3.7 + 0.4).sin() - 0.2
+        });
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .expect("a pool of two threads");
+        let mut checked = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [
+                [1, 1, 6],
+                [2, 1, 5],
+                [1, 3, 4],
+                [3, 3, 3],
+                [5, 2, 7],
+                [9, 8, 6],
+            ] {
+                let settings = crate::ExtractSettings::new(
+                    crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
+                    lattice,
+                    crate::Clustering::None,
+                );
+                let mut stats = Stats::default();
+                let mut samples = Samples::default();
+                samples
+                    .sample(&field, &settings, &pool, &mut stats)
+                    .expect("a finite field");
+                let (mut buf, mut merge, mut mesh) = (
+                    MtBuffers::default(),
+                    MergeBuffers::default(),
+                    Mesh::default(),
+                );
+                extract(
+                    &samples, &settings, &pool, &mut buf, &mut merge, &mut mesh, &mut stats,
+                )
+                .expect("extraction");
+                let mut before = 0u32;
+                for (slot, &o) in buf.owned.iter().enumerate() {
+                    let own = o & OWNED_BITS;
+                    if own != 0 {
+                        assert_eq!(
+                            buf.ids.first(slot),
+                            before,
+                            "{lattice:?} {cells:?} slot {slot}"
+                        );
+                        checked += 1;
+                    }
+                    before += own.count_ones();
+                }
+                assert_eq!(
+                    before as usize,
+                    mesh.positions.len(),
+                    "{lattice:?} {cells:?}"
+                );
+            }
+        }
+        assert!(checked > 100, "only {checked} points own crossings");
+    }
 
     #[test]
     fn for_each_bit_visits_exactly_the_set_bits_from_any_start() {
