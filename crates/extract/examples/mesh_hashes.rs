@@ -1,8 +1,11 @@
 //! Prints a hash of the output mesh (positions, indices, main counters) for a fixed set of
-//! fields, sizes, lattices, clustering modes and thread counts: run it before and after a change
+//! fields, sizes, lattices, clustering modes and thread counts, with and without the tile rule of
+//! chunked worlds: run it before and after a change
 //! that must not change the meshes and compare the two listings.
 //! `cargo run --release -p rmt-extract --example mesh_hashes`.
-use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode};
+use rmt_extract::{
+    CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode, Tiling,
+};
 use rmt_fields::{Asteroid, AsteroidParams, Gyroid, ScalarField, Sphere};
 use rmt_mesh::Mesh;
 
@@ -40,10 +43,19 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                     Clustering::IntegratedUnchecked,
                     Clustering::Postprocessed,
                 ] {
-                    for threads in [1, 2] {
+                    for (threads, tiled) in [(1, false), (2, false), (2, true)] {
                         let mut s = ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);
                         s.threads = threads;
                         s.normals = NormalMode::Skip;
+                        if tiled {
+                            // The tile rule of chunked worlds, for a sub-box at global cell
+                            // (5, 0, 3) of a larger volume, keeping the triangles of some cells.
+                            s.tiles = Some(Tiling::new([8, 16, 8], [5, 0, 3]));
+                            s.keep_cells = Some(CellRange {
+                                lo: [1, 0, 2],
+                                hi: [n - 1, n, n - 3],
+                            });
+                        }
                         let mut mesh = Mesh::default();
                         let st = Extractor::new().extract(field.as_ref(), &s, &mut mesh)?;
                         let mut h = 0xcbf2_9ce4_8422_2325u64;
@@ -66,9 +78,10 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             fnv(&mut h, c as u64);
                         }
                         println!(
-                            "{name:9} n={n:2} {:6} {:20} t={threads}: {:6} triangles {h:016x}",
+                            "{name:9} n={n:2} {:6} {:20} t={threads}{}: {:6} triangles {h:016x}",
                             lattice.name(),
                             clustering.name(),
+                            if tiled { " tiled" } else { "" },
                             st.triangles
                         );
                     }

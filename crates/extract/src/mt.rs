@@ -632,7 +632,21 @@ pub fn extract(
     }
     if let Some(tiling) = &settings.tiles {
         if propose || clustering == Clustering::Postprocessed {
-            crate::tiles::crossing_keys(samples, tiling, &buf.owned, &mut keys);
+            let crossed = &buf.crossed;
+            let dz = samples.dims[2];
+            crate::tiles::crossing_keys(
+                samples,
+                tiling,
+                &buf.owned,
+                |visit| {
+                    for z in 0..dz {
+                        for_each_bit(&crossed[z * wpp..(z + 1) * wpp], 0, plane, |local| {
+                            visit(z * plane + local)
+                        });
+                    }
+                },
+                &mut keys,
+            );
         }
     }
     let tiled = settings.tiles.is_some();
@@ -939,6 +953,7 @@ fn vertex_plane(
 ) -> (PlaneCounts, Vec<Candidate>) {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
+    let slots = v.len();
     let mut counts = PlaneCounts::default();
     let mut cands = Vec::new();
     for sy in 0..dy {
@@ -954,6 +969,10 @@ fn vertex_plane(
         let (lo, hi) = if row_regular { (lo, hi) } else { (dx, dx) };
         let row = z * dx * dy + sy * dx;
         let delta = &l.delta[odd];
+        let (dmin, dmax) = (
+            delta.iter().copied().min().unwrap_or(0),
+            delta.iter().copied().max().unwrap_or(0),
+        );
         // One point with at least one crossed edge: owned crossings, flags, proposals.
         let point = |sx: usize,
                      p: Offset,
@@ -1006,6 +1025,43 @@ fn vertex_plane(
             counts.edges += valid.count_ones() as usize;
             point(sx, p, valid, owned, crossed_bits, counts, cands);
         };
+        if row as isize + dmin >= 0 && (row + dx) as isize + dmax <= slots as isize {
+            // Every neighbour slot of the row is in storage: the 64-point test filters the
+            // border points too (it may let through a point whose only difference is with a
+            // slot that is not its neighbour; `point` then tests the real neighbours).
+            owned[sy * dx..(sy + 1) * dx].fill(0);
+            if lo < hi {
+                counts.edges += 14 * (hi - lo);
+            }
+            for sx in (0..lo.min(dx)).chain(hi.max(lo.min(dx))..dx) {
+                let (exists, valid) = l.border_info(l.coords(sx, sy, z));
+                if exists {
+                    counts.edges += valid.count_ones() as usize;
+                }
+            }
+            let mut sx = 0;
+            while sx < dx {
+                let len = (dx - sx).min(64);
+                let mut block = crossed_points(inside_bits, row + sx, delta, len);
+                while block != 0 {
+                    let x = sx + block.trailing_zeros() as usize;
+                    block &= block - 1;
+                    let p = l.coords(x, sy, z);
+                    let valid = if x >= lo && x < hi {
+                        FULL
+                    } else {
+                        let (exists, valid) = l.border_info(p);
+                        if !exists {
+                            continue;
+                        }
+                        valid
+                    };
+                    point(x, p, valid, owned, crossed_bits, &mut counts, &mut cands);
+                }
+                sx += len;
+            }
+            continue;
+        }
         for sx in 0..lo.min(dx) {
             border(sx, owned, crossed_bits, &mut counts, &mut cands);
         }

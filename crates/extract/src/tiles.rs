@@ -84,8 +84,15 @@ fn key_of(tiling: &Tiling, unit: i64, lo: [i64; 3], hi: [i64; 3]) -> u64 {
 }
 
 /// Keys of all crossings in id order: crossings are numbered by owner (storage order), then by
-/// neighbour index, so walking the owned bits in that order meets them in id order.
-pub(crate) fn crossing_keys(samples: &Samples, tiling: &Tiling, owned: &[u16], out: &mut Vec<u64>) {
+/// neighbour index, so walking the owned bits in that order meets them in id order. `points`
+/// visits the slots that may own crossings, in storage order (the others own none).
+pub(crate) fn crossing_keys(
+    samples: &Samples,
+    tiling: &Tiling,
+    owned: &[u16],
+    points: impl FnOnce(&mut dyn FnMut(usize)),
+    out: &mut Vec<u64>,
+) {
     out.clear();
     let Some(lattice) = samples.lattice else {
         return;
@@ -97,10 +104,10 @@ pub(crate) fn crossing_keys(samples: &Samples, tiling: &Tiling, owned: &[u16], o
         Lattice::Simple => (1i64, tiling.grid_offset.map(|o| o as i64)),
     };
     let [dx, dy, _] = samples.dims;
-    for (slot, &bits) in owned.iter().enumerate() {
-        let mut bits = bits & 0x3FFF;
+    points(&mut |slot| {
+        let mut bits = owned[slot] & 0x3FFF;
         if bits == 0 {
-            continue;
+            return;
         }
         let (sx, sy, z) = (slot % dx, (slot / dx) % dy, slot / (dx * dy));
         let p: [i64; 3] = match lattice {
@@ -125,7 +132,7 @@ pub(crate) fn crossing_keys(samples: &Samples, tiling: &Tiling, owned: &[u16], o
                 [0, 1, 2].map(|a| g[a] + i64::from(hi[a])),
             ));
         }
-    }
+    });
 }
 
 /// Whether the vertices `k` may merge: all carry the same tile key.
