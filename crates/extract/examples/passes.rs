@@ -7,8 +7,8 @@
 //! ```
 //!
 //! `filter` keeps the configurations whose name (`field lattice clustering`, e.g.
-//! `asteroid bcdl integrated`) contains it: `passes 64 50 1 "asteroid bcdl integrated"` repeats
-//! one configuration, for a profiler.
+//! `asteroid bcdl integrated`) is or contains it: `passes 64 50 1 "asteroid bcdl integrated"`
+//! repeats one configuration, for a profiler; `passes 64 20 1 simple` all simple-lattice ones.
 use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode};
 use rmt_fields::{Asteroid, AsteroidParams, ScalarField, Sphere};
 use rmt_mesh::Mesh;
@@ -44,6 +44,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let sphere = Sphere::new(glam::Vec3::ZERO, 0.8);
     let asteroid = Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default());
+    // A filter naming one configuration exactly keeps only that one.
+    let exact = ["sphere", "asteroid"].iter().any(|f| {
+        ["bcdl", "simple"].iter().any(|l| {
+            ["none", "integrated", "integrated-unchecked"]
+                .iter()
+                .any(|c| format!("{f} {l} {c}") == filter)
+        })
+    });
     let mut shown = 0;
     for (name, field) in [
         ("sphere", &sphere as &dyn ScalarField),
@@ -56,7 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 Clustering::IntegratedUnchecked,
             ] {
                 let label = format!("{name} {} {}", lattice.name(), clustering.name());
-                if !label.contains(filter) {
+                if !(label == filter || (!exact && label.contains(filter))) {
                     continue;
                 }
                 shown += 1;
