@@ -68,6 +68,10 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             fnv(&mut h, u64::from(i));
                         }
                         for c in [
+                            st.edges,
+                            st.crossings,
+                            st.tetrahedra_processed,
+                            st.clusters_proposed,
                             st.clusters_committed,
                             st.clusters_rejected,
                             st.lone_absorbed,

@@ -1025,23 +1025,33 @@ fn vertex_plane(
             counts.edges += valid.count_ones() as usize;
             point(sx, p, valid, owned, crossed_bits, counts, cands);
         };
-        if row as isize + dmin >= 0 && (row + dx) as isize + dmax <= slots as isize {
-            // Every neighbour slot of the row is in storage: the 64-point test filters the
-            // border points too (it may let through a point whose only difference is with a
-            // slot that is not its neighbour; `point` then tests the real neighbours).
-            owned[sy * dx..(sy + 1) * dx].fill(0);
+        // The points tested 64 at a time: the whole row where every neighbour slot of it is in
+        // storage (the test may then let through a border point whose only difference is with a
+        // slot that is not its neighbour; `point` tests the real neighbours), else the regular
+        // run. The others one by one.
+        let (flo, fhi) = if row as isize + dmin >= 0 && (row + dx) as isize + dmax <= slots as isize
+        {
+            (0, dx)
+        } else {
+            (lo, hi)
+        };
+        for sx in 0..flo {
+            border(sx, owned, crossed_bits, &mut counts, &mut cands);
+        }
+        if flo < fhi {
+            owned[sy * dx + flo..sy * dx + fhi].fill(0);
             if lo < hi {
                 counts.edges += 14 * (hi - lo);
             }
-            for sx in (0..lo.min(dx)).chain(hi.max(lo.min(dx))..dx) {
+            for sx in (flo..lo.min(fhi)).chain(hi.max(flo)..fhi) {
                 let (exists, valid) = l.border_info(l.coords(sx, sy, z));
                 if exists {
                     counts.edges += valid.count_ones() as usize;
                 }
             }
-            let mut sx = 0;
-            while sx < dx {
-                let len = (dx - sx).min(64);
+            let mut sx = flo;
+            while sx < fhi {
+                let len = (fhi - sx).min(64);
                 let mut block = crossed_points(inside_bits, row + sx, delta, len);
                 while block != 0 {
                     let x = sx + block.trailing_zeros() as usize;
@@ -1060,36 +1070,8 @@ fn vertex_plane(
                 }
                 sx += len;
             }
-            continue;
         }
-        for sx in 0..lo.min(dx) {
-            border(sx, owned, crossed_bits, &mut counts, &mut cands);
-        }
-        if lo < hi {
-            // Regular run, 64 points at a time: only the points with a crossed edge are visited.
-            owned[sy * dx + lo..sy * dx + hi].fill(0);
-            counts.edges += 14 * (hi - lo);
-            let mut sx = lo;
-            while sx < hi {
-                let len = (hi - sx).min(64);
-                let mut block = crossed_points(inside_bits, row + sx, delta, len);
-                while block != 0 {
-                    let x = sx + block.trailing_zeros() as usize;
-                    block &= block - 1;
-                    point(
-                        x,
-                        l.coords(x, sy, z),
-                        FULL,
-                        owned,
-                        crossed_bits,
-                        &mut counts,
-                        &mut cands,
-                    );
-                }
-                sx += len;
-            }
-        }
-        for sx in hi.max(lo.min(dx))..dx {
+        for sx in fhi.max(flo)..dx {
             border(sx, owned, crossed_bits, &mut counts, &mut cands);
         }
     }
