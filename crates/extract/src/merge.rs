@@ -60,17 +60,6 @@ pub struct Scratch {
     bnd: [u64; SMALL],
 }
 
-/// One triangle's change under a checked merge: its new vertices and whether it dies.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TriangleEdit {
-    /// The triangle (original numbering).
-    pub t: u32,
-    /// Its vertices after the merge.
-    pub tri: [u32; 3],
-    /// It had two or more vertices in the merged set and is dropped.
-    pub dead: bool,
-}
-
 impl Default for Scratch {
     fn default() -> Self {
         Self {
@@ -88,6 +77,17 @@ impl Default for Scratch {
             bnd: [0; SMALL],
         }
     }
+}
+
+/// One triangle's change under a checked merge: its new vertices and whether it dies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TriangleEdit {
+    /// The triangle (original numbering).
+    pub t: u32,
+    /// Its vertices after the merge.
+    pub tri: [u32; 3],
+    /// It had two or more vertices in the merged set and is dropped.
+    pub dead: bool,
 }
 
 /// Most regions have at most this many vertices: their check runs on bit sets.

@@ -7,8 +7,8 @@
 //! end), so every crossing has exactly one owner and its vertex id does not depend on processing
 //! order: ids are numbered by owner (storage order), then by neighbour index. A point's owned
 //! crossings are 14 flag bits (`owned`), and `FirstIds` gives the id of its first one in 1.25
-//! bytes per slot: `id(C, d) = first(C) + popcount(owned[C] & ((1 << d) - 1))`. With clustering, the pass also
-//! proposes clusters ([`crate::cluster`]).
+//! bytes per slot: `id(C, d) = first(C) + popcount(owned[C] & ((1 << d) - 1))`. With clustering,
+//! the pass also proposes clusters ([`crate::cluster`]).
 //!
 //! **Geometry pass** (parallel over z-layers): every tetrahedron whose corners disagree gives one
 //! or two triangles from the case table; layers are concatenated in order, so the output is the
@@ -748,15 +748,9 @@ pub fn extract(
                         }
                         let first_edit = b.edits.len();
                         if check {
-                            let k = &b.k;
+                            let (scratch, edits) = (&mut b.scratch, &mut b.edits);
                             if merge_ref
-                                .check_and_record(
-                                    &mut b.scratch,
-                                    positions,
-                                    k,
-                                    centre,
-                                    &mut b.edits,
-                                )
+                                .check_and_record(scratch, positions, &b.k, centre, edits)
                                 .is_err()
                             {
                                 return false;
@@ -774,41 +768,23 @@ pub fn extract(
                         });
                         true
                     };
-                    if try_island(c.island, b) {
-                        continue;
-                    }
                     // Refused: try the cluster without one of its crossings, in bit order,
                     // before giving up (keeps most of the merge where one crossing is the
                     // trouble).
-                    let mut done = false;
-                    if c.island.count_ones() > 2 {
-                        let mut bits = c.island;
-                        while bits != 0 {
-                            let sub = c.island & !(bits & bits.wrapping_neg());
-                            bits &= bits - 1;
-                            if try_island(sub, b) {
-                                done = true;
-                                break;
-                            }
-                        }
-                    }
-                    if !done {
+                    let mut without_one = (0..14)
+                        .filter(|d| c.island.count_ones() > 2 && c.island & (1 << d) != 0)
+                        .map(|d| c.island & !(1 << d));
+                    if !(try_island(c.island, b) || without_one.any(|sub| try_island(sub, b))) {
                         b.rejected += 1;
                     }
                 }
             };
-            if pool.current_num_threads() == 1 {
-                for (b, cands) in commits.iter_mut().zip(group.chunks(COMMIT_BLOCK)) {
-                    try_block(b, cands);
-                }
-            } else {
-                pool.install(|| {
-                    commits[..blocks]
-                        .par_iter_mut()
-                        .zip(group.par_chunks(COMMIT_BLOCK))
-                        .for_each(|(b, cands)| try_block(b, cands));
-                });
-            }
+            pool.install(|| {
+                commits[..blocks]
+                    .par_iter_mut()
+                    .zip(group.par_chunks(COMMIT_BLOCK))
+                    .for_each(|(b, cands)| try_block(b, cands));
+            });
             for b in &commits[..blocks] {
                 for a in &b.accepted {
                     stats.discarded += merge.apply_recorded(
@@ -1121,42 +1097,40 @@ fn number_plane(
     let (mut block, mut in_block) = (usize::MAX, 0u32);
     for_each_bit(crossed, 0, plane, |local| {
         let (sy, sx) = (local / dx, local % dx);
-        {
-            let own = owned[p0 + local] & OWNED_BITS;
-            if own == 0 {
-                return;
+        let own = owned[p0 + local] & OWNED_BITS;
+        if own == 0 {
+            return;
+        }
+        let b = (p0 + local) / ID_BLOCK;
+        if b != block {
+            block = b;
+            let bs = b * ID_BLOCK;
+            if bs < p0 {
+                // Began in an earlier plane: its slots there come first.
+                in_block = count(bs, p0);
+            } else {
+                // First owning slot of a block of this plane: no crossing before it there.
+                in_block = 0;
+                blocks[b - first_block] = next;
             }
-            let b = (p0 + local) / ID_BLOCK;
-            if b != block {
-                block = b;
-                let bs = b * ID_BLOCK;
-                if bs < p0 {
-                    // Began in an earlier plane: its slots there come first.
-                    in_block = count(bs, p0);
-                } else {
-                    // First owning slot of a block of this plane: no crossing before it there.
-                    in_block = 0;
-                    blocks[b - first_block] = next;
-                }
-            }
-            offset[local] = in_block as u8;
-            in_block += own.count_ones();
-            next += own.count_ones();
-            let p = l.coords(sx, sy, z);
-            let i = z * dx * dy + local;
-            let f = v[i];
-            let pp = l.position(p);
-            let mut bits = own;
-            while bits != 0 {
-                let d = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                let q = add(p, l.t.offsets[d]);
-                let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
-                let t = (iso - f) / (g - f);
-                near_points += (t < WELD) as usize;
-                out[w] = pp.lerp(l.position(q), t).to_array();
-                w += 1;
-            }
+        }
+        offset[local] = in_block as u8;
+        in_block += own.count_ones();
+        next += own.count_ones();
+        let p = l.coords(sx, sy, z);
+        let i = z * dx * dy + local;
+        let f = v[i];
+        let pp = l.position(p);
+        let mut bits = own;
+        while bits != 0 {
+            let d = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let q = add(p, l.t.offsets[d]);
+            let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
+            let t = (iso - f) / (g - f);
+            near_points += (t < WELD) as usize;
+            out[w] = pp.lerp(l.position(q), t).to_array();
+            w += 1;
         }
     });
     near_points
