@@ -5,10 +5,11 @@
 //! neighbours S, the edge C-S is crossed when C and S lie on opposite sides of the threshold T
 //! (inside is f < T). The crossing belongs to the nearer end (|f - T| smaller; on a tie, the inside
 //! end), so every crossing has exactly one owner and its vertex id does not depend on processing
-//! order: ids are numbered by owner (storage order), then by neighbour index. A point's owned
-//! crossings are 14 flag bits (`owned`), and `FirstIds` gives the id of its first one in 1.25
-//! bytes per slot: `id(C, d) = first(C) + popcount(owned[C] & ((1 << d) - 1))`. With clustering,
-//! the pass also proposes clusters ([`crate::cluster`]).
+//! order: ids are numbered by owner (storage order), then by neighbour index. Only points with a
+//! crossed edge are stored ([`CrossedIndex`]: a bit per slot, a rank per 64 slots, and per crossed
+//! point its 14 owned-crossing bits and the id of its first owned crossing), so
+//! `id(C, d) = first(C) + popcount(owned(C) & ((1 << d) - 1))` with no table per slot beyond
+//! those bits. With clustering, the pass also proposes clusters ([`crate::cluster`]).
 //!
 //! **Geometry pass** (parallel over z-layers): every tetrahedron whose corners disagree gives one
 //! or two triangles from the case table; layers are concatenated in order, so the output is the
@@ -36,10 +37,11 @@ use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Sampl
 /// Per-point working arrays kept between extractions.
 #[derive(Default)]
 pub struct MtBuffers {
-    /// Owned crossing flags per storage slot.
-    owned: Vec<u16>,
-    /// Where each point's crossings are numbered ([`FirstIds`]).
-    ids: FirstIds,
+    /// Which points have a crossed edge, and their owned crossings and ids ([`CrossedIndex`]).
+    crossed: CrossedIndex,
+    /// Per storage plane, the owned-crossing bits of its crossed points in slot order (the
+    /// vertex pass's output, numbered into [`CrossedIndex::points`]).
+    plane_owned: Vec<Vec<u16>>,
     /// Cluster candidates, in storage order.
     candidates: Vec<Candidate>,
     /// Triangles of each geometry layer, as crossing ids: the geometry pass's output is their
@@ -50,41 +52,134 @@ pub struct MtBuffers {
     inside: Vec<u64>,
     /// Working memory of the cluster commit, one per block of candidates.
     commits: Vec<CommitBlock>,
-    /// One bit per storage slot, set where the point has a crossed edge (owned or not), in
-    /// [`plane_words`] words per storage plane (the last one padding): the numbering and the
-    /// geometry pass visit only these points.
-    crossed: Vec<u64>,
 }
 
-/// Slots per block of [`FirstIds`].
-const ID_BLOCK: usize = 16;
-
-/// The id of each point's first owned crossing, in 1.25 bytes per slot instead of 4: the number
-/// of crossings owned by the slots before each block of [`ID_BLOCK`] slots, and per slot the
-/// number owned by the slots before it in its block (at most 15 x 14 = 210, a byte).
-/// `id(C, d) = first(C) + popcount(owned[C] & ((1 << d) - 1))`.
-#[derive(Default)]
-struct FirstIds {
-    block: Vec<u32>,
-    offset: Vec<u8>,
+/// A point with a crossed edge: the id of its first owned crossing and its owned crossings (bit d:
+/// the crossing on the edge to neighbour d). `id(C, d) = first + popcount(owned & ((1 << d) - 1))`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct CrossedPoint {
+    first: u32,
+    owned: u16,
 }
 
-impl FirstIds {
-    /// Id of the first crossing owned by `slot` (meaningful where it owns one).
+impl CrossedPoint {
+    /// Id of the crossing this point owns on its edge to neighbour `d`.
     #[inline(always)]
-    fn first(&self, slot: usize) -> u32 {
-        self.block[slot / ID_BLOCK] + u32::from(self.offset[slot])
+    fn id(self, d: u8) -> u32 {
+        self.first + (self.owned & ((1u16 << d) - 1)).count_ones()
+    }
+}
+
+/// The points with a crossed edge, found from any storage slot in a few operations and stored
+/// sparsely: a bit per slot, the number of set bits before each word (a rank directory), and one
+/// [`CrossedPoint`] per set bit. About 1.5 bits per slot plus 8 bytes per crossed point, where a
+/// dense table of owned bits and ids took 3.25 bytes per slot.
+///
+/// The bits are kept per storage plane ([`plane_words`] words each, the last one padding) so that
+/// planes are written in parallel; a slot's plane comes from a division by a multiplication.
+#[derive(Default)]
+struct CrossedIndex {
+    /// One bit per storage slot, set where the point has a crossed edge (owned or not).
+    bits: Vec<u64>,
+    /// Per word of `bits`: how many bits are set in the words before it.
+    rank: Vec<u32>,
+    /// The crossed points in storage order (rank order).
+    points: Vec<CrossedPoint>,
+    /// Slots per storage plane, and words per plane.
+    plane: usize,
+    wpp: usize,
+    /// `ceil(2^64 / plane)`: `slot / plane == (slot * div) >> 64` for every slot below 2^32
+    /// (Lemire, Kaser and Kurz 2019); 0 when a plane has one slot.
+    div: u64,
+}
+
+impl CrossedIndex {
+    /// Bits cleared and sized for `planes` storage planes of `plane` slots; the rest is filled by
+    /// [`CrossedIndex::rank_planes`] and the numbering.
+    fn reset(&mut self, plane: usize, planes: usize) {
+        self.plane = plane;
+        self.wpp = plane_words(plane);
+        self.div = if plane > 1 {
+            u64::MAX / plane as u64 + 1
+        } else {
+            0
+        };
+        self.bits.clear();
+        self.bits.resize(self.wpp * planes, 0);
+        self.rank.resize(self.bits.len(), 0);
     }
 
-    /// Sized for `slots` storage slots (contents left as they are: numbering overwrites what is
-    /// read).
-    fn resize(&mut self, slots: usize) {
-        self.block.resize(slots.div_ceil(ID_BLOCK), 0);
-        self.offset.resize(slots, 0);
+    /// The storage plane of `slot` (below 2^32).
+    #[inline(always)]
+    fn plane_of(&self, slot: usize) -> usize {
+        if self.div == 0 {
+            return slot;
+        }
+        ((u128::from(self.div) * slot as u128) >> 64) as usize
+    }
+
+    /// Word of `bits` holding `slot`, and the slot's bit in it.
+    #[inline(always)]
+    fn word(&self, slot: usize) -> (usize, usize) {
+        let z = self.plane_of(slot);
+        let local = slot - z * self.plane;
+        (z * self.wpp + (local >> 6), local & 63)
+    }
+
+    /// Whether `slot` has a crossed edge.
+    #[inline(always)]
+    fn is_crossed(&self, slot: usize) -> bool {
+        let (w, b) = self.word(slot);
+        self.bits[w] >> b & 1 != 0
+    }
+
+    /// The entry of a crossed `slot` (meaningless for others).
+    #[inline(always)]
+    fn get(&self, slot: usize) -> CrossedPoint {
+        let z = self.plane_of(slot);
+        self.get_in(z, slot - z * self.plane)
+    }
+
+    /// The entry of the crossed point in slot `local` of storage plane `z`.
+    #[inline(always)]
+    fn get_in(&self, z: usize, local: usize) -> CrossedPoint {
+        self.get_at(z * self.wpp + (local >> 6), local & 63)
+    }
+
+    /// The entry of the crossed point at bit `b` of word `w`.
+    #[inline(always)]
+    fn get_at(&self, w: usize, b: usize) -> CrossedPoint {
+        let below = self.bits[w] & ((1u64 << b) - 1);
+        self.points[(self.rank[w] + below.count_ones()) as usize]
+    }
+
+    /// Bits of plane `z`.
+    fn plane_bits(&self, z: usize) -> &[u64] {
+        &self.bits[z * self.wpp..(z + 1) * self.wpp]
+    }
+
+    /// Fills the rank directory, given the number of crossed points before each plane
+    /// (`starts[z]`), and sizes `points`.
+    fn rank_planes(&mut self, starts: &[usize], total: usize, pool: &rayon::ThreadPool) {
+        let wpp = self.wpp;
+        pool.install(|| {
+            self.rank
+                .par_chunks_mut(wpp)
+                .zip(self.bits.par_chunks(wpp))
+                .zip(starts.par_iter())
+                .for_each(|((rank, bits), &start)| {
+                    let mut r = start as u32;
+                    for (out, w) in rank.iter_mut().zip(bits) {
+                        *out = r;
+                        r += w.count_ones();
+                    }
+                });
+        });
+        self.points.resize(total, CrossedPoint::default());
     }
 
     fn bytes(&self) -> usize {
-        self.block.len() * 4 + self.offset.len()
+        self.bits.len() * 8 + self.rank.len() * 4 + self.points.len() * 8
     }
 }
 
@@ -182,12 +277,6 @@ const WELD: f32 = 1e-4;
 /// this (see [`crate::collapse::collapse_slivers`]); triangles of a good RMT mesh stay below 2.5.
 const SLIVER_AR: f32 = 4.0;
 
-/// Bit 15 of a point's `owned` word: some edge of the point is crossed (owned or not). A cube or
-/// body-centred face whose anchor point has no crossed edge has all its points on one side.
-const HAS_CROSSING: u16 = 0x8000;
-/// The 14 neighbour bits of an `owned` word.
-const OWNED_BITS: u16 = 0x3FFF;
-
 /// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
 const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
@@ -228,6 +317,11 @@ fn owns(f: f32, g: f32, iso: f32) -> bool {
 #[derive(Clone, Copy, Debug)]
 struct TetTemplate {
     delta: [isize; 4],
+    /// Storage plane of each corner relative to the reference point's, in words of the
+    /// crossed-point bits (`dz * plane_words(plane)`), and the slot delta within that plane
+    /// (`delta = dz * plane + dlocal`): crossed points are found without a division.
+    dzw: [isize; 4],
+    dlocal: [isize; 4],
     /// `dir[i][j]`: neighbour index of corner j seen from corner i.
     dir: [[u8; 4]; 4],
 }
@@ -265,6 +359,7 @@ fn boundary_class(c: i32, max: i32) -> usize {
 impl<'a> Layout<'a> {
     fn new(s: &'a Samples, lattice: Lattice) -> Self {
         let t = LatticeTables::get(lattice);
+        let plane = s.dims[0] * s.dims[1];
         let idx = |p: Offset| -> isize {
             match lattice {
                 Lattice::BodyCentred => s.bcdl_index(p) as isize,
@@ -293,10 +388,16 @@ impl<'a> Layout<'a> {
             .map(|tet| {
                 let mut tpl = TetTemplate {
                     delta: [0; 4],
+                    dzw: [0; 4],
+                    dlocal: [0; 4],
                     dir: [[0; 4]; 4],
                 };
                 for i in 0..4 {
                     tpl.delta[i] = idx(add(r, tet[i])) - idx(r);
+                    // The storage plane is the lattice z (plus one on the body-centred lattice).
+                    let dz = tet[i][2] as isize;
+                    tpl.dzw[i] = dz * plane_words(plane) as isize;
+                    tpl.dlocal[i] = tpl.delta[i] - dz * plane as isize;
                     for j in 0..4 {
                         if i != j {
                             let o = [
@@ -509,15 +610,21 @@ pub fn extract(
     // Allocation: per-slot tables sized to the sample array.
     let t = std::time::Instant::now();
     let slots = samples.values.len();
-    buf.owned.resize(slots, 0);
-    buf.ids.resize(slots);
+    if slots > u32::MAX as usize {
+        return Err(ExtractError::TooLarge {
+            cells: samples.cells,
+            limit: u32::MAX as usize,
+        });
+    }
     buf.candidates.clear();
     let words = slots.div_ceil(64);
     buf.inside.resize(words + 1, 0);
     let plane = samples.dims[0] * samples.dims[1];
-    let wpp = plane_words(plane);
-    buf.crossed.clear();
-    buf.crossed.resize(wpp * samples.dims[2], 0);
+    let planes = samples.dims[2];
+    buf.crossed.reset(plane, planes);
+    if buf.plane_owned.len() < planes {
+        buf.plane_owned.resize_with(planes, Vec::new);
+    }
     stats.t_allocation_s += t.elapsed().as_secs_f64();
 
     // Vertex pass, step 0: the inside bits.
@@ -545,10 +652,11 @@ pub fn extract(
 
     // Vertex pass, step 1: owned crossings and proposals per plane.
     let inside = &buf.inside;
+    let wpp = buf.crossed.wpp;
     let per_plane: Vec<(PlaneCounts, Vec<Candidate>)> = pool.install(|| {
-        buf.owned
-            .par_chunks_mut(plane)
-            .zip(buf.crossed.par_chunks_mut(wpp))
+        buf.plane_owned[..planes]
+            .par_iter_mut()
+            .zip(buf.crossed.bits.par_chunks_mut(wpp))
             .enumerate()
             .map(|(z, (owned, crossed))| {
                 vertex_plane(
@@ -566,11 +674,15 @@ pub fn extract(
             .collect()
     });
     let mut starts = Vec::with_capacity(per_plane.len() + 1);
+    let mut point_starts = Vec::with_capacity(per_plane.len() + 1);
     let mut total = 0usize;
+    let mut total_points = 0usize;
     let mut proposals = ProposalCounts::default();
-    for (c, cands) in &per_plane {
+    for (z, (c, cands)) in per_plane.iter().enumerate() {
         starts.push(total);
         total += c.crossings;
+        point_starts.push(total_points);
+        total_points += buf.plane_owned[z].len();
         stats.edges += c.edges;
         proposals.add(c.proposals);
         buf.candidates.extend_from_slice(cands);
@@ -583,6 +695,7 @@ pub fn extract(
             limit: u32::MAX as usize,
         });
     }
+    buf.crossed.rank_planes(&point_starts, total_points, pool);
     // Step 2: number the crossings and place them.
     let near_points;
     mesh.positions.resize(total, [0.0; 3]);
@@ -594,36 +707,30 @@ pub fn extract(
             chunks.push(head);
             rest = tail;
         }
-        // Plane z numbers the id blocks that start in it.
-        let mut rest: &mut [u32] = &mut buf.ids.block;
-        let mut blocks = Vec::with_capacity(per_plane.len());
-        for z in 0..per_plane.len() {
-            let n = ((z + 1) * plane).div_ceil(ID_BLOCK) - (z * plane).div_ceil(ID_BLOCK);
-            let (head, tail) = rest.split_at_mut(n);
-            blocks.push(head);
+        // Plane z numbers its crossed points.
+        let CrossedIndex { bits, points, .. } = &mut buf.crossed;
+        let mut rest: &mut [CrossedPoint] = points;
+        let mut entries = Vec::with_capacity(per_plane.len());
+        for owned in &buf.plane_owned[..planes] {
+            let (head, tail) = rest.split_at_mut(owned.len());
+            entries.push(head);
             rest = tail;
         }
-        let (owned, crossed) = (&buf.owned, &buf.crossed);
+        let (bits, plane_owned) = (&*bits, &buf.plane_owned);
         near_points = pool.install(|| {
-            buf.ids
-                .offset
-                .par_chunks_mut(plane)
+            entries
+                .into_par_iter()
                 .zip(chunks.into_par_iter())
-                .zip(blocks.into_par_iter())
                 .enumerate()
-                .map(|(z, ((offset, out), blocks))| {
+                .map(|(z, (entries, out))| {
                     number_plane(
                         &layout,
                         z,
                         iso,
-                        owned,
-                        &crossed[z * wpp..(z + 1) * wpp],
-                        (
-                            starts[z] as u32,
-                            (starts[z] + per_plane[z].0.crossings) as u32,
-                        ),
-                        blocks,
-                        offset,
+                        &plane_owned[z],
+                        &bits[z * wpp..(z + 1) * wpp],
+                        starts[z] as u32,
+                        entries,
                         out,
                     )
                 })
@@ -633,15 +740,15 @@ pub fn extract(
     if let Some(tiling) = &settings.tiles {
         if propose || clustering == Clustering::Postprocessed {
             let crossed = &buf.crossed;
-            let dz = samples.dims[2];
             crate::tiles::crossing_keys(
                 samples,
                 tiling,
-                &buf.owned,
                 |visit| {
-                    for z in 0..dz {
-                        for_each_bit(&crossed[z * wpp..(z + 1) * wpp], 0, plane, |local| {
-                            visit(z * plane + local)
+                    let mut r = 0;
+                    for z in 0..planes {
+                        for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
+                            visit(z * plane + local, crossed.points[r].owned);
+                            r += 1;
                         });
                     }
                 },
@@ -662,7 +769,7 @@ pub fn extract(
     if buf.layers.len() < layers {
         buf.layers.resize_with(layers, Vec::new);
     }
-    let (owned, ids, crossed, positions) = (&buf.owned, &buf.ids, &buf.crossed, &mesh.positions);
+    let (crossed, positions) = (&buf.crossed, &mesh.positions);
     stats.tetrahedra_processed += pool.install(|| {
         buf.layers[..layers]
             .par_iter_mut()
@@ -674,8 +781,6 @@ pub fn extract(
                     k,
                     iso,
                     settings.keep_cells,
-                    owned,
-                    ids,
                     crossed,
                     positions,
                     out,
@@ -702,26 +807,22 @@ pub fn extract(
         // Clusters grouped by colour, storage order inside a colour.
         buf.candidates.sort_by_key(|c| c.colour);
         let MtBuffers {
-            owned,
-            ids,
+            crossed,
             candidates,
             commits,
             ..
         } = &mut *buf;
-        let (owned, ids): (&[u16], &FirstIds) = (owned, ids);
+        let crossed: &CrossedIndex = crossed;
         let members =
             |c: &Candidate, island: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
                 k.clear();
-                let (o, b) = (
-                    owned[c.slot as usize] & OWNED_BITS,
-                    ids.first(c.slot as usize),
-                );
+                let point = crossed.get(c.slot as usize);
                 let mut bits = island;
                 let mut sum = glam::Vec3::ZERO;
                 while bits != 0 {
-                    let d = bits.trailing_zeros();
+                    let d = bits.trailing_zeros() as u8;
                     bits &= bits - 1;
-                    let id = b + (o & ((1u16 << d) - 1)).count_ones();
+                    let id = point.id(d);
                     k.push(id);
                     sum += glam::Vec3::from(positions[id as usize]);
                 }
@@ -886,10 +987,11 @@ pub fn extract(
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     }
 
-    stats.bytes_edges =
-        (buf.owned.len() * 2 + buf.ids.bytes() + buf.inside.len() * 8 + buf.crossed.len() * 8)
-            + buf.candidates.len() * std::mem::size_of::<Candidate>()
-            + if propose { merge.bytes() } else { 0 };
+    stats.bytes_edges = buf.crossed.bytes()
+        + buf.plane_owned.iter().map(|o| o.len() * 2).sum::<usize>()
+        + buf.inside.len() * 8
+        + buf.candidates.len() * std::mem::size_of::<Candidate>()
+        + if propose { merge.bytes() } else { 0 };
     Ok(())
 }
 
@@ -913,8 +1015,9 @@ fn weld_coincident(
     stats.discarded += dropped;
 }
 
-/// Vertex pass over one storage plane: owned crossings, counts, cluster proposals, and the
-/// plane's crossed-point bits (`crossed`, [`plane_words`] words, all zero on entry).
+/// Vertex pass over one storage plane: counts, cluster proposals, the plane's crossed-point bits
+/// (`crossed`, [`plane_words`] words, all zero on entry) and the owned crossings of each crossed
+/// point in slot order (`owned`).
 #[allow(clippy::too_many_arguments)]
 fn vertex_plane(
     l: &Layout,
@@ -924,9 +1027,10 @@ fn vertex_plane(
     propose: bool,
     pinch_rule: bool,
     colour_shift: Offset,
-    owned: &mut [u16],
+    owned: &mut Vec<u16>,
     crossed_bits: &mut [u64],
 ) -> (PlaneCounts, Vec<Candidate>) {
+    owned.clear();
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
     let slots = v.len();
@@ -953,7 +1057,7 @@ fn vertex_plane(
         let point = |sx: usize,
                      p: Offset,
                      valid: u16,
-                     owned: &mut [u16],
+                     owned: &mut Vec<u16>,
                      crossed_bits: &mut [u64],
                      counts: &mut PlaneCounts,
                      cands: &mut Vec<Candidate>| {
@@ -974,8 +1078,9 @@ fn vertex_plane(
                     }
                 }
             }
-            owned[local] = own | if crossed != 0 { HAS_CROSSING } else { 0 };
             if crossed != 0 {
+                // Points come in slot order: `owned` stays aligned with the bits.
+                owned.push(own);
                 crossed_bits[local >> 6] |= 1 << (local & 63);
             }
             counts.crossings += own.count_ones() as usize;
@@ -988,14 +1093,13 @@ fn vertex_plane(
         };
         // Border points one by one (existence and valid neighbours from the border table).
         let border = |sx: usize,
-                      owned: &mut [u16],
+                      owned: &mut Vec<u16>,
                       crossed_bits: &mut [u64],
                       counts: &mut PlaneCounts,
                       cands: &mut Vec<Candidate>| {
             let p = l.coords(sx, sy, z);
             let (exists, valid) = l.border_info(p);
             if !exists {
-                owned[sy * dx + sx] = 0;
                 return;
             }
             counts.edges += valid.count_ones() as usize;
@@ -1015,7 +1119,6 @@ fn vertex_plane(
             border(sx, owned, crossed_bits, &mut counts, &mut cands);
         }
         if flo < fhi {
-            owned[sy * dx + flo..sy * dx + fhi].fill(0);
             if lo < hi {
                 counts.edges += 14 * (hi - lo);
             }
@@ -1054,15 +1157,10 @@ fn vertex_plane(
     (counts, cands)
 }
 
-/// Numbers the crossings of plane `z` (ids `start..end`), writes their positions, the plane's
-/// per-slot id offsets (`offset`) and the id bases of the blocks that start in the plane
-/// (`blocks`, from block `ceil(z * plane / ID_BLOCK)` on). Returns how many crossings lie within
-/// `WELD` of their owner (surfaces through sample points).
-///
-/// A block's base is written where a slot of the plane owns a crossing in it, and always for a
-/// block that runs on into the next plane (which may need it without owning one here); the
-/// others are never read. `owned` is the whole array: a block that began in an earlier plane
-/// counts that plane's part itself.
+/// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points'
+/// entries (`entries`, from the owned bits `owned` of the vertex pass) and the crossings'
+/// positions (`out`). Returns how many crossings lie within `WELD` of their owner (surfaces
+/// through sample points).
 #[allow(clippy::too_many_arguments)]
 fn number_plane(
     l: &Layout,
@@ -1070,55 +1168,30 @@ fn number_plane(
     iso: f32,
     owned: &[u16],
     crossed: &[u64],
-    (start, end): (u32, u32),
-    blocks: &mut [u32],
-    offset: &mut [u8],
+    start: u32,
+    entries: &mut [CrossedPoint],
     out: &mut [[f32; 3]],
 ) -> usize {
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
     let plane = dx * dy;
-    let (p0, p1) = (z * plane, (z + 1) * plane);
-    let first_block = p0.div_ceil(ID_BLOCK);
-    let count = |from: usize, to: usize| -> u32 {
-        owned[from..to]
-            .iter()
-            .map(|&o| (o & OWNED_BITS).count_ones())
-            .sum()
-    };
-    // The block that starts in this plane and runs on into the next one.
-    let last = (p1 - 1) / ID_BLOCK;
-    if last * ID_BLOCK >= p0 && p1 % ID_BLOCK != 0 {
-        blocks[last - first_block] = end - count(last * ID_BLOCK, p1);
-    }
     let mut next = start;
-    let mut w = 0;
+    let (mut w, mut r) = (0, 0);
     let mut near_points = 0;
-    let (mut block, mut in_block) = (usize::MAX, 0u32);
     for_each_bit(crossed, 0, plane, |local| {
-        let (sy, sx) = (local / dx, local % dx);
-        let own = owned[p0 + local] & OWNED_BITS;
+        let own = owned[r];
+        entries[r] = CrossedPoint {
+            first: next,
+            owned: own,
+        };
+        r += 1;
         if own == 0 {
             return;
         }
-        let b = (p0 + local) / ID_BLOCK;
-        if b != block {
-            block = b;
-            let bs = b * ID_BLOCK;
-            if bs < p0 {
-                // Began in an earlier plane: its slots there come first.
-                in_block = count(bs, p0);
-            } else {
-                // First owning slot of a block of this plane: no crossing before it there.
-                in_block = 0;
-                blocks[b - first_block] = next;
-            }
-        }
-        offset[local] = in_block as u8;
-        in_block += own.count_ones();
         next += own.count_ones();
+        let (sy, sx) = (local / dx, local % dx);
         let p = l.coords(sx, sy, z);
-        let i = z * dx * dy + local;
+        let i = z * plane + local;
         let f = v[i];
         let pp = l.position(p);
         let mut bits = own;
@@ -1133,6 +1206,11 @@ fn number_plane(
             w += 1;
         }
     });
+    debug_assert_eq!(
+        r,
+        owned.len(),
+        "plane {z}: crossed bits and points disagree"
+    );
     near_points
 }
 
@@ -1143,9 +1221,7 @@ fn geometry_layer(
     k: usize,
     iso: f32,
     keep: Option<CellRange>,
-    owned: &[u16],
-    first_ids: &FirstIds,
-    crossed: &[u64],
+    crossed: &CrossedIndex,
     positions: &[[f32; 3]],
     out: &mut Vec<u32>,
 ) -> usize {
@@ -1154,7 +1230,8 @@ fn geometry_layer(
     let plane = l.s.dims[0] * l.s.dims[1];
     let wpp = plane_words(plane);
     let mut processed = 0;
-    let mut tet = |anchor: usize, tpl: &TetTemplate, out: &mut Vec<u32>| {
+    // `anchor` is slot `local` of storage plane `z`.
+    let mut tet = |anchor: usize, z: usize, local: usize, tpl: &TetTemplate, out: &mut Vec<u32>| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
         let case = (val[0] < iso) as usize
@@ -1171,21 +1248,33 @@ fn geometry_layer(
         for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
             let (a, b) = TET_EDGES[e as usize];
             let (o, d) = if owns(val[a], val[b], iso) {
-                (idx[a], tpl.dir[a][b])
+                (a, tpl.dir[a][b])
             } else {
-                (idx[b], tpl.dir[b][a])
+                (b, tpl.dir[b][a])
             };
-            *slot = first_ids.first(o) + (owned[o] & ((1u16 << d) - 1)).count_ones();
+            let lo = (local as isize + tpl.dlocal[o]) as usize;
+            let w = ((z * wpp) as isize + tpl.dzw[o]) as usize + (lo >> 6);
+            debug_assert_eq!(w, crossed.word(idx[o]).0);
+            *slot = crossed.get_at(w, lo & 63).id(d);
         }
         if n == 3 {
             out.extend_from_slice(&ids[..3]);
         } else {
+            // Split along the shorter diagonal, chosen by a table index rather than a branch
+            // (the choice is data-dependent and mispredicts half the time).
+            const SPLITS: [[usize; 6]; 2] = [[1, 2, 3, 1, 3, 0], [0, 1, 2, 0, 2, 3]];
             let p = |i: u32| glam::Vec3::from(positions[i as usize]);
-            if p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3])) {
-                out.extend_from_slice(&[ids[0], ids[1], ids[2], ids[0], ids[2], ids[3]]);
-            } else {
-                out.extend_from_slice(&[ids[1], ids[2], ids[3], ids[1], ids[3], ids[0]]);
-            }
+            let short02 =
+                p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
+            let s = &SPLITS[usize::from(short02)];
+            out.extend_from_slice(&[
+                ids[s[0] & 3],
+                ids[s[1] & 3],
+                ids[s[2] & 3],
+                ids[s[3] & 3],
+                ids[s[4] & 3],
+                ids[s[5] & 3],
+            ]);
         }
     };
     match l.lattice {
@@ -1199,11 +1288,11 @@ fn geometry_layer(
                     let c = s.simple_index(i, j, k);
                     // Corner 0 is a neighbour of the other 7: no crossed edge there, no
                     // surface in this cube.
-                    if owned[c] & HAS_CROSSING == 0 {
+                    if !crossed.is_crossed(c) {
                         continue;
                     }
                     for tpl in &l.tets {
-                        tet(c, tpl, out);
+                        tet(c, k, c - k * plane, tpl, out);
                     }
                 }
             }
@@ -1213,7 +1302,12 @@ fn geometry_layer(
             // Faces perpendicular to z at plane k, then (inside layer k) to x and to y.
             // A face whose anchor A has a crossed edge (B and the 4 face corners are
             // neighbours of A: without one, no surface in the face's 4 tetrahedra).
-            let mut face = |a: Offset, anchor: usize, axis: usize, out: &mut Vec<u32>| {
+            let mut face = |a: Offset,
+                            anchor: usize,
+                            z: usize,
+                            local: usize,
+                            axis: usize,
+                            out: &mut Vec<u32>| {
                 if let Some(r) = keep {
                     // Anchor cell: above the face along `axis` (clamped into the grid).
                     let mut c = a.map(|x| ((x - 1) / 2) as usize);
@@ -1223,7 +1317,7 @@ fn geometry_layer(
                     }
                 }
                 for tpl in &l.tets[4 * axis..4 * axis + 4] {
-                    tet(anchor, tpl, out);
+                    tet(anchor, z, local, tpl, out);
                 }
             };
             // The anchors of one row of faces are consecutive storage slots: scan their flags
@@ -1234,10 +1328,12 @@ fn geometry_layer(
                 // Storage plane and slot in the plane (see `Samples::bcdl_index`).
                 let z = (first[2] + 1) as usize;
                 let local = start - z * plane;
-                for_each_bit(&crossed[z * wpp..(z + 1) * wpp], local, len, |n| {
+                for_each_bit(crossed.plane_bits(z), local, len, |n| {
                     face(
                         [first[0] + 2 * n as i32, first[1], first[2]],
                         start + n,
+                        z,
+                        local + n,
                         axis,
                         out,
                     );
@@ -1264,9 +1360,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn first_ids_count_the_crossings_owned_before_each_point() {
-        // Grids whose storage planes hold fewer slots than an id block, about as many, and many
-        // more, so that blocks start, end and span whole planes everywhere.
+    fn crossed_index_finds_every_point_and_its_owned_crossings() {
+        // Grids whose storage planes hold fewer slots than a word of bits, about as many, and
+        // many more; the reference is each point's 14 edges tested one by one.
         let field = rmt_fields::FnField(|p: glam::Vec3| {
             (p.x * 7.1).sin() + (p.y * 5.3).cos() * (p.z * 3.7 + 0.4).sin() - 0.2
         });
@@ -1283,6 +1379,7 @@ mod tests {
                 [3, 3, 3],
                 [5, 2, 7],
                 [9, 8, 6],
+                [40, 3, 5],
             ] {
                 let settings = crate::ExtractSettings::new(
                     crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
@@ -1303,19 +1400,49 @@ mod tests {
                     &samples, &settings, &pool, &mut buf, &mut merge, &mut mesh, &mut stats,
                 )
                 .expect("extraction");
-                let mut before = 0u32;
-                for (slot, &o) in buf.owned.iter().enumerate() {
-                    let own = o & OWNED_BITS;
-                    if own != 0 {
-                        assert_eq!(
-                            buf.ids.first(slot),
-                            before,
-                            "{lattice:?} {cells:?} slot {slot}"
-                        );
-                        checked += 1;
+                let l = Layout::new(&samples, lattice);
+                let [dx, dy, dz] = samples.dims;
+                let iso = settings.iso;
+                let (mut before, mut rank) = (0u32, 0usize);
+                for z in 0..dz {
+                    for sy in 0..dy {
+                        for sx in 0..dx {
+                            let slot = (z * dy + sy) * dx + sx;
+                            let (p, exists) = l.point(sx, sy, z);
+                            let (mut crossed, mut own) = (false, 0u16);
+                            if exists {
+                                let f = samples.values[slot];
+                                let valid = l.valid_neighbours(p);
+                                for d in (0..14).filter(|d| valid & (1 << d) != 0) {
+                                    let q =
+                                        (slot as isize + l.delta[(p[0] & 1) as usize][d]) as usize;
+                                    let g = samples.values[q];
+                                    if (g < iso) != (f < iso) {
+                                        crossed = true;
+                                        if owns(f, g, iso) {
+                                            own |= 1 << d;
+                                        }
+                                    }
+                                }
+                            }
+                            let what = format!("{lattice:?} {cells:?} slot {slot}");
+                            assert_eq!(buf.crossed.plane_of(slot), z, "{what}");
+                            assert_eq!(buf.crossed.is_crossed(slot), crossed, "{what}");
+                            if crossed {
+                                let expected = CrossedPoint {
+                                    first: before,
+                                    owned: own,
+                                };
+                                assert_eq!(buf.crossed.get(slot), expected, "{what}");
+                                assert_eq!(buf.crossed.points[rank], expected, "{what}");
+                                rank += 1;
+                                checked += usize::from(own != 0);
+                            }
+                            before += own.count_ones();
+                        }
                     }
-                    before += own.count_ones();
                 }
+                assert_eq!(rank, buf.crossed.points.len(), "{lattice:?} {cells:?}");
                 assert_eq!(
                     before as usize,
                     mesh.positions.len(),
@@ -1324,6 +1451,33 @@ mod tests {
             }
         }
         assert!(checked > 100, "only {checked} points own crossings");
+    }
+
+    #[test]
+    fn plane_of_divides_exactly_for_every_slot_below_2_pow_32() {
+        let mut index = CrossedIndex::default();
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for plane in (1..600).chain([4096, 65_537, 66_049, 1 << 20, 3_000_017]) {
+            index.reset(plane, 0);
+            let mut slots: Vec<usize> = (0..2000).collect();
+            for k in [1usize, 2, 7, 1000, 65_000, (u32::MAX as usize) / plane] {
+                slots.extend([k * plane - 1, k * plane, k * plane + 1]);
+            }
+            slots.push(u32::MAX as usize);
+            for _ in 0..2000 {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                slots.push((x >> 32) as usize);
+            }
+            for slot in slots.into_iter().filter(|&s| s <= u32::MAX as usize) {
+                assert_eq!(
+                    index.plane_of(slot),
+                    slot / plane,
+                    "slot {slot}, plane {plane}"
+                );
+            }
+        }
     }
 
     #[test]

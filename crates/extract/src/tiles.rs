@@ -85,12 +85,12 @@ fn key_of(tiling: &Tiling, unit: i64, lo: [i64; 3], hi: [i64; 3]) -> u64 {
 
 /// Keys of all crossings in id order: crossings are numbered by owner (storage order), then by
 /// neighbour index, so walking the owned bits in that order meets them in id order. `points`
-/// visits the slots that may own crossings, in storage order (the others own none).
+/// visits the slots that may own crossings with their owned bits (bit d: the edge to neighbour
+/// d), in storage order (the others own none).
 pub(crate) fn crossing_keys(
     samples: &Samples,
     tiling: &Tiling,
-    owned: &[u16],
-    points: impl FnOnce(&mut dyn FnMut(usize)),
+    points: impl FnOnce(&mut dyn FnMut(usize, u16)),
     out: &mut Vec<u64>,
 ) {
     out.clear();
@@ -104,8 +104,8 @@ pub(crate) fn crossing_keys(
         Lattice::Simple => (1i64, tiling.grid_offset.map(|o| o as i64)),
     };
     let [dx, dy, _] = samples.dims;
-    points(&mut |slot| {
-        let mut bits = owned[slot] & 0x3FFF;
+    points(&mut |slot, owned| {
+        let mut bits = owned;
         if bits == 0 {
             return;
         }
