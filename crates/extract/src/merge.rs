@@ -170,24 +170,29 @@ pub struct MergeBuffers {
     scratch: Scratch,
     /// The edits of the last checked merge (working memory of [`MergeBuffers::merge`]).
     edits: Vec<TriangleEdit>,
-    /// Fill cursors of the incidence lists (working memory of [`MergeBuffers::load_parts`]).
-    fill: Vec<u32>,
 }
 
 impl MergeBuffers {
     /// Loads `vertex_count` vertices and the triangles `indices` (three per triangle).
     pub fn load(&mut self, vertex_count: usize, indices: &[u32]) {
-        self.load_parts(vertex_count, &[indices]);
+        self.tris.clear();
+        self.tris
+            .extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+        self.load_filled(vertex_count);
     }
 
-    /// Loads `vertex_count` vertices and the triangles of `parts` concatenated in order (three
-    /// indices per triangle in each part), without concatenating them first.
-    pub fn load_parts<P: AsRef<[u32]>>(&mut self, vertex_count: usize, parts: &[P]) {
+    /// Room for `triangles` triangles, three indices each, to be written in place and then
+    /// loaded with [`MergeBuffers::load_filled`] (the geometry pass writes straight into it: no
+    /// second copy of the triangles).
+    pub fn triangles_to_fill(&mut self, triangles: usize) -> &mut [u32] {
         self.tris.clear();
-        for part in parts {
-            self.tris
-                .extend(part.as_ref().chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
-        }
+        self.tris.resize(triangles, [0; 3]);
+        self.tris.as_flattened_mut()
+    }
+
+    /// Loads `vertex_count` vertices and the triangles written into
+    /// [`MergeBuffers::triangles_to_fill`].
+    pub fn load_filled(&mut self, vertex_count: usize) {
         self.alive.clear();
         self.alive.resize(self.tris.len(), true);
         self.inc_start.clear();
@@ -202,7 +207,8 @@ impl MergeBuffers {
         }
         self.inc.clear();
         self.inc.resize(self.tris.len() * 3, 0);
-        let fill = &mut self.fill;
+        // `next_member` serves as the fill cursors first (no separate array).
+        let fill = &mut self.next_member;
         fill.clear();
         fill.extend_from_slice(&self.inc_start[..vertex_count]);
         for (t, tri) in self.tris.iter().enumerate() {
@@ -211,8 +217,7 @@ impl MergeBuffers {
                 fill[v as usize] += 1;
             }
         }
-        self.next_member.clear();
-        self.next_member.resize(vertex_count, NONE);
+        self.next_member.fill(NONE);
         self.rep.clear();
         self.rep.extend(0..vertex_count as u32);
         self.count.clear();
@@ -774,10 +779,18 @@ impl MergeBuffers {
 
     /// Writes the merged mesh: live triangles in their original order, vertices that live
     /// triangles use, renumbered in increasing old order. Returns the number of vertices.
-    pub fn finish(&self, positions: &mut Vec<[f32; 3]>, indices: &mut Vec<u32>) -> usize {
-        let mut new_id = vec![NONE; positions.len()];
+    ///
+    /// This ends the merging: the member chains are reused as the renumbering table (no
+    /// allocation), so only [`MergeBuffers::is_alive`] and [`MergeBuffers::triangle`] stay
+    /// meaningful until the next load.
+    pub fn finish(&mut self, positions: &mut Vec<[f32; 3]>, indices: &mut Vec<u32>) -> usize {
+        let new_id = &mut self.next_member;
+        new_id.clear();
+        new_id.resize(positions.len(), NONE);
+        let mut live = 0;
         for (t, tri) in self.tris.iter().enumerate() {
             if self.alive[t] {
+                live += 1;
                 for &v in tri {
                     new_id[v as usize] = 0;
                 }
@@ -795,6 +808,7 @@ impl MergeBuffers {
         }
         positions.truncate(write);
         indices.clear();
+        indices.reserve_exact(3 * live);
         for (t, tri) in self.tris.iter().enumerate() {
             if self.alive[t] {
                 indices.extend(tri.iter().map(|&v| new_id[v as usize]));

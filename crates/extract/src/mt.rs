@@ -39,14 +39,11 @@ use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Sampl
 pub struct MtBuffers {
     /// Which points have a crossed edge, and their owned crossings and ids ([`CrossedIndex`]).
     crossed: CrossedIndex,
-    /// Per storage plane, the owned-crossing bits of its crossed points in slot order (the
-    /// vertex pass's output, numbered into [`CrossedIndex::points`]).
-    plane_owned: Vec<Vec<u16>>,
+    /// Per storage plane, its crossed points in slot order as `owned | crossed << 16` (the vertex
+    /// pass's output, numbered into [`CrossedIndex::points`]).
+    plane_points: Vec<Vec<u32>>,
     /// Cluster candidates, in storage order.
     candidates: Vec<Candidate>,
-    /// Triangles of each geometry layer, as crossing ids: the geometry pass's output is their
-    /// concatenation in layer order.
-    layers: Vec<Vec<u32>>,
     /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
     /// of padding: 64 points are tested for crossings at once with a few word operations.
     inside: Vec<u64>,
@@ -60,6 +57,8 @@ pub struct MtBuffers {
 struct CrossedPoint {
     first: u32,
     owned: u16,
+    /// All its crossed edges (owned or not), by neighbour bit.
+    crossed: u16,
 }
 
 impl CrossedPoint {
@@ -127,7 +126,7 @@ impl CrossedIndex {
     }
 
     /// Whether `slot` has a crossed edge.
-    #[inline(always)]
+    #[cfg(test)]
     fn is_crossed(&self, slot: usize) -> bool {
         let (w, b) = self.word(slot);
         self.bits[w] >> b & 1 != 0
@@ -144,6 +143,13 @@ impl CrossedIndex {
     #[inline(always)]
     fn get_in(&self, z: usize, local: usize) -> CrossedPoint {
         self.get_at(z * self.wpp + (local >> 6), local & 63)
+    }
+
+    /// The rank of slot `local` of storage plane `z`: how many crossed points come before it.
+    #[inline(always)]
+    fn rank_in(&self, z: usize, local: usize) -> usize {
+        let (w, b) = (z * self.wpp + (local >> 6), local & 63);
+        (self.rank[w] + (self.bits[w] & ((1u64 << b) - 1)).count_ones()) as usize
     }
 
     /// The entry of the crossed point at bit `b` of word `w`.
@@ -326,6 +332,76 @@ struct TetTemplate {
     dir: [[u8; 4]; 4],
 }
 
+/// The tetrahedra visited together (a body-centred face's 4 around the centres A and B, with 6
+/// distinct points; a cube's 6, with 8 corners) and the number of triangles they give for each
+/// inside/outside pattern of those points, derived from the case table: the geometry pass counts
+/// a layer's triangles from the inside bits before it writes them.
+#[derive(Clone, Debug, Default)]
+struct TetGroup {
+    /// Storage deltas of its distinct points from the anchor (point 0, in every tetrahedron of
+    /// the group).
+    points: [isize; 8],
+    /// Neighbour index of each point seen from the anchor (`u8::MAX` for the anchor itself).
+    dirs: [u8; 8],
+    len: usize,
+    /// Triangles of its tetrahedra when the points with bit i set in the index are inside.
+    /// A tetrahedron gives as many triangles with its sides swapped, so this is also the count
+    /// when bit i says "point i is on the other side from the anchor", i.e. the anchor's
+    /// crossed edges: no sample value needs reading.
+    triangles: Vec<u8>,
+}
+
+impl TetGroup {
+    /// The group of templates `tets` (corners given by their storage deltas).
+    fn new(tets: &[TetTemplate]) -> Self {
+        let mut group = Self {
+            len: 1,
+            dirs: [u8::MAX; 8],
+            ..Self::default()
+        };
+        let mut corners = Vec::with_capacity(tets.len());
+        for tpl in tets {
+            // The anchor: the reference point of the templates.
+            let a = tpl.delta.iter().position(|&d| d == 0);
+            let a = a.expect("every tetrahedron of a group has the anchor as a corner");
+            let mut c = [0usize; 4];
+            for (i, &d) in tpl.delta.iter().enumerate() {
+                c[i] = match group.points[..group.len].iter().position(|&p| p == d) {
+                    Some(j) => j,
+                    None => {
+                        group.points[group.len] = d;
+                        group.dirs[group.len] = tpl.dir[a][i];
+                        group.len += 1;
+                        group.len - 1
+                    }
+                };
+            }
+            corners.push(c);
+        }
+        group.triangles = (0..1usize << group.len)
+            .map(|code| {
+                corners
+                    .iter()
+                    .map(|c| {
+                        let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i);
+                        case_triangles(case)
+                    })
+                    .sum()
+            })
+            .collect();
+        group
+    }
+}
+
+/// Triangles a tetrahedron gives in `case` (bit i: corner i inside): none, one, or two (a quad).
+fn case_triangles(case: usize) -> u8 {
+    match CASES[case] {
+        [u8::MAX, ..] => 0,
+        [_, _, _, u8::MAX] => 1,
+        _ => 2,
+    }
+}
+
 /// The lattice in storage terms: neighbour deltas per parity and tetrahedron templates.
 struct Layout<'a> {
     s: &'a Samples,
@@ -334,6 +410,8 @@ struct Layout<'a> {
     /// Storage-index delta of neighbour d, for even (`[0]`) and odd (`[1]`) points.
     delta: [[isize; 14]; 2],
     tets: Vec<TetTemplate>,
+    /// The tetrahedra visited together: per face axis (body-centred) or the cube (simple).
+    groups: Vec<TetGroup>,
     /// Existence (bit 16) and valid-neighbour mask (bits 0..14) of a point by the boundary
     /// class of each coordinate ([`boundary_class`]) and its parity; empty for grids too small
     /// for the classes to be apart (then computed point by point).
@@ -411,13 +489,20 @@ impl<'a> Layout<'a> {
                 }
                 tpl
             })
-            .collect();
+            .collect::<Vec<_>>();
+        // Groups: a body-centred face's 4 tetrahedra (the table lists them by face axis), a
+        // cube's 6.
+        let groups = match lattice {
+            Lattice::BodyCentred => tets.chunks(4).map(TetGroup::new).collect(),
+            Lattice::Simple => vec![TetGroup::new(&tets)],
+        };
         let mut layout = Self {
             s,
             lattice,
             t,
             delta,
             tets,
+            groups,
             border_table: Vec::new(),
         };
         layout.border_table = layout.build_border_table();
@@ -622,8 +707,8 @@ pub fn extract(
     let plane = samples.dims[0] * samples.dims[1];
     let planes = samples.dims[2];
     buf.crossed.reset(plane, planes);
-    if buf.plane_owned.len() < planes {
-        buf.plane_owned.resize_with(planes, Vec::new);
+    if buf.plane_points.len() < planes {
+        buf.plane_points.resize_with(planes, Vec::new);
     }
     stats.t_allocation_s += t.elapsed().as_secs_f64();
 
@@ -654,7 +739,7 @@ pub fn extract(
     let inside = &buf.inside;
     let wpp = buf.crossed.wpp;
     let per_plane: Vec<(PlaneCounts, Vec<Candidate>)> = pool.install(|| {
-        buf.plane_owned[..planes]
+        buf.plane_points[..planes]
             .par_iter_mut()
             .zip(buf.crossed.bits.par_chunks_mut(wpp))
             .enumerate()
@@ -682,7 +767,7 @@ pub fn extract(
         starts.push(total);
         total += c.crossings;
         point_starts.push(total_points);
-        total_points += buf.plane_owned[z].len();
+        total_points += buf.plane_points[z].len();
         stats.edges += c.edges;
         proposals.add(c.proposals);
         buf.candidates.extend_from_slice(cands);
@@ -711,12 +796,12 @@ pub fn extract(
         let CrossedIndex { bits, points, .. } = &mut buf.crossed;
         let mut rest: &mut [CrossedPoint] = points;
         let mut entries = Vec::with_capacity(per_plane.len());
-        for owned in &buf.plane_owned[..planes] {
+        for owned in &buf.plane_points[..planes] {
             let (head, tail) = rest.split_at_mut(owned.len());
             entries.push(head);
             rest = tail;
         }
-        let (bits, plane_owned) = (&*bits, &buf.plane_owned);
+        let (bits, plane_points) = (&*bits, &buf.plane_points);
         near_points = pool.install(|| {
             entries
                 .into_par_iter()
@@ -727,7 +812,7 @@ pub fn extract(
                         &layout,
                         z,
                         iso,
-                        &plane_owned[z],
+                        &plane_points[z],
                         &bits[z * wpp..(z + 1) * wpp],
                         starts[z] as u32,
                         entries,
@@ -766,29 +851,43 @@ pub fn extract(
         Lattice::BodyCentred => samples.cells[2] + 1,
         Lattice::Simple => samples.cells[2],
     };
-    if buf.layers.len() < layers {
-        buf.layers.resize_with(layers, Vec::new);
+    // Triangles per layer, counted from the inside bits, so that every layer writes its
+    // triangles straight into their final place (the mesh, or the merge buffers when clusters
+    // follow): no per-layer buffers, no second copy.
+    let crossed = &buf.crossed;
+    let keep = settings.keep_cells;
+    let counts: Vec<usize> = pool.install(|| {
+        (0..layers)
+            .into_par_iter()
+            .map(|k| count_layer(&layout, k, keep, crossed))
+            .collect()
+    });
+    let triangles: usize = counts.iter().sum();
+    let Mesh {
+        positions, indices, ..
+    } = &mut *mesh;
+    let out: &mut [u32] = if propose {
+        merge.triangles_to_fill(triangles)
+    } else {
+        indices.clear();
+        indices.resize(3 * triangles, 0);
+        indices
+    };
+    let mut parts = Vec::with_capacity(layers);
+    let mut rest = out;
+    for &n in &counts {
+        let (head, tail) = rest.split_at_mut(3 * n);
+        parts.push(head);
+        rest = tail;
     }
-    let (crossed, positions) = (&buf.crossed, &mesh.positions);
+    let positions = &*positions;
     stats.tetrahedra_processed += pool.install(|| {
-        buf.layers[..layers]
-            .par_iter_mut()
+        parts
+            .into_par_iter()
             .enumerate()
-            .map(|(k, out)| {
-                out.clear();
-                geometry_layer(
-                    &layout,
-                    k,
-                    iso,
-                    settings.keep_cells,
-                    crossed,
-                    positions,
-                    out,
-                )
-            })
+            .map(|(k, out)| geometry_layer(&layout, k, iso, keep, crossed, positions, out))
             .sum::<usize>()
     });
-    let layer_tris = &buf.layers[..layers];
     let [nx, ny, nz] = samples.cells;
     stats.tetrahedra_total = match lattice {
         Lattice::BodyCentred => 4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1)),
@@ -803,7 +902,7 @@ pub fn extract(
     if propose {
         let t = std::time::Instant::now();
         let check = clustering == Clustering::Integrated;
-        merge.load_parts(total, layer_tris);
+        merge.load_filled(total);
         // Clusters grouped by colour, storage order inside a colour.
         buf.candidates.sort_by_key(|c| c.colour);
         let MtBuffers {
@@ -953,11 +1052,6 @@ pub fn extract(
             weld_coincident(merge, mesh, settings, tiled.then_some(&keys[..]), stats);
         }
         stats.t_vertex_s += t.elapsed().as_secs_f64();
-    } else {
-        mesh.indices.clear();
-        for tris in layer_tris {
-            mesh.indices.extend_from_slice(tris);
-        }
     }
     stats.clusters_rejected = stats.clusters_rejected_prefilter + stats.clusters_rejected_check;
 
@@ -988,7 +1082,7 @@ pub fn extract(
     }
 
     stats.bytes_edges = buf.crossed.bytes()
-        + buf.plane_owned.iter().map(|o| o.len() * 2).sum::<usize>()
+        + buf.plane_points.iter().map(|o| o.len() * 4).sum::<usize>()
         + buf.inside.len() * 8
         + buf.candidates.len() * std::mem::size_of::<Candidate>()
         + if propose { merge.bytes() } else { 0 };
@@ -1027,7 +1121,7 @@ fn vertex_plane(
     propose: bool,
     pinch_rule: bool,
     colour_shift: Offset,
-    owned: &mut Vec<u16>,
+    owned: &mut Vec<u32>,
     crossed_bits: &mut [u64],
 ) -> (PlaneCounts, Vec<Candidate>) {
     owned.clear();
@@ -1057,7 +1151,7 @@ fn vertex_plane(
         let point = |sx: usize,
                      p: Offset,
                      valid: u16,
-                     owned: &mut Vec<u16>,
+                     owned: &mut Vec<u32>,
                      crossed_bits: &mut [u64],
                      counts: &mut PlaneCounts,
                      cands: &mut Vec<Candidate>| {
@@ -1080,7 +1174,7 @@ fn vertex_plane(
             }
             if crossed != 0 {
                 // Points come in slot order: `owned` stays aligned with the bits.
-                owned.push(own);
+                owned.push(u32::from(own) | u32::from(crossed) << 16);
                 crossed_bits[local >> 6] |= 1 << (local & 63);
             }
             counts.crossings += own.count_ones() as usize;
@@ -1093,7 +1187,7 @@ fn vertex_plane(
         };
         // Border points one by one (existence and valid neighbours from the border table).
         let border = |sx: usize,
-                      owned: &mut Vec<u16>,
+                      owned: &mut Vec<u32>,
                       crossed_bits: &mut [u64],
                       counts: &mut PlaneCounts,
                       cands: &mut Vec<Candidate>| {
@@ -1166,7 +1260,7 @@ fn number_plane(
     l: &Layout,
     z: usize,
     iso: f32,
-    owned: &[u16],
+    owned: &[u32],
     crossed: &[u64],
     start: u32,
     entries: &mut [CrossedPoint],
@@ -1179,10 +1273,11 @@ fn number_plane(
     let (mut w, mut r) = (0, 0);
     let mut near_points = 0;
     for_each_bit(crossed, 0, plane, |local| {
-        let own = owned[r];
+        let own = owned[r] as u16;
         entries[r] = CrossedPoint {
             first: next,
             owned: own,
+            crossed: (owned[r] >> 16) as u16,
         };
         r += 1;
         if own == 0 {
@@ -1214,8 +1309,94 @@ fn number_plane(
     near_points
 }
 
-/// Geometry pass over one z-layer; returns the tetrahedra processed.
-#[allow(clippy::too_many_arguments)]
+/// Calls `visit(anchor, z, local, rank, group)` for each body-centred face (group: its axis) or
+/// cube (group 0) of geometry layer `k` that can hold surface: its anchor point has a crossed
+/// edge and, in a chunk, its cell is kept. `anchor` is slot `local` of storage plane `z`, and
+/// the anchor's entry is `crossed.points[rank]`. The count and the geometry pass both walk the
+/// layer with it, so they see the same groups.
+fn for_each_group(
+    l: &Layout,
+    k: usize,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    mut visit: impl FnMut(usize, usize, usize, usize, usize),
+) {
+    let [nx, ny, nz] = l.s.cells;
+    let plane = l.s.dims[0] * l.s.dims[1];
+    // The anchors of one row are consecutive storage slots: scan their bits, visit only the
+    // crossed ones (`cell(n)`: the cell of the n-th, to test against the kept cells).
+    let mut row =
+        |start: usize, z: usize, len: usize, g: usize, cell: &dyn Fn(usize) -> [usize; 3]| {
+            let local = start - z * plane;
+            let mut rank = crossed.rank_in(z, local);
+            for_each_bit(crossed.plane_bits(z), local, len, |n| {
+                let r = rank;
+                rank += 1;
+                if keep.is_some_and(|range| !range.contains(cell(n))) {
+                    return;
+                }
+                visit(start + n, z, local + n, r, g);
+            });
+        };
+    match l.lattice {
+        Lattice::Simple => {
+            // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface
+            // in the cube.
+            for j in 0..ny {
+                row(l.s.simple_index(0, j, k), k, nx, 0, &|i| [i, j, k]);
+            }
+        }
+        Lattice::BodyCentred => {
+            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by their
+            // anchor A, the centre below (B and the 4 face corners are neighbours of A: without
+            // a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a face anchor
+            // moves by one storage slot.
+            let ki = k as i32;
+            let mut faces = |first: Offset, len: usize, axis: usize| {
+                // Storage plane (see `Samples::bcdl_index`); the anchor cell is above the face
+                // along `axis` (clamped into the grid).
+                let z = (first[2] + 1) as usize;
+                let cell = |n: usize| {
+                    let a = [first[0] + 2 * n as i32, first[1], first[2]];
+                    let mut c = a.map(|x| ((x - 1) / 2) as usize);
+                    c[axis] = (((a[axis] + 1) / 2) as usize).min(l.s.cells[axis] - 1);
+                    c
+                };
+                row(l.s.bcdl_index(first), z, len, axis, &cell);
+            };
+            for j in 0..ny as i32 {
+                faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
+            }
+            if k < nz {
+                for j in 0..ny as i32 {
+                    faces([-1, 2 * j + 1, 2 * ki + 1], nx + 1, 0);
+                }
+                for f in 0..=ny as i32 {
+                    faces([1, 2 * f - 1, 2 * ki + 1], nx, 1);
+                }
+            }
+        }
+    }
+}
+
+/// Triangles geometry layer `k` will give: per group, a table lookup by the anchor's crossed
+/// edges.
+fn count_layer(l: &Layout, k: usize, keep: Option<CellRange>, crossed: &CrossedIndex) -> usize {
+    let mut n = 0;
+    for_each_group(l, k, keep, crossed, |_, _, _, rank, g| {
+        let group = &l.groups[g];
+        let mask = usize::from(crossed.points[rank].crossed);
+        let mut code = 0;
+        for (i, &d) in group.dirs[1..group.len].iter().enumerate() {
+            code |= ((mask >> d) & 1) << (i + 1);
+        }
+        n += usize::from(group.triangles[code]);
+    });
+    n
+}
+
+/// Geometry pass over one z-layer: writes its triangles into `out`, sized by [`count_layer`];
+/// returns the tetrahedra processed.
 fn geometry_layer(
     l: &Layout,
     k: usize,
@@ -1223,15 +1404,14 @@ fn geometry_layer(
     keep: Option<CellRange>,
     crossed: &CrossedIndex,
     positions: &[[f32; 3]],
-    out: &mut Vec<u32>,
+    out: &mut [u32],
 ) -> usize {
     let v = &l.s.values;
-    let [nx, ny, nz] = l.s.cells;
-    let plane = l.s.dims[0] * l.s.dims[1];
-    let wpp = plane_words(plane);
+    let wpp = plane_words(l.s.dims[0] * l.s.dims[1]);
     let mut processed = 0;
+    let mut w = 0;
     // `anchor` is slot `local` of storage plane `z`.
-    let mut tet = |anchor: usize, z: usize, local: usize, tpl: &TetTemplate, out: &mut Vec<u32>| {
+    let mut tet = |anchor: usize, z: usize, local: usize, tpl: &TetTemplate| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
         let case = (val[0] < iso) as usize
@@ -1253,12 +1433,13 @@ fn geometry_layer(
                 (b, tpl.dir[b][a])
             };
             let lo = (local as isize + tpl.dlocal[o]) as usize;
-            let w = ((z * wpp) as isize + tpl.dzw[o]) as usize + (lo >> 6);
-            debug_assert_eq!(w, crossed.word(idx[o]).0);
-            *slot = crossed.get_at(w, lo & 63).id(d);
+            let word = ((z * wpp) as isize + tpl.dzw[o]) as usize + (lo >> 6);
+            debug_assert_eq!(word, crossed.word(idx[o]).0);
+            *slot = crossed.get_at(word, lo & 63).id(d);
         }
         if n == 3 {
-            out.extend_from_slice(&ids[..3]);
+            out[w..w + 3].copy_from_slice(&ids[..3]);
+            w += 3;
         } else {
             // Split along the shorter diagonal, chosen by a table index rather than a branch
             // (the choice is data-dependent and mispredicts half the time).
@@ -1267,7 +1448,7 @@ fn geometry_layer(
             let short02 =
                 p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
             let s = &SPLITS[usize::from(short02)];
-            out.extend_from_slice(&[
+            out[w..w + 6].copy_from_slice(&[
                 ids[s[0] & 3],
                 ids[s[1] & 3],
                 ids[s[2] & 3],
@@ -1275,83 +1456,23 @@ fn geometry_layer(
                 ids[s[4] & 3],
                 ids[s[5] & 3],
             ]);
+            w += 6;
         }
     };
-    match l.lattice {
-        Lattice::Simple => {
-            let s = l.s;
-            for j in 0..ny {
-                for i in 0..nx {
-                    if keep.is_some_and(|r| !r.contains([i, j, k])) {
-                        continue;
-                    }
-                    let c = s.simple_index(i, j, k);
-                    // Corner 0 is a neighbour of the other 7: no crossed edge there, no
-                    // surface in this cube.
-                    if !crossed.is_crossed(c) {
-                        continue;
-                    }
-                    for tpl in &l.tets {
-                        tet(c, k, c - k * plane, tpl, out);
-                    }
-                }
-            }
+    for_each_group(l, k, keep, crossed, |anchor, z, local, _, g| {
+        let tets = match l.lattice {
+            Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
+            Lattice::Simple => &l.tets[..],
+        };
+        for tpl in tets {
+            tet(anchor, z, local, tpl);
         }
-        Lattice::BodyCentred => {
-            let k = k as i32;
-            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y.
-            // A face whose anchor A has a crossed edge (B and the 4 face corners are
-            // neighbours of A: without one, no surface in the face's 4 tetrahedra).
-            let mut face = |a: Offset,
-                            anchor: usize,
-                            z: usize,
-                            local: usize,
-                            axis: usize,
-                            out: &mut Vec<u32>| {
-                if let Some(r) = keep {
-                    // Anchor cell: above the face along `axis` (clamped into the grid).
-                    let mut c = a.map(|x| ((x - 1) / 2) as usize);
-                    c[axis] = (((a[axis] + 1) / 2) as usize).min(l.s.cells[axis] - 1);
-                    if !r.contains(c) {
-                        return;
-                    }
-                }
-                for tpl in &l.tets[4 * axis..4 * axis + 4] {
-                    tet(anchor, z, local, tpl, out);
-                }
-            };
-            // The anchors of one row of faces are consecutive storage slots: scan their flags
-            // and visit only the faces whose anchor has a crossed edge.
-            // (Along x, a face anchor moves by one storage slot.)
-            let mut row = |first: Offset, len: usize, axis: usize, out: &mut Vec<u32>| {
-                let start = l.s.bcdl_index(first);
-                // Storage plane and slot in the plane (see `Samples::bcdl_index`).
-                let z = (first[2] + 1) as usize;
-                let local = start - z * plane;
-                for_each_bit(crossed.plane_bits(z), local, len, |n| {
-                    face(
-                        [first[0] + 2 * n as i32, first[1], first[2]],
-                        start + n,
-                        z,
-                        local + n,
-                        axis,
-                        out,
-                    );
-                });
-            };
-            for j in 0..ny as i32 {
-                row([1, 2 * j + 1, 2 * k - 1], nx, 2, out);
-            }
-            if (k as usize) < nz {
-                for j in 0..ny as i32 {
-                    row([-1, 2 * j + 1, 2 * k + 1], nx + 1, 0, out);
-                }
-                for f in 0..=ny as i32 {
-                    row([1, 2 * f - 1, 2 * k + 1], nx, 1, out);
-                }
-            }
-        }
-    }
+    });
+    debug_assert_eq!(
+        w,
+        out.len(),
+        "layer {k}: triangles counted and written differ"
+    );
     processed
 }
 
@@ -1409,7 +1530,7 @@ mod tests {
                         for sx in 0..dx {
                             let slot = (z * dy + sy) * dx + sx;
                             let (p, exists) = l.point(sx, sy, z);
-                            let (mut crossed, mut own) = (false, 0u16);
+                            let (mut crossed, mut own) = (0u16, 0u16);
                             if exists {
                                 let f = samples.values[slot];
                                 let valid = l.valid_neighbours(p);
@@ -1418,7 +1539,7 @@ mod tests {
                                         (slot as isize + l.delta[(p[0] & 1) as usize][d]) as usize;
                                     let g = samples.values[q];
                                     if (g < iso) != (f < iso) {
-                                        crossed = true;
+                                        crossed |= 1 << d;
                                         if owns(f, g, iso) {
                                             own |= 1 << d;
                                         }
@@ -1427,11 +1548,12 @@ mod tests {
                             }
                             let what = format!("{lattice:?} {cells:?} slot {slot}");
                             assert_eq!(buf.crossed.plane_of(slot), z, "{what}");
-                            assert_eq!(buf.crossed.is_crossed(slot), crossed, "{what}");
-                            if crossed {
+                            assert_eq!(buf.crossed.is_crossed(slot), crossed != 0, "{what}");
+                            if crossed != 0 {
                                 let expected = CrossedPoint {
                                     first: before,
                                     owned: own,
+                                    crossed,
                                 };
                                 assert_eq!(buf.crossed.get(slot), expected, "{what}");
                                 assert_eq!(buf.crossed.points[rank], expected, "{what}");
