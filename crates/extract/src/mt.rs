@@ -1576,6 +1576,102 @@ mod tests {
     }
 
     #[test]
+    fn layer_triangle_counts_match_the_tetrahedra_of_every_group() {
+        // The count reads only the anchor's crossed edges through the group tables; here each
+        // group's tetrahedra are evaluated from the sample values instead, with and without
+        // kept cells.
+        let field = rmt_fields::FnField(|p: glam::Vec3| {
+            (p.x * 6.3).sin() * (p.y * 4.1 + 0.3).cos() + (p.z * 5.7).sin() * 0.8 - 0.1
+        });
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("a pool of one thread");
+        let mut triangles = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[3, 2, 4], [9, 8, 6], [13, 11, 12]] {
+                let settings = crate::ExtractSettings::new(
+                    crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
+                    lattice,
+                    crate::Clustering::None,
+                );
+                let mut stats = Stats::default();
+                let mut samples = Samples::default();
+                samples
+                    .sample(&field, &settings, &pool, &mut stats)
+                    .expect("a finite field");
+                let (mut buf, mut merge, mut mesh) = (
+                    MtBuffers::default(),
+                    MergeBuffers::default(),
+                    Mesh::default(),
+                );
+                extract(
+                    &samples, &settings, &pool, &mut buf, &mut merge, &mut mesh, &mut stats,
+                )
+                .expect("extraction");
+                let l = Layout::new(&samples, lattice);
+                let (expected_len, dirs_from) = match lattice {
+                    Lattice::BodyCentred => (6, 1),
+                    Lattice::Simple => (8, 0),
+                };
+                for g in &l.groups {
+                    assert_eq!(g.len, expected_len, "{lattice:?}");
+                    assert_eq!(g.points[0], 0, "the anchor comes first");
+                    for i in 1..g.len {
+                        let d = l.delta[dirs_from][g.dirs[i] as usize];
+                        assert_eq!(d, g.points[i], "{lattice:?} point {i}");
+                    }
+                    for code in 0..1usize << g.len {
+                        let swapped = !code & ((1 << g.len) - 1);
+                        assert_eq!(g.triangles[code], g.triangles[swapped], "side swap");
+                    }
+                }
+                let layers = match lattice {
+                    Lattice::BodyCentred => cells[2] + 1,
+                    Lattice::Simple => cells[2],
+                };
+                let keeps = [
+                    None,
+                    Some(CellRange {
+                        lo: [1, 0, 1],
+                        hi: [cells[0] - 1, cells[1], cells[2] - 1],
+                    }),
+                ];
+                for keep in keeps {
+                    let mut total = 0;
+                    for k in 0..layers {
+                        let mut direct = 0;
+                        for_each_group(&l, k, keep, &buf.crossed, |anchor, _, _, _, g| {
+                            let tets = match lattice {
+                                Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
+                                Lattice::Simple => &l.tets[..],
+                            };
+                            for tpl in tets {
+                                let case = (0..4).fold(0, |case, i| {
+                                    let slot = (anchor as isize + tpl.delta[i]) as usize;
+                                    case | usize::from(samples.values[slot] < settings.iso) << i
+                                });
+                                direct += usize::from(case_triangles(case));
+                            }
+                        });
+                        let counted = count_layer(&l, k, keep, &buf.crossed);
+                        assert_eq!(counted, direct, "{lattice:?} {cells:?} layer {k} {keep:?}");
+                        total += counted;
+                    }
+                    if keep.is_none() {
+                        assert_eq!(total * 3, mesh.indices.len(), "{lattice:?} {cells:?}");
+                    }
+                    triangles += total;
+                }
+            }
+        }
+        assert!(
+            triangles > 1000,
+            "only {triangles} triangles: the fields miss the grids"
+        );
+    }
+
+    #[test]
     fn plane_of_divides_exactly_for_every_slot_below_2_pow_32() {
         let mut index = CrossedIndex::default();
         let mut x = 0x9E37_79B9_7F4A_7C15u64;
