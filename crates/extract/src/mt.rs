@@ -12,8 +12,10 @@
 //! those bits. With clustering, the pass also proposes clusters ([`crate::cluster`]).
 //!
 //! **Geometry pass** (parallel over z-layers): every tetrahedron whose corners disagree gives one
-//! or two triangles from the case table; layers are concatenated in order, so the output is the
-//! same for any thread count. Cubes (or body-centred faces) whose sample points all agree are
+//! or two triangles from the case table. Each layer's triangles are counted first, from the
+//! crossed edges of the face or cube anchors ([`TetGroup`] tables), so that every layer writes
+//! into its own slice of the output in layer order: the same output for any thread count, and
+//! the triangles stored once. Cubes (or body-centred faces) whose anchor has no crossed edge are
 //! skipped before any tetrahedron is looked at.
 //!
 //! **Commit** (clustering): clusters are merged one lattice colour at a time, each only after the
