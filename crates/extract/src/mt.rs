@@ -6,14 +6,14 @@
 //! (inside is f < T). The crossing belongs to the nearer end (|f - T| smaller; on a tie, the inside
 //! end), so every crossing has exactly one owner and its vertex id does not depend on processing
 //! order: ids are numbered by owner (storage order), then by neighbour index. Only points with a
-//! crossed edge are stored ([`CrossedIndex`]: a bit per slot, a rank per 64 slots, and per crossed
+//! crossed edge are stored (`CrossedIndex`: a bit per slot, a rank per 64 slots, and per crossed
 //! point its 14 owned-crossing bits and the id of its first owned crossing), so
 //! `id(C, d) = first(C) + popcount(owned(C) & ((1 << d) - 1))` with no table per slot beyond
 //! those bits. With clustering, the pass also proposes clusters ([`crate::cluster`]).
 //!
 //! **Geometry pass** (parallel over z-layers): every tetrahedron whose corners disagree gives one
 //! or two triangles from the case table. Each layer's triangles are counted first, from the
-//! crossed edges of the face or cube anchors ([`TetGroup`] tables), so that every layer writes
+//! crossed edges of the face or cube anchors (`TetGroup` tables), so that every layer writes
 //! into its own slice of the output in layer order: the same output for any thread count, and
 //! the triangles stored once. Cubes (or body-centred faces) whose anchor has no crossed edge are
 //! skipped before any tetrahedron is looked at.
