@@ -273,8 +273,13 @@ pub struct BenchRow {
     pub cpu_median_s: Option<f64>,
     /// `median_s` per sample point of the method's lattice, in nanoseconds.
     pub ns_per_point: f64,
-    /// `median_s` over fast-surface-nets' `median_s` at the same field, size and threads.
+    /// `median_s` over fast-surface-nets' `median_s` at the same field, size and threads (whole
+    /// calls: the body-centred lattice has about twice the points of the grid).
     pub ratio_to_fast_surface_nets: f64,
+    /// `ns_per_point` over fast-surface-nets' `ns_per_point` (per grid point) at the same field,
+    /// size and threads: the measure of the performance target ("RMT per sample point within
+    /// 2x of fast-surface-nets per grid point").
+    pub point_ratio_to_fast_surface_nets: f64,
     /// Sample points of the method's lattice (body-centred: corners, centres and ghost centres;
     /// otherwise the `(n + 1)^3` corners).
     pub sample_points: usize,
@@ -641,6 +646,7 @@ pub fn run_bench(
                 .unwrap_or(0);
             for (ti, &threads) in config.threads.iter().enumerate() {
                 let fsn = median(&times[ti][reference]);
+                let fsn_per_point = fsn / case.points(methods[reference]) as f64;
                 for (mi, &m) in methods.iter().enumerate() {
                     let median_s = median(&times[ti][mi]);
                     let points = case.points(m);
@@ -655,6 +661,7 @@ pub fn run_bench(
                         cpu_median_s: (!cpu[ti][mi].is_empty()).then(|| median(&cpu[ti][mi])),
                         ns_per_point: median_s * 1e9 / points as f64,
                         ratio_to_fast_surface_nets: median_s / fsn,
+                        point_ratio_to_fast_surface_nets: median_s / points as f64 / fsn_per_point,
                         sample_points: points,
                         triangles: triangles[ti][mi],
                         vertex_geometry_median_s: ours.then(|| median(&passes[ti][mi])),
@@ -678,7 +685,7 @@ pub fn format_table(report: &BenchReport) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<9} {:>4} {:>3} {:<22} {:>10} {:>10} {:>8} {:>7} {:>10} {:>7} {:>9}",
+        "{:<9} {:>4} {:>3} {:<22} {:>10} {:>10} {:>8} {:>7} {:>8} {:>10} {:>7} {:>9}",
         "field",
         "n",
         "thr",
@@ -687,6 +694,7 @@ pub fn format_table(report: &BenchReport) -> String {
         "cpu_ms",
         "ns/point",
         "x_fsn",
+        "x_fsn/pt",
         "vg_ms",
         "alloc2",
         "triangles"
@@ -708,7 +716,7 @@ pub fn format_table(report: &BenchReport) -> String {
         };
         let _ = writeln!(
             s,
-            "{:<9} {:>4} {:>3} {:<22} {:>10.3} {:>10} {:>8.2} {:>7.2} {:>10} {:>7} {:>9}",
+            "{:<9} {:>4} {:>3} {:<22} {:>10.3} {:>10} {:>8.2} {:>7.2} {:>8.2} {:>10} {:>7} {:>9}",
             r.field,
             r.n,
             thr,
@@ -717,6 +725,7 @@ pub fn format_table(report: &BenchReport) -> String {
             cpu,
             r.ns_per_point,
             r.ratio_to_fast_surface_nets,
+            r.point_ratio_to_fast_surface_nets,
             vg,
             alloc,
             r.triangles
@@ -730,7 +739,9 @@ pub fn format_table(report: &BenchReport) -> String {
     let _ = writeln!(
         s,
         "{} repetitions, medians; cpu = CPU time of all threads; * = single-threaded peer; \
-         vg = vertex + geometry passes (wall); alloc2 = allocation share of a second call; load average before {}, after {}",
+         x_fsn = time over fast-surface-nets'; x_fsn/pt = ns/point over fast-surface-nets' ns per \
+         grid point (the target's measure); vg = vertex + geometry passes (wall); alloc2 = \
+         allocation share of a second call; load average before {}, after {}",
         report.reps,
         load(report.load_average_before),
         load(report.load_average_after)
@@ -890,7 +901,22 @@ mod tests {
             }
             if r.method == "fast_surface_nets" {
                 assert_eq!(r.ratio_to_fast_surface_nets, 1.0);
+                assert!((r.point_ratio_to_fast_surface_nets - 1.0).abs() < 1e-12);
             }
+            // Per point: the time ratio scaled by the grid's points over the method's.
+            let fsn = report
+                .results
+                .iter()
+                .find(|f| {
+                    f.method == "fast_surface_nets"
+                        && (f.field, f.n, f.threads) == (r.field, r.n, r.threads)
+                })
+                .expect("a fast-surface-nets row per field, size and thread count");
+            let expected = r.ns_per_point / fsn.ns_per_point;
+            assert!(
+                (r.point_ratio_to_fast_surface_nets - expected).abs() < 1e-9 * expected,
+                "{r:?}"
+            );
         }
         let json = serde_json::to_value(&report).unwrap();
         let first = &json["results"][0];
@@ -901,6 +927,8 @@ mod tests {
             "threads",
             "median_s",
             "ns_per_point",
+            "ratio_to_fast_surface_nets",
+            "point_ratio_to_fast_surface_nets",
         ] {
             assert!(!first[key].is_null(), "{key} missing in {first}");
         }
