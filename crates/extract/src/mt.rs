@@ -1482,6 +1482,36 @@ fn geometry_layer(
 mod tests {
     use super::*;
 
+    /// Plain MT of `field` on `cells` in [-1, 1]^3: the settings, samples, the pass buffers as the
+    /// extraction left them, and the mesh.
+    fn plain_mt(
+        field: &impl rmt_fields::ScalarField,
+        lattice: Lattice,
+        cells: [usize; 3],
+        pool: &rayon::ThreadPool,
+    ) -> (crate::ExtractSettings, Samples, MtBuffers, Mesh) {
+        let settings = crate::ExtractSettings::new(
+            crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
+            lattice,
+            crate::Clustering::None,
+        );
+        let mut stats = Stats::default();
+        let mut samples = Samples::default();
+        samples
+            .sample(field, &settings, pool, &mut stats)
+            .expect("a finite field");
+        let (mut buf, mut merge, mut mesh) = (
+            MtBuffers::default(),
+            MergeBuffers::default(),
+            Mesh::default(),
+        );
+        extract(
+            &samples, &settings, pool, &mut buf, &mut merge, &mut mesh, &mut stats,
+        )
+        .expect("extraction");
+        (settings, samples, buf, mesh)
+    }
+
     #[test]
     fn crossed_index_finds_every_point_and_its_owned_crossings() {
         // Grids whose storage planes hold fewer slots than a word of bits, about as many, and
@@ -1504,25 +1534,7 @@ mod tests {
                 [9, 8, 6],
                 [40, 3, 5],
             ] {
-                let settings = crate::ExtractSettings::new(
-                    crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
-                    lattice,
-                    crate::Clustering::None,
-                );
-                let mut stats = Stats::default();
-                let mut samples = Samples::default();
-                samples
-                    .sample(&field, &settings, &pool, &mut stats)
-                    .expect("a finite field");
-                let (mut buf, mut merge, mut mesh) = (
-                    MtBuffers::default(),
-                    MergeBuffers::default(),
-                    Mesh::default(),
-                );
-                extract(
-                    &samples, &settings, &pool, &mut buf, &mut merge, &mut mesh, &mut stats,
-                )
-                .expect("extraction");
+                let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
                 let l = Layout::new(&samples, lattice);
                 let [dx, dy, dz] = samples.dims;
                 let iso = settings.iso;
@@ -1592,25 +1604,7 @@ mod tests {
         let mut triangles = 0;
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             for cells in [[3, 2, 4], [9, 8, 6], [13, 11, 12]] {
-                let settings = crate::ExtractSettings::new(
-                    crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
-                    lattice,
-                    crate::Clustering::None,
-                );
-                let mut stats = Stats::default();
-                let mut samples = Samples::default();
-                samples
-                    .sample(&field, &settings, &pool, &mut stats)
-                    .expect("a finite field");
-                let (mut buf, mut merge, mut mesh) = (
-                    MtBuffers::default(),
-                    MergeBuffers::default(),
-                    Mesh::default(),
-                );
-                extract(
-                    &samples, &settings, &pool, &mut buf, &mut merge, &mut mesh, &mut stats,
-                )
-                .expect("extraction");
+                let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
                 let l = Layout::new(&samples, lattice);
                 let (expected_len, dirs_from) = match lattice {
                     Lattice::BodyCentred => (6, 1),
