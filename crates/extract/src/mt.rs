@@ -120,7 +120,7 @@ impl CrossedIndex {
     }
 
     /// Word of `bits` holding `slot`, and the slot's bit in it.
-    #[inline(always)]
+    #[cfg(test)]
     fn word(&self, slot: usize) -> (usize, usize) {
         let z = self.plane_of(slot);
         let local = slot - z * self.plane;
@@ -325,10 +325,9 @@ fn owns(f: f32, g: f32, iso: f32) -> bool {
 #[derive(Clone, Copy, Debug)]
 struct TetTemplate {
     delta: [isize; 4],
-    /// Storage plane of each corner relative to the reference point's, in words of the
-    /// crossed-point bits (`dz * plane_words(plane)`), and the slot delta within that plane
-    /// (`delta = dz * plane + dlocal`): crossed points are found without a division.
-    dzw: [isize; 4],
+    /// Storage plane of each corner relative to the reference point's, and the slot delta within
+    /// that plane (`delta = dz * plane + dlocal`): crossed points are found without a division.
+    dz: [isize; 4],
     dlocal: [isize; 4],
     /// `dir[i][j]`: neighbour index of corner j seen from corner i.
     dir: [[u8; 4]; 4],
@@ -468,7 +467,7 @@ impl<'a> Layout<'a> {
             .map(|tet| {
                 let mut tpl = TetTemplate {
                     delta: [0; 4],
-                    dzw: [0; 4],
+                    dz: [0; 4],
                     dlocal: [0; 4],
                     dir: [[0; 4]; 4],
                 };
@@ -476,7 +475,7 @@ impl<'a> Layout<'a> {
                     tpl.delta[i] = idx(add(r, tet[i])) - idx(r);
                     // The storage plane is the lattice z (plus one on the body-centred lattice).
                     let dz = tet[i][2] as isize;
-                    tpl.dzw[i] = dz * plane_words(plane) as isize;
+                    tpl.dz[i] = dz;
                     tpl.dlocal[i] = tpl.delta[i] - dz * plane as isize;
                     for j in 0..4 {
                         if i != j {
@@ -604,6 +603,18 @@ impl<'a> Layout<'a> {
             Lattice::Simple => self
                 .s
                 .simple_position(p[0] as usize, p[1] as usize, p[2] as usize),
+        }
+    }
+
+    /// The storage planes geometry layer `k` reads (inclusive): body-centred faces perpendicular
+    /// to z are anchored in plane 2k and reach 2k + 2, those perpendicular to x and y are
+    /// anchored in plane 2k + 2 and reach 2k + 1 ..= 2k + 3; cubes of layer k span planes k and
+    /// k + 1.
+    fn layer_planes(&self, k: usize) -> (usize, usize) {
+        let last = self.s.dims[2] - 1;
+        match self.lattice {
+            Lattice::BodyCentred => (2 * k, (2 * k + 3).min(last)),
+            Lattice::Simple => (k, (k + 1).min(last)),
         }
     }
 
@@ -1408,8 +1419,49 @@ fn geometry_layer(
     positions: &[[f32; 3]],
     out: &mut [u32],
 ) -> usize {
+    let plane = l.s.dims[0] * l.s.dims[1];
+    // The crossed points of the storage planes this layer reads, copied into a dense window (one
+    // entry per slot) of this thread: a crossing's id is then one load away, where the rank
+    // directory needs two dependent ones. A few planes per thread, not a table per slot.
+    let (z0, z1) = l.layer_planes(k);
+    LAYER_WINDOW.with_borrow_mut(|window| {
+        if window.len() < (z1 + 1 - z0) * plane {
+            window.resize((z1 + 1 - z0) * plane, CrossedPoint::default());
+        }
+        for z in z0..=z1 {
+            let base = (z - z0) * plane;
+            let mut r = crossed.rank_in(z, 0);
+            for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
+                window[base + local] = crossed.points[r];
+                r += 1;
+            });
+        }
+        geometry_in_window(l, k, iso, keep, crossed, positions, &window[..], z0, out)
+    })
+}
+
+thread_local! {
+    /// The dense window of [`geometry_layer`], kept per thread between layers and extractions
+    /// (entries of slots without a crossed edge are stale and never read).
+    static LAYER_WINDOW: std::cell::RefCell<Vec<CrossedPoint>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`.
+#[allow(clippy::too_many_arguments)]
+fn geometry_in_window(
+    l: &Layout,
+    k: usize,
+    iso: f32,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    positions: &[[f32; 3]],
+    window: &[CrossedPoint],
+    z0: usize,
+    out: &mut [u32],
+) -> usize {
     let v = &l.s.values;
-    let wpp = plane_words(l.s.dims[0] * l.s.dims[1]);
+    let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
     let mut w = 0;
     // `anchor` is slot `local` of storage plane `z`.
@@ -1434,10 +1486,12 @@ fn geometry_layer(
             } else {
                 (b, tpl.dir[b][a])
             };
+            let zo = (z as isize + tpl.dz[o]) as usize;
             let lo = (local as isize + tpl.dlocal[o]) as usize;
-            let word = ((z * wpp) as isize + tpl.dzw[o]) as usize + (lo >> 6);
-            debug_assert_eq!(word, crossed.word(idx[o]).0);
-            *slot = crossed.get_at(word, lo & 63).id(d);
+            debug_assert_eq!(zo * plane + lo, idx[o]);
+            let entry = window[(zo - z0) * plane + lo];
+            debug_assert_eq!(entry, crossed.get(idx[o]));
+            *slot = entry.id(d);
         }
         if n == 3 {
             out[w..w + 3].copy_from_slice(&ids[..3]);
