@@ -138,13 +138,7 @@ impl CrossedIndex {
     #[inline(always)]
     fn get(&self, slot: usize) -> CrossedPoint {
         let z = self.plane_of(slot);
-        self.get_in(z, slot - z * self.plane)
-    }
-
-    /// The entry of the crossed point in slot `local` of storage plane `z`.
-    #[inline(always)]
-    fn get_in(&self, z: usize, local: usize) -> CrossedPoint {
-        self.get_at(z * self.wpp + (local >> 6), local & 63)
+        self.points[self.rank_in(z, slot - z * self.plane)]
     }
 
     /// The rank of slot `local` of storage plane `z`: how many crossed points come before it.
@@ -152,13 +146,6 @@ impl CrossedIndex {
     fn rank_in(&self, z: usize, local: usize) -> usize {
         let (w, b) = (z * self.wpp + (local >> 6), local & 63);
         (self.rank[w] + (self.bits[w] & ((1u64 << b) - 1)).count_ones()) as usize
-    }
-
-    /// The entry of the crossed point at bit `b` of word `w`.
-    #[inline(always)]
-    fn get_at(&self, w: usize, b: usize) -> CrossedPoint {
-        let below = self.bits[w] & ((1u64 << b) - 1);
-        self.points[(self.rank[w] + below.count_ones()) as usize]
     }
 
     /// Bits of plane `z`.
@@ -325,10 +312,6 @@ fn owns(f: f32, g: f32, iso: f32) -> bool {
 #[derive(Clone, Copy, Debug)]
 struct TetTemplate {
     delta: [isize; 4],
-    /// Storage plane of each corner relative to the reference point's, and the slot delta within
-    /// that plane (`delta = dz * plane + dlocal`): crossed points are found without a division.
-    dz: [isize; 4],
-    dlocal: [isize; 4],
     /// `dir[i][j]`: neighbour index of corner j seen from corner i.
     dir: [[u8; 4]; 4],
 }
@@ -336,7 +319,7 @@ struct TetTemplate {
 /// The tetrahedra visited together (a body-centred face's 4 around the centres A and B, with 6
 /// distinct points; a cube's 6, with 8 corners) and the number of triangles they give for each
 /// inside/outside pattern of those points, derived from the case table: the geometry pass counts
-/// a layer's triangles from the inside bits before it writes them.
+/// a layer's triangles from the anchors' crossed edges before it writes them.
 #[derive(Clone, Debug, Default)]
 struct TetGroup {
     /// Storage deltas of its distinct points from the anchor (point 0, in every tetrahedron of
@@ -438,7 +421,6 @@ fn boundary_class(c: i32, max: i32) -> usize {
 impl<'a> Layout<'a> {
     fn new(s: &'a Samples, lattice: Lattice) -> Self {
         let t = LatticeTables::get(lattice);
-        let plane = s.dims[0] * s.dims[1];
         let idx = |p: Offset| -> isize {
             match lattice {
                 Lattice::BodyCentred => s.bcdl_index(p) as isize,
@@ -467,16 +449,10 @@ impl<'a> Layout<'a> {
             .map(|tet| {
                 let mut tpl = TetTemplate {
                     delta: [0; 4],
-                    dz: [0; 4],
-                    dlocal: [0; 4],
                     dir: [[0; 4]; 4],
                 };
                 for i in 0..4 {
                     tpl.delta[i] = idx(add(r, tet[i])) - idx(r);
-                    // The storage plane is the lattice z (plus one on the body-centred lattice).
-                    let dz = tet[i][2] as isize;
-                    tpl.dz[i] = dz;
-                    tpl.dlocal[i] = tpl.delta[i] - dz * plane as isize;
                     for j in 0..4 {
                         if i != j {
                             let o = [
@@ -864,7 +840,7 @@ pub fn extract(
         Lattice::BodyCentred => samples.cells[2] + 1,
         Lattice::Simple => samples.cells[2],
     };
-    // Triangles per layer, counted from the inside bits, so that every layer writes its
+    // Triangles per layer, counted from the anchors' crossed edges, so that every layer writes its
     // triangles straight into their final place (the mesh, or the merge buffers when clusters
     // follow): no per-layer buffers, no second copy.
     let crossed = &buf.crossed;
@@ -1123,8 +1099,8 @@ fn weld_coincident(
 }
 
 /// Vertex pass over one storage plane: counts, cluster proposals, the plane's crossed-point bits
-/// (`crossed`, [`plane_words`] words, all zero on entry) and the owned crossings of each crossed
-/// point in slot order (`owned`).
+/// (`crossed`, [`plane_words`] words, all zero on entry) and, per crossed point in slot order,
+/// its owned and crossed edges as `owned | crossed << 16` (`owned`).
 #[allow(clippy::too_many_arguments)]
 fn vertex_plane(
     l: &Layout,
@@ -1265,7 +1241,7 @@ fn vertex_plane(
 }
 
 /// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points'
-/// entries (`entries`, from the owned bits `owned` of the vertex pass) and the crossings'
+/// entries (`entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the crossings'
 /// positions (`out`). Returns how many crossings lie within `WELD` of their owner (surfaces
 /// through sample points).
 #[allow(clippy::too_many_arguments)]
@@ -1322,17 +1298,16 @@ fn number_plane(
     near_points
 }
 
-/// Calls `visit(anchor, z, local, rank, group)` for each body-centred face (group: its axis) or
-/// cube (group 0) of geometry layer `k` that can hold surface: its anchor point has a crossed
-/// edge and, in a chunk, its cell is kept. `anchor` is slot `local` of storage plane `z`, and
-/// the anchor's entry is `crossed.points[rank]`. The count and the geometry pass both walk the
+/// Calls `visit(anchor, rank, group)` for each body-centred face (group: its axis) or cube
+/// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot) has a
+/// crossed edge and, in a chunk, its cell is kept. The anchor's entry is `crossed.points[rank]`. The count and the geometry pass both walk the
 /// layer with it, so they see the same groups.
 fn for_each_group(
     l: &Layout,
     k: usize,
     keep: Option<CellRange>,
     crossed: &CrossedIndex,
-    mut visit: impl FnMut(usize, usize, usize, usize, usize),
+    mut visit: impl FnMut(usize, usize, usize),
 ) {
     let [nx, ny, nz] = l.s.cells;
     let plane = l.s.dims[0] * l.s.dims[1];
@@ -1348,7 +1323,7 @@ fn for_each_group(
                 if keep.is_some_and(|range| !range.contains(cell(n))) {
                     return;
                 }
-                visit(start + n, z, local + n, r, g);
+                visit(start + n, r, g);
             });
         };
     match l.lattice {
@@ -1396,7 +1371,7 @@ fn for_each_group(
 /// edges.
 fn count_layer(l: &Layout, k: usize, keep: Option<CellRange>, crossed: &CrossedIndex) -> usize {
     let mut n = 0;
-    for_each_group(l, k, keep, crossed, |_, _, _, rank, g| {
+    for_each_group(l, k, keep, crossed, |_, rank, g| {
         let group = &l.groups[g];
         let mask = usize::from(crossed.points[rank].crossed);
         let mut code = 0;
@@ -1464,8 +1439,7 @@ fn geometry_in_window(
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
     let mut w = 0;
-    // `anchor` is slot `local` of storage plane `z`.
-    let mut tet = |anchor: usize, z: usize, local: usize, tpl: &TetTemplate| {
+    let mut tet = |anchor: usize, tpl: &TetTemplate| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
         let case = (val[0] < iso) as usize
@@ -1486,10 +1460,8 @@ fn geometry_in_window(
             } else {
                 (b, tpl.dir[b][a])
             };
-            let zo = (z as isize + tpl.dz[o]) as usize;
-            let lo = (local as isize + tpl.dlocal[o]) as usize;
-            debug_assert_eq!(zo * plane + lo, idx[o]);
-            let entry = window[(zo - z0) * plane + lo];
+            // The window starts at slot 0 of plane z0.
+            let entry = window[idx[o] - z0 * plane];
             debug_assert_eq!(entry, crossed.get(idx[o]));
             *slot = entry.id(d);
         }
@@ -1515,13 +1487,13 @@ fn geometry_in_window(
             w += 6;
         }
     };
-    for_each_group(l, k, keep, crossed, |anchor, z, local, _, g| {
+    for_each_group(l, k, keep, crossed, |anchor, _, g| {
         let tets = match l.lattice {
             Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
             Lattice::Simple => &l.tets[..],
         };
         for tpl in tets {
-            tet(anchor, z, local, tpl);
+            tet(anchor, tpl);
         }
     });
     debug_assert_eq!(
@@ -1691,7 +1663,7 @@ mod tests {
                     let mut total = 0;
                     for k in 0..layers {
                         let mut direct = 0;
-                        for_each_group(&l, k, keep, &buf.crossed, |anchor, _, _, _, g| {
+                        for_each_group(&l, k, keep, &buf.crossed, |anchor, _, g| {
                             let tets = match lattice {
                                 Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
                                 Lattice::Simple => &l.tets[..],
