@@ -205,6 +205,10 @@ fn for_each_bit(words: &[u64], start: usize, len: usize, mut visit: impl FnMut(u
 /// Candidates of one colour are checked in blocks of this many, in parallel.
 const COMMIT_BLOCK: usize = 64;
 
+/// At most this many candidates (a whole number of blocks) are checked before their records are
+/// applied: bounds the records' memory (about 1.4 KiB per accepted cluster) whatever the size.
+const COMMIT_ROUND: usize = 64 * COMMIT_BLOCK;
+
 /// A cluster that passed its check, waiting to be applied.
 struct Accepted {
     /// Its crossings, in [`CommitBlock::members`].
@@ -811,6 +815,9 @@ pub fn extract(
                 .sum::<usize>()
         });
     }
+    // The per-plane proposals were copied into `buf.candidates`: free them before the geometry
+    // pass and the clustering allocate.
+    drop(per_plane);
     if let Some(tiling) = &settings.tiles {
         if propose || clustering == Clustering::Postprocessed {
             let crossed = &buf.crossed;
@@ -916,10 +923,15 @@ pub fn extract(
                 }
                 (sum / k.len() as f32).to_array()
             };
-        for group in candidates.chunk_by(|a, b| a.colour == b.colour) {
-            // Clusters of one colour share no tetrahedron, hence no triangle: check them in
-            // parallel against the mesh as the earlier colours left it, recording what each
-            // accepted merge changes, then apply the records in storage order.
+        // Clusters of one colour share no tetrahedron, hence no triangle: check them in parallel
+        // against the mesh as the earlier colours left it, recording what each accepted merge
+        // changes, then apply the records in storage order. A round takes at most
+        // `COMMIT_ROUND` candidates, so the records stay small (applying a round cannot change
+        // what the next round of the same colour sees).
+        let rounds = candidates
+            .chunk_by(|a, b| a.colour == b.colour)
+            .flat_map(|group| group.chunks(COMMIT_ROUND));
+        for group in rounds {
             let blocks = group.len().div_ceil(COMMIT_BLOCK);
             if commits.len() < blocks {
                 commits.resize_with(blocks, CommitBlock::default);

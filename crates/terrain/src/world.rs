@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
+use rmt_extract::lattice::LatticeTables;
 use rmt_extract::samples::sampled_lattice;
 use rmt_extract::{
     CellRange, Clustering, ExtractError, ExtractSettings, Extractor, Grid, Lattice, Method,
@@ -188,6 +189,8 @@ pub struct World {
     dirty: Vec<bool>,
     pool: Arc<rayon::ThreadPool>,
     extractors: Mutex<Vec<Extractor>>,
+    /// Old values of the last stroke's box (working memory of [`World::apply_brush`]).
+    stroke_old: Vec<f32>,
 }
 
 impl World {
@@ -221,6 +224,7 @@ impl World {
             dirty: vec![true; n],
             pool,
             extractors: Mutex::new(Vec::new()),
+            stroke_old: Vec::new(),
         })
     }
 
@@ -272,59 +276,128 @@ impl World {
     }
 
     /// Applies `brush` for a frame of `dt` seconds to the samples and marks the chunks whose
-    /// input (cells plus halo) holds a changed value. Returns how many chunks it marked (some may
-    /// have been dirty already).
+    /// mesh the change can alter. Returns how many chunks it marked (some may have been dirty
+    /// already).
+    ///
+    /// A chunk's mesh depends only on the inside/outside state of the points of its input (cells
+    /// plus halo, ghost slots included) and on the values at the ends of its crossed edges. So a
+    /// changed value matters only where the point changed side, or where the point has a
+    /// neighbour on the other side before or after the stroke (an end of a crossed edge); a
+    /// chunk is marked when its input holds such a point. Changes deep inside or outside the
+    /// solid re-mesh nothing. Neighbours are the lattice's 14 edge directions
+    /// ([`LatticeTables::offsets`]; on the simple lattice they include the axes, the edges of
+    /// marching cubes); points within two lattice steps of the box faces, where ghosts stand in
+    /// for missing points, always count.
     pub fn apply_brush(&mut self, brush: &Brush, dt: f32) -> Result<usize, TerrainError> {
         brush.check(dt)?;
         let s = &self.settings;
         let lattice = sampled_lattice(&self.unit);
+        let body = lattice == Lattice::BodyCentred;
         // Lattice coordinates: half cells on the body-centred lattice, cells on the simple one.
-        let scale = if lattice == Lattice::BodyCentred {
-            2.0
-        } else {
-            1.0
-        };
+        let scale = if body { 2.0 } else { 1.0 };
         let cu = (brush.centre - s.origin) / s.h * scale;
         let ru = brush.radius / s.h * scale;
         let mut lo = [0i64; 3];
         let mut hi = [0i64; 3];
+        let mut bmin = [0i64; 3];
+        let mut bmax = [0i64; 3];
         for a in 0..3 {
-            let (min, max) = if lattice == Lattice::BodyCentred {
-                (-1.0, 2.0 * s.cells[a] as f32 + 1.0)
+            (bmin[a], bmax[a]) = if body {
+                (-1, 2 * s.cells[a] as i64 + 1)
             } else {
-                (0.0, s.cells[a] as f32)
+                (0, s.cells[a] as i64)
             };
             // One extra point each side: ghosts sit on the box faces, off their lattice spot.
-            lo[a] = ((cu[a] - ru).floor() - 1.0).clamp(min, max) as i64;
-            hi[a] = ((cu[a] + ru).ceil() + 1.0).clamp(min, max) as i64;
+            lo[a] = ((cu[a] - ru).floor() as i64 - 1).clamp(bmin[a], bmax[a]);
+            hi[a] = ((cu[a] + ru).ceil() as i64 + 1).clamp(bmin[a], bmax[a]);
         }
-        let (mut clo, mut chi) = ([i64::MAX; 3], [i64::MIN; 3]);
+        // Old values of the stroke's box (dense, x fastest), for the neighbour test below.
+        let size = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1) as usize);
+        let old = &mut self.stroke_old;
+        old.clear();
+        old.resize(size[0] * size[1] * size[2], f32::NAN);
         let samples = &mut self.samples;
+        let lookup = |samples: &Samples, q: [i64; 3]| -> Option<usize> {
+            if (0..3).any(|a| q[a] < bmin[a] || q[a] > bmax[a]) {
+                return None;
+            }
+            let p = q.map(|c| c as i32);
+            if body {
+                samples.bcdl_exists(p).then(|| samples.bcdl_index(p))
+            } else {
+                let [x, y, z] = p.map(|c| c as usize);
+                Some(samples.simple_index(x, y, z))
+            }
+        };
+        let mut changed = false;
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 for x in lo[0]..=hi[0] {
+                    let Some(index) = lookup(samples, [x, y, z]) else {
+                        continue;
+                    };
                     let p = [x as i32, y as i32, z as i32];
-                    let (index, pos) = match lattice {
-                        Lattice::BodyCentred => {
-                            if !samples.bcdl_exists(p) {
-                                continue;
-                            }
-                            (samples.bcdl_index(p), samples.bcdl_position(p))
-                        }
-                        Lattice::Simple => {
-                            let [x, y, z] = p.map(|c| c as usize);
-                            (
-                                samples.simple_index(x, y, z),
-                                samples.simple_position(x, y, z),
-                            )
-                        }
+                    let pos = if body {
+                        samples.bcdl_position(p)
+                    } else {
+                        let [x, y, z] = p.map(|c| c as usize);
+                        samples.simple_position(x, y, z)
                     };
                     let d = (s.origin + pos * s.h).distance(brush.centre);
-                    let old = samples.values[index];
-                    let new = brush.apply(old, d, dt);
-                    if new != old {
+                    let before = samples.values[index];
+                    let new = brush.apply(before, d, dt);
+                    let at = ((z - lo[2]) as usize * size[1] + (y - lo[1]) as usize) * size[0]
+                        + (x - lo[0]) as usize;
+                    old[at] = before;
+                    if new != before {
                         samples.values[index] = new;
-                        let q = [x, y, z];
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if !changed {
+            return Ok(0);
+        }
+        // The lattice's 14 edge directions: those of the tetrahedra, which on the simple lattice
+        // include the axes, the edges of marching cubes.
+        let neighbours = LatticeTables::get(lattice)
+            .offsets
+            .map(|d| d.map(i64::from));
+        let iso = s.iso;
+        let (mut clo, mut chi) = ([i64::MAX; 3], [i64::MIN; 3]);
+        let samples = &self.samples;
+        let old_at = |q: [i64; 3], index: usize| -> f32 {
+            if (0..3).all(|a| q[a] >= lo[a] && q[a] <= hi[a]) {
+                let at = ((q[2] - lo[2]) as usize * size[1] + (q[1] - lo[1]) as usize) * size[0]
+                    + (q[0] - lo[0]) as usize;
+                old[at]
+            } else {
+                samples.values[index]
+            }
+        };
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let q = [x, y, z];
+                    let Some(index) = lookup(samples, q) else {
+                        continue;
+                    };
+                    let (before, now) = (old_at(q, index), samples.values[index]);
+                    if before == now {
+                        continue;
+                    }
+                    let (was_in, is_in) = (before < iso, now < iso);
+                    let near_box = (0..3).any(|a| q[a] - bmin[a] < 2 || bmax[a] - q[a] < 2);
+                    let matters = was_in != is_in
+                        || near_box
+                        || neighbours.iter().any(|d| {
+                            let r = [q[0] + d[0], q[1] + d[1], q[2] + d[2]];
+                            lookup(samples, r).is_some_and(|j| {
+                                (old_at(r, j) < iso) != was_in || (samples.values[j] < iso) != is_in
+                            })
+                        });
+                    if matters {
                         for a in 0..3 {
                             clo[a] = clo[a].min(q[a]);
                             chi[a] = chi[a].max(q[a]);
@@ -339,11 +412,10 @@ impl World {
         let mut marked = 0;
         for i in 0..self.chunks.len() {
             let (s0, s1) = self.input_box(i);
-            let (ilo, ihi) = match lattice {
-                Lattice::BodyCentred => {
-                    (s0.map(|c| 2 * c as i64 - 1), s1.map(|c| 2 * c as i64 + 1))
-                }
-                Lattice::Simple => (s0.map(|c| c as i64), s1.map(|c| c as i64)),
+            let (ilo, ihi) = if body {
+                (s0.map(|c| 2 * c as i64 - 1), s1.map(|c| 2 * c as i64 + 1))
+            } else {
+                (s0.map(|c| c as i64), s1.map(|c| c as i64))
             };
             if (0..3).all(|a| clo[a] <= ihi[a] && chi[a] >= ilo[a]) {
                 self.dirty[i] = true;
@@ -390,7 +462,7 @@ impl World {
                             ex.set_pool(pool.clone());
                             ex
                         });
-                    let r = extract_chunk(samples, unit, *own, *input, &mut ex, mesh);
+                    let r = extract_chunk(samples, unit, *own, *input, &mut ex, mesh).map(|_| ());
                     extractors
                         .lock()
                         .unwrap_or_else(|e| e.into_inner())
@@ -414,6 +486,29 @@ impl World {
             chunks: ids.len(),
             triangles,
             seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Extracts chunk `i` from the current samples into `mesh` with `ex` (whose buffers are
+    /// reused), without touching the world's own chunk meshes or dirty flags: the extractor's
+    /// stage timings and counters for one chunk, for profiling. `None` for a chunk index out of
+    /// range.
+    pub fn extract_chunk(
+        &self,
+        i: usize,
+        ex: &mut Extractor,
+        mesh: &mut Mesh,
+    ) -> Option<Result<Stats, TerrainError>> {
+        (i < self.chunks.len()).then(|| {
+            extract_chunk(
+                &self.samples,
+                &self.unit,
+                self.chunk_cells(i),
+                self.input_box(i),
+                ex,
+                mesh,
+            )
+            .map_err(TerrainError::from)
         })
     }
 
@@ -480,7 +575,7 @@ fn extract_chunk(
     (s0, s1): ([usize; 3], [usize; 3]),
     ex: &mut Extractor,
     mesh: &mut Mesh,
-) -> Result<(), ExtractError> {
+) -> Result<Stats, ExtractError> {
     let cells = [0, 1, 2].map(|a| s1[a] - s0[a]);
     let corner = |c: [usize; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
     let mut st = *unit;
@@ -507,9 +602,9 @@ fn extract_chunk(
             dst.values[dst_at..dst_at + ld[0]].copy_from_slice(&samples.values[src..src + ld[0]]);
         }
     }
-    ex.extract_presampled(&st, mesh)?;
+    let stats = ex.extract_presampled(&st, mesh)?;
     compact(mesh);
-    Ok(())
+    Ok(stats)
 }
 
 /// Drops the vertices no triangle uses (keeping the order of the others) and the normals.

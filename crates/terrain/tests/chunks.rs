@@ -311,9 +311,10 @@ fn output_does_not_depend_on_the_thread_count() {
     assert_eq!(bits(&a), bits(&b));
 }
 
-/// A stroke re-meshes a few chunks, not the world.
+/// A stroke re-meshes a few chunks, not the world, and none where it cannot change the surface.
 #[test]
 fn a_small_brush_marks_only_nearby_chunks() {
+    // The ground y = 1 lies on the seam between the two chunk layers (cells 0..8 and 8..16).
     let field = FnField(|p: Vec3| p.y - 1.0);
     let s = WorldSettings::new(
         [32, 16, 32],
@@ -325,12 +326,22 @@ fn a_small_brush_marks_only_nearby_chunks() {
     .with_chunk(8);
     let mut world = World::new(&field, s).expect("world builds");
     world.remesh_dirty().expect("remesh runs");
-    // Well inside chunk (1, 1, 1): cells 8..16, i.e. world 1.0 .. 2.0.
+    let before = canonical_triangles(&world.mesh_welded());
+    // In the air above chunk (1, 1, 1) (world 1.0 .. 2.0): values change (by at most 0.1, all
+    // stay > 0) but no point next to the surface does, so no mesh can change.
     let marked = world
         .apply_brush(&Brush::add(Vec3::new(1.5, 1.5, 1.5), 0.3, 1.0), 0.1)
         .expect("brush applies");
-    assert_eq!(marked, 1);
-    // On a chunk corner: the 8 chunks around it.
+    assert_eq!(marked, 0);
+    world.mark_all_dirty();
+    world.remesh_dirty().expect("remesh runs");
+    assert!(canonical_triangles(&world.mesh_welded()) == before);
+    // On the ground in the middle of a column of chunks: the chunk above and the one below.
+    let marked = world
+        .apply_brush(&Brush::add(Vec3::new(1.5, 1.0, 1.5), 0.3, 1.0), 0.1)
+        .expect("brush applies");
+    assert_eq!(marked, 2);
+    // On the ground at a chunk corner: the 8 chunks around it.
     let marked = world
         .apply_brush(&Brush::add(Vec3::new(1.0, 1.0, 1.0), 0.3, 1.0), 0.1)
         .expect("brush applies");
@@ -340,6 +351,7 @@ fn a_small_brush_marks_only_nearby_chunks() {
         .apply_brush(&Brush::add(Vec3::new(-5.0, 1.0, 1.0), 0.3, 1.0), 0.1)
         .expect("brush applies");
     assert_eq!(marked, 0);
+    // The two strokes on the ground overlap in chunks (1, 0, 1) and (1, 1, 1).
     assert_eq!(world.remesh_dirty().expect("remesh runs").chunks, 8);
 }
 

@@ -1,0 +1,93 @@
+//! Stage times of one chunk's extraction on the Svoboda terrain (what an edit costs per chunk),
+//! median over repetitions with a warm extractor, for the chunks the surface crosses:
+//!
+//! ```text
+//! cargo run --release -p rmt-terrain --example chunk_profile -- [clustering] [reps] [chunks]
+//! ```
+//!
+//! `clustering` is none / integrated / integrated-unchecked / postprocessed (default
+//! integrated), on the body-centred lattice, 256 x 64 x 256 cells in chunks of 32; `chunks` is
+//! how many surface chunks to time (default 8).
+use anyhow::{bail, Context, Result};
+use glam::Vec3;
+use rmt_extract::{Clustering, Extractor, Lattice};
+use rmt_fields::{SvobodaParams, SvobodaTerrain};
+use rmt_mesh::Mesh;
+use rmt_terrain::{World, WorldSettings};
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let clustering = match args.get(1).map_or("integrated", String::as_str) {
+        "none" => Clustering::None,
+        "integrated" => Clustering::Integrated,
+        "integrated-unchecked" => Clustering::IntegratedUnchecked,
+        "postprocessed" => Clustering::Postprocessed,
+        c => bail!("unknown clustering {c:?}"),
+    };
+    let reps: usize = args.get(2).map_or(Ok(20), |s| s.parse()).context("reps")?;
+    let count: usize = args.get(3).map_or(Ok(8), |s| s.parse()).context("chunks")?;
+    let cells = [256, 64, 256];
+    let h = 8.0 / 256.0;
+    let origin = Vec3::new(0.0, -32.0 * h, 0.0);
+    let settings = WorldSettings::new(cells, origin, h, Lattice::BodyCentred, clustering);
+    let world = World::new(&SvobodaTerrain::new(SvobodaParams::default()), settings)?;
+    let mut ex = Extractor::new();
+    let mut mesh = Mesh::default();
+    let mut shown = 0;
+    let (mut all_v, mut all_g, mut all_t) = (0.0, 0.0, 0.0);
+    for i in 0..world.chunk_count() {
+        if shown == count {
+            break;
+        }
+        let first = world
+            .extract_chunk(i, &mut ex, &mut mesh)
+            .context("chunk")??;
+        if first.triangles == 0 {
+            continue;
+        }
+        shown += 1;
+        let (mut v, mut g, mut t) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..reps {
+            let st = world
+                .extract_chunk(i, &mut ex, &mut mesh)
+                .context("chunk")??;
+            v.push(st.t_vertex_s);
+            g.push(st.t_geometry_s);
+            t.push(st.t_total_s);
+        }
+        let (v, g, t) = (median(v), median(g), median(t));
+        all_v += v;
+        all_g += g;
+        all_t += t;
+        println!(
+            "chunk {i:3}: vertex {:.3} ms  geometry {:.3} ms  total {:.3} ms  ({} points, {} crossings, {} triangles, {} clusters committed of {} proposed, {} prefilter-rejected, {} check-rejected, {} reduced, {} lone absorbed, {} slivers, {} welds)",
+            v * 1e3,
+            g * 1e3,
+            t * 1e3,
+            first.sample_points,
+            first.crossings,
+            mesh.triangle_count(),
+            first.clusters_committed,
+            first.clusters_proposed,
+            first.clusters_rejected_prefilter,
+            first.clusters_rejected_check,
+            first.clusters_reduced,
+            first.lone_absorbed,
+            first.slivers_collapsed,
+            first.collapses
+        );
+    }
+    let n = shown.max(1) as f64;
+    println!(
+        "mean over {shown} chunks: vertex {:.3} ms  geometry {:.3} ms  total {:.3} ms",
+        all_v / n * 1e3,
+        all_g / n * 1e3,
+        all_t / n * 1e3
+    );
+    Ok(())
+}
