@@ -2,9 +2,11 @@
 //! fields, sizes, lattices, clustering modes and thread counts, with and without the tile rule of
 //! chunked worlds: run it before and after a change
 //! that must not change the meshes and compare the two listings.
-//! `cargo run --release -p rmt-extract --example mesh_hashes`.
+//! `cargo run --release -p rmt-extract --example mesh_hashes [lean]` (`lean`: extractors with
+//! [`rmt_extract::BufferPolicy::Lean`], whose listing must equal the default one).
 use rmt_extract::{
-    CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode, Tiling,
+    BufferPolicy, CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode,
+    Tiling,
 };
 use rmt_fields::{Asteroid, AsteroidParams, Gyroid, ScalarField, Sphere};
 use rmt_mesh::Mesh;
@@ -18,6 +20,10 @@ fn fnv(h: &mut u64, x: u64) {
 }
 
 fn main() -> Result<(), rmt_extract::ExtractError> {
+    let policy = match std::env::args().nth(1).as_deref() {
+        Some("lean") => BufferPolicy::Lean,
+        _ => BufferPolicy::Reuse,
+    };
     let fields: Vec<(&str, Box<dyn ScalarField>)> = vec![
         ("sphere", Box::new(Sphere::new(glam::Vec3::ZERO, 0.8))),
         // Touches the box and passes through sample points: welds and border rules.
@@ -57,7 +63,9 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             });
                         }
                         let mut mesh = Mesh::default();
-                        let st = Extractor::new().extract(field.as_ref(), &s, &mut mesh)?;
+                        let mut ex = Extractor::new();
+                        ex.set_buffer_policy(policy);
+                        let st = ex.extract(field.as_ref(), &s, &mut mesh)?;
                         let mut h = 0xcbf2_9ce4_8422_2325u64;
                         for p in &mesh.positions {
                             for c in p {

@@ -1,13 +1,16 @@
 //! One extraction of the sphere (radius 0.8 in [-1, 1]^3), to measure peak memory from outside:
 //!
-//! `/usr/bin/time -v target/release/examples/peak_memory [n] [clustering] [threads]`
+//! `/usr/bin/time -v target/release/examples/peak_memory [n] [clustering] [threads] [lean]`
 //!
 //! Defaults: 256 cells per axis, body-centred lattice, integrated clustering (`none` for plain
-//! MT), 1 thread, normals skipped. Prints the f32 sample array size and the other buffer sizes of
+//! MT), 1 thread, normals skipped, buffers kept for reuse (`lean`:
+//! [`rmt_extract::BufferPolicy::Lean`]). Prints the f32 sample array size and the other buffer sizes of
 //! [`rmt_extract::Stats`], and this process's peak resident set (VmHWM, Linux) for comparison
 //! with what `time -v` reports, in total and beyond the output mesh, as ratios to the samples.
 
-use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode};
+use rmt_extract::{
+    BufferPolicy, Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode,
+};
 use rmt_fields::Sphere;
 use rmt_mesh::Mesh;
 
@@ -42,13 +45,18 @@ fn main() -> Result<(), String> {
     settings.threads = threads;
     settings.normals = NormalMode::Skip;
     let mut extractor = Extractor::new();
+    let lean = args.get(4).map(String::as_str) == Some("lean");
+    if lean {
+        extractor.set_buffer_policy(BufferPolicy::Lean);
+    }
     let mut mesh = Mesh::default();
     let stats = extractor
         .extract(&Sphere::new(glam::Vec3::ZERO, 0.8), &settings, &mut mesh)
         .map_err(|e| e.to_string())?;
     println!(
-        "{n}^3 bcdl {}, {threads} thread(s): {} sample points, {} triangles, {:.3} s",
+        "{n}^3 bcdl {}, {threads} thread(s), buffers {}: {} sample points, {} triangles, {:.3} s",
         clustering.name(),
+        if lean { "lean" } else { "reused" },
         stats.sample_points,
         stats.triangles,
         stats.t_total_s

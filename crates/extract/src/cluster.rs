@@ -13,16 +13,51 @@ use crate::lattice::LatticeTables;
 /// All 14 neighbour bits.
 pub const FULL: u16 = 0x3FFF;
 
-/// A cluster that passed the pre-filter: the nearby crossings `island` of the point at storage
-/// index `slot`, to be merged into one vertex.
+/// A cluster that passed the pre-filter: some of the nearby crossings of one point, to be merged
+/// into one vertex, named by crossing id so that no lookup is needed to find them.
+///
+/// Crossings are numbered point by point in storage order, each point's owned crossings in
+/// neighbour-bit order, so the point's owned crossings have the ids `first, first + 1, ...`;
+/// bit `r` of `members` stands for id `first + r`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Candidate {
-    /// Storage index of the owning sample point.
-    pub slot: u32,
-    /// Neighbour bits of the crossings to merge (a subset of the point's owned crossings).
-    pub island: u16,
+    /// Id of the owning point's first owned crossing.
+    pub first: u32,
+    /// The crossings to merge, by rank among the point's owned crossings (see above).
+    pub members: u16,
     /// Lattice colour of the point: clusters of one colour never share a tetrahedron.
     pub colour: u8,
+}
+
+impl Candidate {
+    /// The ids of the crossings to merge, in increasing order.
+    pub fn ids(self) -> impl Iterator<Item = u32> {
+        let mut bits = self.members;
+        std::iter::from_fn(move || {
+            (bits != 0).then(|| {
+                let r = bits.trailing_zeros();
+                bits &= bits - 1;
+                self.first + r
+            })
+        })
+    }
+}
+
+/// The bits of `bits` (a subset of `mask`) renumbered by their rank among the bits of `mask`
+/// (a parallel bit extract): bit `d` of `bits` becomes bit `popcount(mask & ((1 << d) - 1))`.
+pub fn compress(bits: u16, mask: u16) -> u16 {
+    let mut out = 0u16;
+    let mut m = mask;
+    let mut r = 0;
+    while m != 0 {
+        let d = m.trailing_zeros();
+        m &= m - 1;
+        if bits & (1 << d) != 0 {
+            out |= 1 << r;
+        }
+        r += 1;
+    }
+    out
 }
 
 /// Counts of the proposal step.
@@ -42,7 +77,7 @@ impl ProposalCounts {
     }
 }
 
-/// Proposes the clusters of one point.
+/// Proposes the clusters of one point, whose first owned crossing has id `first`.
 ///
 /// `valid`: the neighbours whose edges exist (all 14 except on the box faces); `owned`: the
 /// point's nearby crossings; `crossed`: all its crossed edges (the neighbours on the other side of
@@ -52,7 +87,7 @@ impl ProposalCounts {
 #[allow(clippy::too_many_arguments)]
 pub fn propose(
     t: &LatticeTables,
-    slot: u32,
+    first: u32,
     colour: u8,
     valid: u16,
     owned: u16,
@@ -84,8 +119,8 @@ pub fn propose(
             continue;
         }
         out.push(Candidate {
-            slot,
-            island,
+            first,
+            members: compress(island, owned),
             colour,
         });
     }
@@ -127,6 +162,35 @@ mod tests {
         let c = propose(t, 5, 3, FULL, owned, owned, true, &mut out);
         assert_eq!(c.proposed, 1);
         assert_eq!(out.len() + c.rejected, 1);
+    }
+
+    #[test]
+    fn members_name_the_ids_of_the_island_crossings() {
+        // Ids of a point's owned crossings: `first` plus the rank of the neighbour bit among the
+        // owned bits (the numbering of the vertex pass).
+        let id = |first: u32, owned: u16, d: u32| first + (owned & ((1u16 << d) - 1)).count_ones();
+        let t = LatticeTables::get(Lattice::BodyCentred);
+        for owned in [0x0003u16, 0x00C1, 0x3FC0 ^ 0x0100, 0x1234, 0x0F0F] {
+            let mut out = Vec::new();
+            propose(t, 100, 0, FULL, owned, owned, false, &mut out);
+            for c in &out {
+                let expected: Vec<u32> = t
+                    .islands(owned)
+                    .filter(|sheet| sheet.count_ones() >= 2)
+                    .find(|sheet| compress(*sheet, owned) == c.members)
+                    .map(|sheet| {
+                        (0..14)
+                            .filter(|d| sheet & (1 << d) != 0)
+                            .map(|d| id(100, owned, d))
+                            .collect()
+                    })
+                    .expect("the members are one island of the owned crossings");
+                assert_eq!(c.ids().collect::<Vec<_>>(), expected);
+            }
+        }
+        assert_eq!(compress(0b1010_0000, 0b1110_0100), 0b1010);
+        assert_eq!(compress(0, 0x3FFF), 0);
+        assert_eq!(compress(0x3FFF, 0x3FFF), 0x3FFF);
     }
 
     #[test]

@@ -96,8 +96,24 @@ pub enum ExtractError {
     },
 }
 
+/// What an [`Extractor`] does with its working memory.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BufferPolicy {
+    /// Keep every table and scratch buffer between calls: re-meshing allocates nothing once the
+    /// sizes have been seen (for repeated extractions, e.g. chunks). The peak is the sum of the
+    /// tables of all passes.
+    #[default]
+    Reuse,
+    /// Free each table as soon as its last reader is done (the vertex pass's tables after the
+    /// geometry pass, the cluster candidates after the commit, the adjacency before the output
+    /// indices are written) and everything but the samples at the end: the lowest peak, for one
+    /// large extraction; every call allocates again.
+    Lean,
+}
+
 /// A reusable extractor: keeps its sample array, per-point tables and scratch buffers between
-/// calls so that re-meshing allocates nothing once the sizes have been seen.
+/// calls so that re-meshing allocates nothing once the sizes have been seen (see
+/// [`BufferPolicy`] for the low-memory alternative).
 #[derive(Default)]
 pub struct Extractor {
     pub(crate) samples: Samples,
@@ -110,6 +126,22 @@ impl Extractor {
     /// An extractor with empty buffers.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Sets what happens to the working memory (default [`BufferPolicy::Reuse`]).
+    ///
+    /// ```
+    /// use rmt_extract::{BufferPolicy, Clustering, ExtractSettings, Extractor, Grid, Lattice};
+    /// let mut ex = Extractor::new();
+    /// ex.set_buffer_policy(BufferPolicy::Lean);
+    /// let settings = ExtractSettings::new(Grid::cube(16, 1.0), Lattice::BodyCentred,
+    ///     Clustering::Integrated);
+    /// let mut mesh = rmt_mesh::Mesh::default();
+    /// ex.extract(&rmt_fields::Sphere::new(glam::Vec3::ZERO, 0.6), &settings, &mut mesh).unwrap();
+    /// assert!(mesh.triangle_count() > 0);
+    /// ```
+    pub fn set_buffer_policy(&mut self, policy: BufferPolicy) {
+        self.mt.lean = policy == BufferPolicy::Lean;
     }
 
     /// Runs extractions with `pool.current_num_threads()` threads on `pool` instead of a pool of

@@ -165,8 +165,6 @@ pub struct MergeBuffers {
     next_member: Vec<u32>,
     /// The vertex an original vertex has been merged into (itself if none).
     rep: Vec<u32>,
-    /// Original vertices merged into each current vertex (meaningful where `rep[v] == v`).
-    count: Vec<u32>,
     scratch: Scratch,
     /// The edits of the last checked merge (working memory of [`MergeBuffers::merge`]).
     edits: Vec<TriangleEdit>,
@@ -220,20 +218,13 @@ impl MergeBuffers {
         self.next_member.fill(NONE);
         self.rep.clear();
         self.rep.extend(0..vertex_count as u32);
-        self.count.clear();
-        self.count.resize(vertex_count, 1);
     }
 
     /// Bytes held by the adjacency structures.
     pub fn bytes(&self) -> usize {
         self.tris.len() * 12
             + self.alive.len()
-            + (self.inc_start.len()
-                + self.inc.len()
-                + self.next_member.len()
-                + self.rep.len()
-                + self.count.len())
-                * 4
+            + (self.inc_start.len() + self.inc.len() + self.next_member.len() + self.rep.len()) * 4
     }
 
     /// The vertex that original vertex `v` now belongs to.
@@ -241,11 +232,9 @@ impl MergeBuffers {
         self.rep[v as usize]
     }
 
-    /// Number of original vertices merged into current vertex `v` (1 for an unmerged vertex).
+    /// Number of original vertices merged into current vertex `v` (1 for an unmerged vertex):
+    /// the length of its member chain (a few links; no per-vertex count is stored).
     pub fn member_count(&self, v: u32) -> u32 {
-        if self.rep[v as usize] == v {
-            return self.count[v as usize];
-        }
         let mut n = 0;
         let mut m = v;
         while m != NONE {
@@ -426,7 +415,7 @@ impl MergeBuffers {
         dropped
     }
 
-    /// Chains every member of `k[1..]` behind `k[0]` and counts them there.
+    /// Chains every member of `k[1..]` behind `k[0]` and points their `rep` at it.
     fn chain_members(&mut self, k: &[u32]) {
         let v = k[0];
         let mut tail = v;
@@ -434,7 +423,6 @@ impl MergeBuffers {
             tail = self.next_member[tail as usize];
         }
         for &c in &k[1..] {
-            self.count[v as usize] += self.count[c as usize];
             self.next_member[tail as usize] = c;
             let mut m = c;
             while m != NONE {
@@ -777,6 +765,16 @@ impl MergeBuffers {
         Ok(())
     }
 
+    /// Frees the vertex-to-triangle adjacency and the representatives (a lean extractor calls
+    /// it before [`MergeBuffers::finish`], which needs neither): after it only
+    /// [`MergeBuffers::finish`], [`MergeBuffers::is_alive`] and [`MergeBuffers::triangle`] may be
+    /// used until the next load.
+    pub fn release_adjacency(&mut self) {
+        self.inc = Vec::new();
+        self.inc_start = Vec::new();
+        self.rep = Vec::new();
+    }
+
     /// Writes the merged mesh: live triangles in their original order, vertices that live
     /// triangles use, renumbered in increasing old order. Returns the number of vertices.
     ///
@@ -967,16 +965,14 @@ pub(crate) mod tests {
             assert_eq!(recorded.next_member, direct.next_member);
         }
         assert!(merged > 10, "only {merged} merges were tried");
-        // Member counts kept per vertex agree with the member chains.
+        // A current vertex's member chain holds exactly the original vertices merged into it.
+        let mut owners = vec![0u32; p0.len()];
+        for v in 0..p0.len() as u32 {
+            owners[recorded.rep(v) as usize] += 1;
+        }
         for v in 0..p0.len() as u32 {
             if recorded.rep(v) == v {
-                let mut n = 0;
-                let mut m = v;
-                while m != NONE {
-                    n += 1;
-                    m = recorded.next_member[m as usize];
-                }
-                assert_eq!(recorded.member_count(v), n, "vertex {v}");
+                assert_eq!(recorded.member_count(v), owners[v as usize], "vertex {v}");
             }
         }
         let (mut out_p, mut out_i) = (pr.clone(), Vec::new());

@@ -46,11 +46,25 @@ pub struct MtBuffers {
     plane_points: Vec<Vec<u32>>,
     /// Cluster candidates, in storage order.
     candidates: Vec<Candidate>,
+    /// The candidates of one commit round (see [`COMMIT_ROUND`]).
+    round: Vec<Candidate>,
     /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
     /// of padding: 64 points are tested for crossings at once with a few word operations.
     inside: Vec<u64>,
     /// Working memory of the cluster commit, one per block of candidates.
     commits: Vec<CommitBlock>,
+    /// [`crate::BufferPolicy::Lean`]: free every table when its last reader is done.
+    pub(crate) lean: bool,
+}
+
+impl MtBuffers {
+    /// Bytes of the per-point tables (crossed points, per-plane lists, inside bits, candidates).
+    fn table_bytes(&self) -> usize {
+        self.crossed.bytes()
+            + self.plane_points.iter().map(|o| o.len() * 4).sum::<usize>()
+            + self.inside.len() * 8
+            + self.candidates.len() * std::mem::size_of::<Candidate>()
+    }
 }
 
 /// A point with a crossed edge: the id of its first owned crossing and its owned crossings (bit d:
@@ -206,8 +220,8 @@ fn for_each_bit(words: &[u64], start: usize, len: usize, mut visit: impl FnMut(u
 const COMMIT_BLOCK: usize = 64;
 
 /// At most this many candidates (a whole number of blocks) are checked before their records are
-/// applied: bounds the records' memory (about 1.4 KiB per accepted cluster) whatever the size.
-const COMMIT_ROUND: usize = 64 * COMMIT_BLOCK;
+/// applied: bounds the records' memory (a few hundred KiB) whatever the size.
+const COMMIT_ROUND: usize = 16 * COMMIT_BLOCK;
 
 /// A cluster that passed its check, waiting to be applied.
 struct Accepted {
@@ -763,7 +777,11 @@ pub fn extract(
         total_points += buf.plane_points[z].len();
         stats.edges += c.edges;
         proposals.add(c.proposals);
-        buf.candidates.extend_from_slice(cands);
+        let start = starts[z] as u32;
+        buf.candidates.extend(cands.iter().map(|c| Candidate {
+            first: start + c.first,
+            ..*c
+        }));
     }
     stats.edges /= 2;
     stats.crossings = total;
@@ -890,6 +908,15 @@ pub fn extract(
         Lattice::Simple => 6 * nx * ny * nz,
     };
     stats.t_geometry_s += t.elapsed().as_secs_f64();
+    // Lean: the per-point tables have no reader left (candidates name their crossings by id).
+    let mut lean_bytes = 0;
+    if buf.lean {
+        lean_bytes = buf.table_bytes();
+        buf.crossed = CrossedIndex::default();
+        buf.inside = Vec::new();
+        buf.plane_points = Vec::new();
+        pool.broadcast(|_| LAYER_WINDOW.with_borrow_mut(|w| *w = Vec::new()));
+    }
 
     // Clustering: commit one colour at a time (counted in the vertex pass, where the dissertation
     // does its merging).
@@ -899,106 +926,112 @@ pub fn extract(
         let t = std::time::Instant::now();
         let check = clustering == Clustering::Integrated;
         merge.load_filled(total);
-        // Clusters grouped by colour, storage order inside a colour.
-        buf.candidates.sort_by_key(|c| c.colour);
+        lean_bytes += merge.bytes();
         let MtBuffers {
-            crossed,
             candidates,
+            round,
             commits,
             ..
         } = &mut *buf;
-        let crossed: &CrossedIndex = crossed;
         let members =
-            |c: &Candidate, island: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
+            |c: &Candidate, members: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
                 k.clear();
-                let point = crossed.get(c.slot as usize);
-                let mut bits = island;
                 let mut sum = glam::Vec3::ZERO;
-                while bits != 0 {
-                    let d = bits.trailing_zeros() as u8;
-                    bits &= bits - 1;
-                    let id = point.id(d);
+                for id in (Candidate { members, ..*c }).ids() {
                     k.push(id);
                     sum += glam::Vec3::from(positions[id as usize]);
                 }
                 (sum / k.len() as f32).to_array()
             };
-        // Clusters of one colour share no tetrahedron, hence no triangle: check them in parallel
-        // against the mesh as the earlier colours left it, recording what each accepted merge
-        // changes, then apply the records in storage order. A round takes at most
-        // `COMMIT_ROUND` candidates, so the records stay small (applying a round cannot change
-        // what the next round of the same colour sees).
-        let rounds = candidates
-            .chunk_by(|a, b| a.colour == b.colour)
-            .flat_map(|group| group.chunks(COMMIT_ROUND));
-        for group in rounds {
-            let blocks = group.len().div_ceil(COMMIT_BLOCK);
-            if commits.len() < blocks {
-                commits.resize_with(blocks, CommitBlock::default);
-            }
-            let positions = &mesh.positions;
-            let merge_ref = &*merge;
-            let keys = &keys;
-            let try_block = |b: &mut CommitBlock, cands: &[Candidate]| {
-                b.clear();
-                for c in cands {
-                    let try_island = |island: u16, b: &mut CommitBlock| -> bool {
-                        let centre = members(c, island, positions, &mut b.k);
-                        if !allowed(&b.k, keys) {
-                            return false;
-                        }
-                        let first_edit = b.edits.len();
-                        if check {
-                            let (scratch, edits) = (&mut b.scratch, &mut b.edits);
-                            if merge_ref
-                                .check_and_record(scratch, positions, &b.k, centre, edits)
-                                .is_err()
-                            {
+        // Colour by colour, storage order inside a colour. Clusters of one colour share no
+        // tetrahedron, hence no triangle: check them in parallel against the mesh as the earlier
+        // colours left it, recording what each accepted merge changes, then apply the records in
+        // storage order. A round gathers at most `COMMIT_ROUND` candidates of the colour, so the
+        // records stay small (applying a round cannot change what the next round of the same
+        // colour sees), and the candidates need no sorting.
+        for colour in 0..lattice::colour_count(lattice) as u8 {
+            let mut of_colour = candidates.iter().filter(|c| c.colour == colour);
+            loop {
+                round.clear();
+                round.extend(of_colour.by_ref().take(COMMIT_ROUND));
+                if round.is_empty() {
+                    break;
+                }
+                let group = &round[..];
+                let blocks = group.len().div_ceil(COMMIT_BLOCK);
+                if commits.len() < blocks {
+                    commits.resize_with(blocks, CommitBlock::default);
+                }
+                let positions = &mesh.positions;
+                let merge_ref = &*merge;
+                let keys = &keys;
+                let try_block = |b: &mut CommitBlock, cands: &[Candidate]| {
+                    b.clear();
+                    for c in cands {
+                        let try_island = |island: u16, b: &mut CommitBlock| -> bool {
+                            let centre = members(c, island, positions, &mut b.k);
+                            if !allowed(&b.k, keys) {
                                 return false;
                             }
-                        } else {
-                            merge_ref.record_unchecked(&mut b.scratch, &b.k, &mut b.edits);
+                            let first_edit = b.edits.len();
+                            if check {
+                                let (scratch, edits) = (&mut b.scratch, &mut b.edits);
+                                if merge_ref
+                                    .check_and_record(scratch, positions, &b.k, centre, edits)
+                                    .is_err()
+                                {
+                                    return false;
+                                }
+                            } else {
+                                merge_ref.record_unchecked(&mut b.scratch, &b.k, &mut b.edits);
+                            }
+                            let first_member = b.members.len();
+                            b.members.extend_from_slice(&b.k);
+                            b.accepted.push(Accepted {
+                                members: first_member as u32..b.members.len() as u32,
+                                edits: first_edit as u32..b.edits.len() as u32,
+                                centre,
+                                reduced: island != c.members,
+                            });
+                            true
+                        };
+                        // Refused: try the cluster without one of its crossings, in bit order,
+                        // before giving up (keeps most of the merge where one crossing is the
+                        // trouble).
+                        let mut without_one = (0..14)
+                            .filter(|d| c.members.count_ones() > 2 && c.members & (1 << d) != 0)
+                            .map(|d| c.members & !(1 << d));
+                        if !(try_island(c.members, b) || without_one.any(|sub| try_island(sub, b)))
+                        {
+                            b.rejected += 1;
                         }
-                        let first_member = b.members.len();
-                        b.members.extend_from_slice(&b.k);
-                        b.accepted.push(Accepted {
-                            members: first_member as u32..b.members.len() as u32,
-                            edits: first_edit as u32..b.edits.len() as u32,
-                            centre,
-                            reduced: island != c.island,
-                        });
-                        true
-                    };
-                    // Refused: try the cluster without one of its crossings, in bit order,
-                    // before giving up (keeps most of the merge where one crossing is the
-                    // trouble).
-                    let mut without_one = (0..14)
-                        .filter(|d| c.island.count_ones() > 2 && c.island & (1 << d) != 0)
-                        .map(|d| c.island & !(1 << d));
-                    if !(try_island(c.island, b) || without_one.any(|sub| try_island(sub, b))) {
-                        b.rejected += 1;
                     }
+                };
+                pool.install(|| {
+                    commits[..blocks]
+                        .par_iter_mut()
+                        .zip(group.par_chunks(COMMIT_BLOCK))
+                        .for_each(|(b, cands)| try_block(b, cands));
+                });
+                for b in &commits[..blocks] {
+                    for a in &b.accepted {
+                        stats.discarded += merge.apply_recorded(
+                            &mut mesh.positions,
+                            &b.members[a.members.start as usize..a.members.end as usize],
+                            a.centre,
+                            &b.edits[a.edits.start as usize..a.edits.end as usize],
+                        );
+                        stats.clusters_committed += 1;
+                        stats.clusters_reduced += usize::from(a.reduced);
+                    }
+                    stats.clusters_rejected_check += b.rejected;
                 }
-            };
-            pool.install(|| {
-                commits[..blocks]
-                    .par_iter_mut()
-                    .zip(group.par_chunks(COMMIT_BLOCK))
-                    .for_each(|(b, cands)| try_block(b, cands));
-            });
-            for b in &commits[..blocks] {
-                for a in &b.accepted {
-                    stats.discarded += merge.apply_recorded(
-                        &mut mesh.positions,
-                        &b.members[a.members.start as usize..a.members.end as usize],
-                        a.centre,
-                        &b.edits[a.edits.start as usize..a.edits.end as usize],
-                    );
-                    stats.clusters_committed += 1;
-                    stats.clusters_reduced += usize::from(a.reduced);
-                }
-                stats.clusters_rejected_check += b.rejected;
             }
+        }
+        if buf.lean {
+            buf.candidates = Vec::new();
+            buf.round = Vec::new();
+            buf.commits = Vec::new();
         }
         if check {
             // Lone crossings (the only nearby crossing of their point on that sheet) join the
@@ -1042,6 +1075,11 @@ pub fn extract(
             stats.slivers_collapsed += slivers;
             stats.discarded += dropped;
         }
+        if buf.lean {
+            // Only the triangles and their liveness are read from here on: the adjacency goes
+            // before the output indices are allocated.
+            merge.release_adjacency();
+        }
         merge.finish(&mut mesh.positions, &mut mesh.indices);
         if tiled {
             crate::tiles::compact_keys(merge, &mut keys, merge.triangle_count());
@@ -1082,11 +1120,25 @@ pub fn extract(
         stats.t_geometry_s += t.elapsed().as_secs_f64();
     }
 
-    stats.bytes_edges = buf.crossed.bytes()
-        + buf.plane_points.iter().map(|o| o.len() * 4).sum::<usize>()
-        + buf.inside.len() * 8
-        + buf.candidates.len() * std::mem::size_of::<Candidate>()
-        + if propose { merge.bytes() } else { 0 };
+    stats.bytes_edges = if buf.lean {
+        // Measured before they were released.
+        if lean_bytes == 0 {
+            buf.table_bytes()
+        } else {
+            lean_bytes
+        }
+    } else {
+        buf.table_bytes() + if propose { merge.bytes() } else { 0 }
+    };
+    if buf.lean {
+        *merge = MergeBuffers::default();
+        *buf = MtBuffers {
+            lean: true,
+            ..MtBuffers::default()
+        };
+        mesh.positions.shrink_to_fit();
+        mesh.indices.shrink_to_fit();
+    }
     Ok(())
 }
 
@@ -1178,11 +1230,14 @@ fn vertex_plane(
                 owned.push(u32::from(own) | u32::from(crossed) << 16);
                 crossed_bits[local >> 6] |= 1 << (local & 63);
             }
+            // Ids within the plane for now; the plane's first id is added when the planes'
+            // candidates are joined.
+            let first = counts.crossings as u32;
             counts.crossings += own.count_ones() as usize;
             if propose && own.count_ones() >= 2 {
                 let colour = lattice::colour(l.lattice, add(p, colour_shift)) as u8;
                 counts.proposals.add(cluster::propose(
-                    l.t, i as u32, colour, valid, own, crossed, pinch_rule, cands,
+                    l.t, first, colour, valid, own, crossed, pinch_rule, cands,
                 ));
             }
         };

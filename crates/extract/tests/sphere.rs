@@ -236,6 +236,58 @@ fn a_reused_extractor_gives_the_same_mesh_as_a_fresh_one() {
 }
 
 #[test]
+fn a_lean_extractor_gives_the_same_meshes_and_counters_as_a_reusing_one() {
+    let asteroid = rmt_fields::Asteroid::new(Vec3::ZERO, rmt_fields::AsteroidParams::default());
+    // One lean extractor for every call (it must come back from releasing its tables), one
+    // reusing extractor for every call.
+    let mut lean = rmt_extract::Extractor::new();
+    lean.set_buffer_policy(rmt_extract::BufferPolicy::Lean);
+    let mut reuse = rmt_extract::Extractor::new();
+    for lattice in LATTICES {
+        for clustering in [
+            Clustering::None,
+            Clustering::Integrated,
+            Clustering::IntegratedUnchecked,
+            Clustering::Postprocessed,
+        ] {
+            for (n, threads) in [(28, 1), (36, 2), (20, 2)] {
+                let mut settings =
+                    rmt_extract::ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);
+                settings.threads = threads;
+                let mut a = rmt_mesh::Mesh::default();
+                let mut b = rmt_mesh::Mesh::default();
+                let sa = lean
+                    .extract(&asteroid, &settings, &mut a)
+                    .expect("extracts");
+                let sb = reuse
+                    .extract(&asteroid, &settings, &mut b)
+                    .expect("extracts");
+                let what = format!("{lattice:?} {clustering:?} n={n} threads={threads}");
+                assert!(sa.triangles > 100, "{what}");
+                assert_eq!(a, b, "{what}");
+                assert_eq!(
+                    (
+                        sa.crossings,
+                        sa.clusters_committed,
+                        sa.lone_absorbed,
+                        sa.discarded
+                    ),
+                    (
+                        sb.crossings,
+                        sb.clusters_committed,
+                        sb.lone_absorbed,
+                        sb.discarded
+                    ),
+                    "{what}"
+                );
+                // The lean extractor reports its tables as they were at their largest.
+                assert_eq!(sa.bytes_edges > 0, sb.bytes_edges > 0, "{what}");
+            }
+        }
+    }
+}
+
+#[test]
 fn bad_settings_and_non_finite_fields_are_errors_not_panics() {
     let mut mesh = rmt_mesh::Mesh::default();
     let mut ex = rmt_extract::Extractor::new();
