@@ -30,7 +30,6 @@ pub fn collapse_short_edges_tiled(
     max_len: f32,
     tile_keys: Option<&[u64]>,
 ) -> (usize, usize) {
-    merge.load(mesh.positions.len(), &mesh.indices);
     let max2 = max_len * max_len;
     let pos = |p: &[[f32; 3]], i: u32| glam::Vec3::from(p[i as usize]);
     // Candidate edges, each once (a < b).
@@ -46,6 +45,12 @@ pub fn collapse_short_edges_tiled(
             }
         }
     }
+    if edges.is_empty() {
+        // Nothing to collapse: what `finish` would leave without a merge (no adjacency built).
+        merge.drop_unused_vertices(mesh);
+        return (0, 0);
+    }
+    merge.load(mesh.positions.len(), &mesh.indices);
     edges.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
     let (mut collapses, mut dropped) = (0, 0);
     for &(_, a, b) in &edges {
@@ -170,6 +175,36 @@ mod tests {
             aspect_ratio(Vec3::ZERO, Vec3::X, Vec3::X * 2.0),
             f32::INFINITY
         );
+    }
+
+    #[test]
+    fn without_short_edges_the_mesh_is_only_compacted_as_finish_would() {
+        // An octahedron with two unused vertices (first and in the middle): nothing to collapse.
+        let (positions, indices) = crate::merge::tests::octahedron();
+        let mut p = vec![[9.0, 9.0, 9.0]];
+        p.extend_from_slice(&positions[..3]);
+        p.push([7.0, 7.0, 7.0]);
+        p.extend_from_slice(&positions[3..]);
+        let shifted: Vec<u32> = indices
+            .iter()
+            .map(|&v| if v < 3 { v + 1 } else { v + 2 })
+            .collect();
+        let mut mesh = Mesh {
+            positions: p.clone(),
+            indices: shifted.clone(),
+            ..Mesh::default()
+        };
+        let mut merge = MergeBuffers::default();
+        assert_eq!(collapse_short_edges(&mut merge, &mut mesh, 1e-3), (0, 0));
+        // What loading and finishing without a merge gives.
+        let (mut fp, mut fi) = (p, Vec::new());
+        let mut reference = MergeBuffers::default();
+        reference.load(fp.len(), &shifted);
+        reference.finish(&mut fp, &mut fi);
+        assert_eq!(mesh.positions, fp);
+        assert_eq!(mesh.indices, fi);
+        assert_eq!(mesh.positions, positions);
+        assert_eq!(mesh.indices, indices);
     }
 
     #[test]
