@@ -11,7 +11,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use rmt_extract::{Clustering, Extractor, Lattice, Measurement, Method};
+use rmt_extract::{BufferPolicy, Clustering, Extractor, Lattice, Measurement, Method};
 use rmt_mesh::Mesh;
 use serde_json::{Map, Value};
 
@@ -151,9 +151,14 @@ pub fn run(args: Args) -> Result<()> {
     let mut mesh = Mesh::default();
     let mut chunked = None;
     let stats = match args.chunks {
-        None => Extractor::new()
-            .extract(field.as_ref(), &settings, &mut mesh)
-            .with_context(|| format!("extracting {}", e.object.kind))?,
+        None => {
+            // One extraction: nothing to keep for a next call, so the lowest peak memory.
+            let mut extractor = Extractor::new();
+            extractor.set_buffer_policy(BufferPolicy::Lean);
+            extractor
+                .extract(field.as_ref(), &settings, &mut mesh)
+                .with_context(|| format!("extracting {}", e.object.kind))?
+        }
         Some(c) => {
             let (_, mut result) = crate::edit::extract_chunked(field.as_ref(), &e, c, threads)
                 .with_context(|| format!("extracting {} in chunks of {c}", e.object.kind))?;
