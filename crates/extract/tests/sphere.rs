@@ -9,6 +9,14 @@ use rmt_fields::{Gyroid, ScalarField, Sphere, Torus};
 
 const MODES: [Clustering; 2] = [Clustering::None, Clustering::Integrated];
 
+/// Every clustering mode that keeps the output identical for any thread count and buffer policy.
+const ALL_MT_MODES: [Clustering; 4] = [
+    Clustering::None,
+    Clustering::Integrated,
+    Clustering::IntegratedUnchecked,
+    Clustering::Postprocessed,
+];
+
 #[test]
 fn sphere_is_closed_manifold_and_a_sphere_on_both_lattices_and_modes() {
     let sphere = Sphere::new(Vec3::ZERO, 0.8);
@@ -185,12 +193,7 @@ fn gyroid_topology_matches_between_lattices_and_modes() {
 fn output_is_byte_identical_for_any_thread_count() {
     let field = rmt_fields::Asteroid::new(Vec3::ZERO, rmt_fields::AsteroidParams::default());
     for lattice in LATTICES {
-        for clustering in [
-            Clustering::None,
-            Clustering::Integrated,
-            Clustering::IntegratedUnchecked,
-            Clustering::Postprocessed,
-        ] {
+        for clustering in ALL_MT_MODES {
             let mut meshes = Vec::new();
             for threads in [1, 2, 8] {
                 let mut settings =
@@ -244,12 +247,7 @@ fn a_lean_extractor_gives_the_same_meshes_and_counters_as_a_reusing_one() {
     lean.set_buffer_policy(rmt_extract::BufferPolicy::Lean);
     let mut reuse = rmt_extract::Extractor::new();
     for lattice in LATTICES {
-        for clustering in [
-            Clustering::None,
-            Clustering::Integrated,
-            Clustering::IntegratedUnchecked,
-            Clustering::Postprocessed,
-        ] {
+        for clustering in ALL_MT_MODES {
             for (n, threads) in [(28, 1), (36, 2), (20, 2)] {
                 let mut settings =
                     rmt_extract::ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);

@@ -36,8 +36,11 @@
 //!   (`origin + p * h`) are applied after welding. Welding by exact position then joins exactly
 //!   the vertices the chunks share (plus, in plain MT, distinct crossings that coincide because
 //!   the surface passes through a sample point).
-//! - **Edits.** A brush changes sample values; every chunk whose input (cells plus halo, ghost
-//!   slots included) holds a changed value is marked dirty, and [`World::remesh_dirty`]
+//! - **Edits.** A brush changes sample values. A chunk's mesh depends only on which side of the
+//!   isovalue each point of its input (cells plus halo, ghost slots included) lies and on the
+//!   values at the ends of its crossed edges, so a changed value matters only where the point
+//!   changed side or has a lattice neighbour on the other side before or after the stroke; every
+//!   chunk whose input holds such a point is marked dirty, and [`World::remesh_dirty`]
 //!   re-extracts only those. Since a chunk depends on nothing else, the incrementally updated
 //!   world equals a full re-extraction of the edited volume.
 //!
