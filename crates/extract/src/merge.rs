@@ -27,6 +27,9 @@
 /// Marks "no vertex" in member chains.
 const NONE: u32 = u32::MAX;
 
+/// A dropped triangle.
+const DEAD: [u32; 3] = [NONE; 3];
+
 /// Why a merge was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reject {
@@ -156,8 +159,8 @@ impl LocalIds {
 /// A triangle mesh prepared for merges, with buffers kept between extractions.
 #[derive(Default)]
 pub struct MergeBuffers {
+    /// The triangles; a dropped one becomes [`DEAD`] (no separate liveness array).
     tris: Vec<[u32; 3]>,
-    alive: Vec<bool>,
     /// Incident triangles of each original vertex (CSR): `inc[inc_start[v]..inc_start[v + 1]]`.
     inc_start: Vec<u32>,
     inc: Vec<u32>,
@@ -191,8 +194,6 @@ impl MergeBuffers {
     /// Loads `vertex_count` vertices and the triangles written into
     /// [`MergeBuffers::triangles_to_fill`].
     pub fn load_filled(&mut self, vertex_count: usize) {
-        self.alive.clear();
-        self.alive.resize(self.tris.len(), true);
         self.inc_start.clear();
         self.inc_start.resize(vertex_count + 1, 0);
         for tri in &self.tris {
@@ -223,7 +224,6 @@ impl MergeBuffers {
     /// Bytes held by the adjacency structures.
     pub fn bytes(&self) -> usize {
         self.tris.len() * 12
-            + self.alive.len()
             + (self.inc_start.len() + self.inc.len() + self.next_member.len() + self.rep.len()) * 4
     }
 
@@ -254,7 +254,7 @@ impl MergeBuffers {
                 self.inc_start[m as usize + 1] as usize,
             );
             for &t in &self.inc[a..b] {
-                if self.alive[t as usize] {
+                if self.live(t) {
                     out.extend(self.tris[t as usize].iter().filter(|&&u| u != v));
                 }
             }
@@ -269,12 +269,17 @@ impl MergeBuffers {
         self.tris.len()
     }
 
-    /// Whether triangle `t` (original numbering) still exists.
-    pub fn is_alive(&self, t: usize) -> bool {
-        self.alive[t]
+    #[inline]
+    fn live(&self, t: u32) -> bool {
+        self.tris[t as usize] != DEAD
     }
 
-    /// Current vertices of triangle `t`.
+    /// Whether triangle `t` (original numbering) still exists.
+    pub fn is_alive(&self, t: usize) -> bool {
+        self.tris[t] != DEAD
+    }
+
+    /// Current vertices of triangle `t` (meaningful while it is alive).
     pub fn triangle(&self, t: usize) -> [u32; 3] {
         self.tris[t]
     }
@@ -297,7 +302,7 @@ impl MergeBuffers {
                     self.inc_start[m as usize] as usize,
                     self.inc_start[m as usize + 1] as usize,
                 );
-                region.extend(self.inc[a..b].iter().filter(|&&t| self.alive[t as usize]));
+                region.extend(self.inc[a..b].iter().filter(|&&t| self.live(t)));
                 m = self.next_member[m as usize];
             }
         }
@@ -405,11 +410,8 @@ impl MergeBuffers {
         positions[k[0] as usize] = new_pos;
         let mut dropped = 0;
         for e in edits {
-            self.tris[e.t as usize] = e.tri;
-            if e.dead {
-                self.alive[e.t as usize] = false;
-                dropped += 1;
-            }
+            self.tris[e.t as usize] = if e.dead { DEAD } else { e.tri };
+            dropped += usize::from(e.dead);
         }
         self.chain_members(k);
         dropped
@@ -462,7 +464,7 @@ impl MergeBuffers {
         positions[v as usize] = new_pos;
         let mut dropped = 0;
         for &t in region.iter() {
-            if !self.alive[t as usize] {
+            if !self.live(t) {
                 continue;
             }
             let tri = &mut self.tris[t as usize];
@@ -474,7 +476,7 @@ impl MergeBuffers {
                 }
             }
             if inside >= 2 {
-                self.alive[t as usize] = false;
+                *tri = DEAD;
                 dropped += 1;
             }
         }
@@ -814,8 +816,8 @@ impl MergeBuffers {
         new_id.clear();
         new_id.resize(positions.len(), NONE);
         let mut live = 0;
-        for (t, tri) in self.tris.iter().enumerate() {
-            if self.alive[t] {
+        for tri in &self.tris {
+            if *tri != DEAD {
                 live += 1;
                 for &v in tri {
                     new_id[v as usize] = 0;
@@ -835,8 +837,8 @@ impl MergeBuffers {
         positions.truncate(write);
         indices.clear();
         indices.reserve_exact(3 * live);
-        for (t, tri) in self.tris.iter().enumerate() {
-            if self.alive[t] {
+        for tri in &self.tris {
+            if *tri != DEAD {
                 indices.extend(tri.iter().map(|&v| new_id[v as usize]));
             }
         }
@@ -988,7 +990,6 @@ pub(crate) mod tests {
             }
             assert_eq!(pr, pd);
             assert_eq!(recorded.tris, direct.tris);
-            assert_eq!(recorded.alive, direct.alive);
             assert_eq!(recorded.rep, direct.rep);
             assert_eq!(recorded.next_member, direct.next_member);
         }
