@@ -46,7 +46,7 @@ fn main() -> Result<()> {
         }
         let first = world
             .extract_chunk(i, &mut ex, &mut mesh)
-            .context("chunk")??;
+            .with_context(|| format!("chunk {i}"))?;
         if first.triangles == 0 {
             continue;
         }
@@ -55,7 +55,7 @@ fn main() -> Result<()> {
         for _ in 0..reps {
             let st = world
                 .extract_chunk(i, &mut ex, &mut mesh)
-                .context("chunk")??;
+                .with_context(|| format!("chunk {i}"))?;
             v.push(st.t_vertex_s);
             g.push(st.t_geometry_s);
             t.push(st.t_total_s);

@@ -88,6 +88,14 @@ pub enum TerrainError {
     /// The extractor refused (bad grid, non-finite field value, ...).
     #[error("extraction failed: {0}")]
     Extract(#[from] rmt_extract::ExtractError),
+    /// A chunk index past the last chunk.
+    #[error("no chunk {index}: the world has {count} chunks")]
+    NoSuchChunk {
+        /// The index asked for.
+        index: usize,
+        /// Chunks in the world.
+        count: usize,
+    },
     /// The worker thread pool could not be created.
     #[error("could not start {threads} worker threads: {message}")]
     ThreadPool {

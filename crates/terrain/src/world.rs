@@ -491,25 +491,27 @@ impl World {
 
     /// Extracts chunk `i` from the current samples into `mesh` with `ex` (whose buffers are
     /// reused), without touching the world's own chunk meshes or dirty flags: the extractor's
-    /// stage timings and counters for one chunk, for profiling. `None` for a chunk index out of
-    /// range.
+    /// stage timings and counters for one chunk, for profiling.
     pub fn extract_chunk(
         &self,
         i: usize,
         ex: &mut Extractor,
         mesh: &mut Mesh,
-    ) -> Option<Result<Stats, TerrainError>> {
-        (i < self.chunks.len()).then(|| {
-            extract_chunk(
-                &self.samples,
-                &self.unit,
-                self.chunk_cells(i),
-                self.input_box(i),
-                ex,
-                mesh,
-            )
-            .map_err(TerrainError::from)
-        })
+    ) -> Result<Stats, TerrainError> {
+        if i >= self.chunks.len() {
+            return Err(TerrainError::NoSuchChunk {
+                index: i,
+                count: self.chunks.len(),
+            });
+        }
+        Ok(extract_chunk(
+            &self.samples,
+            &self.unit,
+            self.chunk_cells(i),
+            self.input_box(i),
+            ex,
+            mesh,
+        )?)
     }
 
     /// The chunk meshes welded into one, in world coordinates, with area-weighted normals.

@@ -356,6 +356,36 @@ fn a_small_brush_marks_only_nearby_chunks() {
 }
 
 #[test]
+fn one_chunk_extracted_alone_is_the_chunk_of_the_world() {
+    let field = FnField(|p: Vec3| p.length() - 0.9);
+    let s = WorldSettings::new(
+        [12, 12, 12],
+        Vec3::splat(-1.5),
+        0.25,
+        Lattice::BodyCentred,
+        Clustering::Integrated,
+    )
+    .with_chunk(6);
+    let mut world = World::new(&field, s).expect("world builds");
+    world.remesh_dirty().expect("remesh runs");
+    let mut ex = rmt_extract::Extractor::new();
+    let mut mesh = Mesh::default();
+    for i in 0..world.chunk_count() {
+        let stats = world
+            .extract_chunk(i, &mut ex, &mut mesh)
+            .expect("chunk extracts");
+        let own = world.chunk_mesh(i).expect("chunk exists");
+        assert_eq!(mesh.indices, own.indices, "chunk {i}");
+        assert_eq!(mesh.positions, own.positions, "chunk {i}");
+        assert!(stats.sample_points > 0);
+    }
+    let err = world
+        .extract_chunk(world.chunk_count(), &mut ex, &mut mesh)
+        .expect_err("no such chunk");
+    assert!(err.to_string().contains("no chunk 8"), "{err}");
+}
+
+#[test]
 fn bad_settings_and_brushes_give_clear_errors() {
     let sphere = Sphere::new(Vec3::ZERO, 0.5);
     let base = WorldSettings::new(
