@@ -1140,11 +1140,7 @@ pub fn extract(
 
     stats.bytes_edges = if buf.lean {
         // Measured before they were released.
-        if lean_bytes == 0 {
-            buf.table_bytes()
-        } else {
-            lean_bytes
-        }
+        lean_bytes
     } else {
         buf.table_bytes() + if propose { merge.bytes() } else { 0 }
     };
