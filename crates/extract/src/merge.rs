@@ -777,32 +777,11 @@ impl MergeBuffers {
         self.rep = Vec::new();
     }
 
-    /// Drops the vertices no triangle of `mesh` uses, renumbering the others in increasing old
-    /// order (the triangles keep their order): what [`MergeBuffers::finish`] leaves of a mesh
-    /// loaded and merged nothing, without building the adjacency. Uses the member chains as the
-    /// renumbering table, so, like `finish`, it ends any merging in progress.
+    /// [`rmt_mesh::Mesh::drop_unused_vertices`] with the member chains as working memory: what
+    /// [`MergeBuffers::finish`] leaves of a mesh loaded and merged nothing, without building the
+    /// adjacency. Like `finish`, it ends any merging in progress.
     pub fn drop_unused_vertices(&mut self, mesh: &mut rmt_mesh::Mesh) {
-        let id = &mut self.next_member;
-        id.clear();
-        id.resize(mesh.positions.len(), NONE);
-        for &v in &mesh.indices {
-            id[v as usize] = 0;
-        }
-        if id.iter().all(|&i| i == 0) {
-            return;
-        }
-        let mut next = 0u32;
-        for (v, slot) in id.iter_mut().enumerate() {
-            if *slot != NONE {
-                *slot = next;
-                mesh.positions[next as usize] = mesh.positions[v];
-                next += 1;
-            }
-        }
-        mesh.positions.truncate(next as usize);
-        for v in &mut mesh.indices {
-            *v = id[*v as usize];
-        }
+        mesh.drop_unused_vertices(&mut self.next_member);
     }
 
     /// Writes the merged mesh: live triangles in their original order, vertices that live

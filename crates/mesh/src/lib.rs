@@ -71,6 +71,48 @@ impl Mesh {
         self.indices.clear();
     }
 
+    /// Drops the vertices no triangle uses, renumbering the others in increasing old order (the
+    /// triangles keep their order; normals, when there is one per vertex, follow their
+    /// vertices). `scratch` is working memory (one entry per vertex), so a caller that keeps it
+    /// allocates nothing.
+    ///
+    /// ```
+    /// let mut m = rmt_mesh::Mesh::from_triangles(vec![[9.0; 3], [0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![1, 2, 3]);
+    /// m.drop_unused_vertices(&mut Vec::new());
+    /// assert_eq!((m.vertex_count(), m.indices.clone()), (3, vec![0, 1, 2]));
+    /// ```
+    pub fn drop_unused_vertices(&mut self, scratch: &mut Vec<u32>) {
+        const UNUSED: u32 = u32::MAX;
+        let id = scratch;
+        id.clear();
+        id.resize(self.positions.len(), UNUSED);
+        for &v in &self.indices {
+            id[v as usize] = 0;
+        }
+        if id.iter().all(|&i| i == 0) {
+            return;
+        }
+        let with_normals = self.normals.len() == self.positions.len();
+        let mut next = 0u32;
+        for (v, slot) in id.iter_mut().enumerate() {
+            if *slot != UNUSED {
+                *slot = next;
+                self.positions[next as usize] = self.positions[v];
+                if with_normals {
+                    self.normals[next as usize] = self.normals[v];
+                }
+                next += 1;
+            }
+        }
+        self.positions.truncate(next as usize);
+        if with_normals {
+            self.normals.truncate(next as usize);
+        }
+        for v in &mut self.indices {
+            *v = id[*v as usize];
+        }
+    }
+
     /// Iterator over triangles as index triples.
     pub fn triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
         self.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]])

@@ -313,6 +313,13 @@ impl World {
         }
         // Old values of the stroke's box (dense, x fastest), for the neighbour test below.
         let size = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1) as usize);
+        // Index into `old` of a point inside the stroke's box.
+        let box_at = |q: [i64; 3]| -> Option<usize> {
+            (0..3).all(|a| q[a] >= lo[a] && q[a] <= hi[a]).then(|| {
+                ((q[2] - lo[2]) as usize * size[1] + (q[1] - lo[1]) as usize) * size[0]
+                    + (q[0] - lo[0]) as usize
+            })
+        };
         let old = &mut self.stroke_old;
         old.clear();
         old.resize(size[0] * size[1] * size[2], f32::NAN);
@@ -346,9 +353,9 @@ impl World {
                     let d = (s.origin + pos * s.h).distance(brush.centre);
                     let before = samples.values[index];
                     let new = brush.apply(before, d, dt);
-                    let at = ((z - lo[2]) as usize * size[1] + (y - lo[1]) as usize) * size[0]
-                        + (x - lo[0]) as usize;
-                    old[at] = before;
+                    if let Some(at) = box_at([x, y, z]) {
+                        old[at] = before;
+                    }
                     if new != before {
                         samples.values[index] = new;
                         changed = true;
@@ -368,13 +375,7 @@ impl World {
         let (mut clo, mut chi) = ([i64::MAX; 3], [i64::MIN; 3]);
         let samples = &self.samples;
         let old_at = |q: [i64; 3], index: usize| -> f32 {
-            if (0..3).all(|a| q[a] >= lo[a] && q[a] <= hi[a]) {
-                let at = ((q[2] - lo[2]) as usize * size[1] + (q[1] - lo[1]) as usize) * size[0]
-                    + (q[0] - lo[0]) as usize;
-                old[at]
-            } else {
-                samples.values[index]
-            }
+            box_at(q).map_or(samples.values[index], |at| old[at])
         };
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
@@ -605,29 +606,9 @@ fn extract_chunk(
         }
     }
     let stats = ex.extract_presampled(&st, mesh)?;
-    compact(mesh);
-    Ok(stats)
-}
-
-/// Drops the vertices no triangle uses (keeping the order of the others) and the normals.
-fn compact(mesh: &mut Mesh) {
-    let mut id = vec![u32::MAX; mesh.positions.len()];
-    for &v in &mesh.indices {
-        id[v as usize] = 0;
-    }
-    let mut next = 0;
-    for (v, slot) in id.iter_mut().enumerate() {
-        if *slot == 0 {
-            *slot = next;
-            mesh.positions[next as usize] = mesh.positions[v];
-            next += 1;
-        }
-    }
-    mesh.positions.truncate(next as usize);
-    for v in &mut mesh.indices {
-        *v = id[*v as usize];
-    }
     mesh.normals.clear();
+    mesh.drop_unused_vertices(&mut Vec::new());
+    Ok(stats)
 }
 
 /// Bit pattern of a position, with -0.0 taken as 0.0.
