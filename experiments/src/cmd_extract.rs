@@ -247,6 +247,18 @@ pub fn summary(e: &Extraction, threads: usize, m: &Measurement) -> String {
         ms(s.t_normals_s),
         ms(s.t_allocation_s),
     );
+    if s.t_cluster_check_s > 0.0 {
+        out += &format!(
+            "  merging:  of the vertex pass, adjacency {:.3} + cluster checks {:.3} (parallel) + \
+             apply {:.3} + lone crossings {:.3} + slivers {:.3} + mesh out {:.3}\n",
+            ms(s.t_adjacency_s),
+            ms(s.t_cluster_check_s),
+            ms(s.t_cluster_apply_s),
+            ms(s.t_lone_s),
+            ms(s.t_slivers_s),
+            ms(s.t_finish_s),
+        );
+    }
     out +=
         &format!(
         "  topology: {} (holes {}, non-manifold edges {} / vertices {}, orientation errors {}), \

@@ -6,6 +6,9 @@
 //! cargo run --release -p rmt-extract --example passes -- [n] [reps] [threads] [filter]
 //! ```
 //!
+//! For the clustering modes a second line splits the clustering part of the vertex pass into its
+//! steps (see the `t_*_s` fields of `Stats`): only the cluster checks run in parallel.
+//!
 //! `filter` keeps the configurations whose name (`field lattice clustering`, e.g.
 //! `asteroid bcdl integrated`) is or contains it: `passes 64 50 1 "asteroid bcdl integrated"`
 //! repeats one configuration, for a profiler; `passes 64 20 1 simple` all simple-lattice ones.
@@ -75,11 +78,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let mut mesh = Mesh::default();
                 let first = ex.extract(field, &s, &mut mesh)?;
                 let (mut v, mut g, mut t) = (Vec::new(), Vec::new(), Vec::new());
+                // The clustering steps inside the vertex pass, in order.
+                let mut steps: [Vec<f64>; 6] = Default::default();
                 for _ in 0..reps {
                     let st = ex.extract_presampled(&s, &mut mesh)?;
                     v.push(st.t_vertex_s);
                     g.push(st.t_geometry_s);
                     t.push(st.t_total_s);
+                    for (acc, x) in steps.iter_mut().zip([
+                        st.t_adjacency_s,
+                        st.t_cluster_check_s,
+                        st.t_cluster_apply_s,
+                        st.t_lone_s,
+                        st.t_slivers_s,
+                        st.t_finish_s,
+                    ]) {
+                        acc.push(x);
+                    }
                 }
                 let pts = first.sample_points as f64;
                 println!(
@@ -91,6 +106,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     first.sample_points,
                     first.triangles
                 );
+                if clustering != Clustering::None {
+                    let [adj, check, apply, lone, slivers, finish] = steps.map(median);
+                    println!(
+                        "{:36}   of the vertex pass: adjacency {:.2} + cluster checks {:.2} (parallel) + apply {:.2} + lone {:.2} + slivers {:.2} + finish {:.2} ms",
+                        "",
+                        adj * 1e3,
+                        check * 1e3,
+                        apply * 1e3,
+                        lone * 1e3,
+                        slivers * 1e3,
+                        finish * 1e3
+                    );
+                }
             }
         }
     }

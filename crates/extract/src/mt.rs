@@ -943,7 +943,9 @@ pub fn extract(
     if propose {
         let t = std::time::Instant::now();
         let check = clustering == Clustering::Integrated;
+        let step = std::time::Instant::now();
         merge.load_filled(total);
+        stats.t_adjacency_s += step.elapsed().as_secs_f64();
         lean_bytes += merge.bytes();
         let MtBuffers {
             candidates,
@@ -1025,12 +1027,15 @@ pub fn extract(
                         }
                     }
                 };
+                let step = std::time::Instant::now();
                 pool.install(|| {
                     commits[..blocks]
                         .par_iter_mut()
                         .zip(group.par_chunks(COMMIT_BLOCK))
                         .for_each(|(b, cands)| try_block(b, cands));
                 });
+                stats.t_cluster_check_s += step.elapsed().as_secs_f64();
+                let step = std::time::Instant::now();
                 for b in &commits[..blocks] {
                     for a in &b.accepted {
                         stats.discarded += merge.apply_recorded(
@@ -1044,6 +1049,7 @@ pub fn extract(
                     }
                     stats.clusters_rejected_check += b.rejected;
                 }
+                stats.t_cluster_apply_s += step.elapsed().as_secs_f64();
             }
         }
         if buf.lean {
@@ -1051,6 +1057,7 @@ pub fn extract(
             buf.round = Vec::new();
             buf.commits = Vec::new();
         }
+        let step = std::time::Instant::now();
         if check {
             // Lone crossings (the only nearby crossing of their point on that sheet) join the
             // nearest neighbouring cluster vertex when the exact check allows it: the one step
@@ -1084,6 +1091,10 @@ pub fn extract(
             }
         }
         if check {
+            stats.t_lone_s += step.elapsed().as_secs_f64();
+        }
+        let step = std::time::Instant::now();
+        if check {
             let (slivers, dropped) = crate::collapse::collapse_slivers(
                 merge,
                 &mut mesh.positions,
@@ -1093,6 +1104,10 @@ pub fn extract(
             stats.slivers_collapsed += slivers;
             stats.discarded += dropped;
         }
+        if check {
+            stats.t_slivers_s += step.elapsed().as_secs_f64();
+        }
+        let step = std::time::Instant::now();
         if buf.lean {
             // Only the triangles and their liveness are read from here on: the adjacency goes
             // before the output indices are allocated.
@@ -1108,6 +1123,7 @@ pub fn extract(
             // check, so no flat triangle is left inside the box.
             weld_coincident(merge, mesh, settings, tiled.then_some(&keys[..]), stats);
         }
+        stats.t_finish_s += step.elapsed().as_secs_f64();
         stats.t_vertex_s += t.elapsed().as_secs_f64();
     }
     stats.clusters_rejected = stats.clusters_rejected_prefilter + stats.clusters_rejected_check;

@@ -36,6 +36,24 @@ pub struct Stats {
     pub t_normals_s: f64,
     /// Seconds for the whole extraction.
     pub t_total_s: f64,
+    /// Part of `t_vertex_s` (integrated clustering): building the vertex-to-triangle adjacency
+    /// the merges need. Serial.
+    pub t_adjacency_s: f64,
+    /// Part of `t_vertex_s` (integrated clustering): checking the cluster candidates against the
+    /// mesh, colour by colour, in parallel.
+    pub t_cluster_check_s: f64,
+    /// Part of `t_vertex_s` (integrated clustering): applying the accepted cluster merges, in
+    /// storage order. Serial.
+    pub t_cluster_apply_s: f64,
+    /// Part of `t_vertex_s` (checked integrated clustering): absorbing lone crossings into a
+    /// neighbouring cluster, one after the other. Serial.
+    pub t_lone_s: f64,
+    /// Part of `t_vertex_s` (checked integrated clustering): collapsing needle and cap
+    /// triangles. Serial.
+    pub t_slivers_s: f64,
+    /// Part of `t_vertex_s` (integrated clustering): writing the merged mesh out of the merge
+    /// buffers, and welding coincident crossings where that applies. Serial.
+    pub t_finish_s: f64,
     /// Clusters (groups of at least two crossings at one point) found by the vertex pass.
     pub clusters_proposed: usize,
     /// Clusters merged into one vertex.

@@ -371,3 +371,52 @@ fn tiles_keep_clustering_closed_and_local() {
         assert!(tiled.triangles < plain.triangles * 7 / 10, "{lattice:?}");
     }
 }
+
+#[test]
+fn the_merge_steps_are_timed_inside_the_vertex_pass() {
+    let sphere = Sphere::new(Vec3::ZERO, 0.8);
+    for lattice in LATTICES {
+        for clustering in ALL_MT_MODES {
+            let settings =
+                rmt_extract::ExtractSettings::new(Grid::cube(24, 1.0), lattice, clustering);
+            let mut mesh = rmt_mesh::Mesh::default();
+            let s = rmt_extract::Extractor::new()
+                .extract(&sphere, &settings, &mut mesh)
+                .expect("extracts");
+            let what = format!("{lattice:?} {clustering:?}");
+            let steps = [
+                s.t_adjacency_s,
+                s.t_cluster_check_s,
+                s.t_cluster_apply_s,
+                s.t_lone_s,
+                s.t_slivers_s,
+                s.t_finish_s,
+            ];
+            assert!(steps.iter().all(|&t| t >= 0.0), "{what}: {steps:?}");
+            assert!(
+                steps.iter().sum::<f64>() <= s.t_vertex_s,
+                "{what}: the steps {steps:?} are parts of the vertex pass ({} s)",
+                s.t_vertex_s
+            );
+            let merging = matches!(
+                clustering,
+                Clustering::Integrated | Clustering::IntegratedUnchecked
+            );
+            // Timed steps are the ones that ran: clusters were checked (or recorded) and applied
+            // only with integrated clustering; lone crossings and slivers only when checked.
+            assert_eq!(s.t_cluster_check_s > 0.0, merging, "{what}");
+            assert_eq!(s.t_cluster_apply_s > 0.0, merging, "{what}");
+            assert_eq!(s.t_adjacency_s > 0.0, merging, "{what}");
+            assert_eq!(
+                s.t_lone_s > 0.0,
+                clustering == Clustering::Integrated,
+                "{what}"
+            );
+            assert_eq!(
+                s.t_slivers_s > 0.0,
+                clustering == Clustering::Integrated,
+                "{what}"
+            );
+        }
+    }
+}
