@@ -40,6 +40,8 @@ fn main() -> Result<()> {
     let mut mesh = Mesh::default();
     let mut shown = 0;
     let (mut all_v, mut all_g, mut all_t) = (0.0, 0.0, 0.0);
+    // The merging steps of the vertex pass (see `Stats`), summed over the chunks.
+    let mut all_steps = [0.0; 6];
     for i in 0..world.chunk_count() {
         if shown == count {
             break;
@@ -52,6 +54,7 @@ fn main() -> Result<()> {
         }
         shown += 1;
         let (mut v, mut g, mut t) = (Vec::new(), Vec::new(), Vec::new());
+        let mut steps: [Vec<f64>; 6] = Default::default();
         for _ in 0..reps {
             let st = world
                 .extract_chunk(i, &mut ex, &mut mesh)
@@ -59,6 +62,19 @@ fn main() -> Result<()> {
             v.push(st.t_vertex_s);
             g.push(st.t_geometry_s);
             t.push(st.t_total_s);
+            for (acc, x) in steps.iter_mut().zip([
+                st.t_adjacency_s,
+                st.t_cluster_check_s,
+                st.t_cluster_apply_s,
+                st.t_lone_s,
+                st.t_slivers_s,
+                st.t_finish_s,
+            ]) {
+                acc.push(x);
+            }
+        }
+        for (sum, s) in all_steps.iter_mut().zip(steps) {
+            *sum += median(s);
         }
         let (v, g, t) = (median(v), median(g), median(t));
         all_v += v;
@@ -89,5 +105,11 @@ fn main() -> Result<()> {
         all_g / n * 1e3,
         all_t / n * 1e3
     );
+    if clustering != Clustering::None && clustering != Clustering::Postprocessed {
+        let [adj, check, apply, lone, slivers, finish] = all_steps.map(|s| s / n * 1e3);
+        println!(
+            "  of the vertex pass: adjacency {adj:.3} + cluster checks {check:.3} + apply {apply:.3} + lone {lone:.3} + slivers {slivers:.3} + finish {finish:.3} ms"
+        );
+    }
     Ok(())
 }
