@@ -168,7 +168,9 @@ pub struct MergeBuffers {
     next_member: Vec<u32>,
     /// The vertex an original vertex has been merged into (itself if none).
     rep: Vec<u32>,
-    scratch: Scratch,
+    /// Working memory of [`MergeBuffers::merge`], boxed so that lending it out moves a pointer,
+    /// not kilobytes of tables (and allocates nothing).
+    scratch: Option<Box<Scratch>>,
     /// The edits of the last checked merge (working memory of [`MergeBuffers::merge`]).
     edits: Vec<TriangleEdit>,
 }
@@ -319,7 +321,7 @@ impl MergeBuffers {
         new_pos: [f32; 3],
         check: bool,
     ) -> Result<usize, Reject> {
-        let mut scratch = std::mem::take(&mut self.scratch);
+        let mut scratch = self.scratch.take().unwrap_or_default();
         let result = if check {
             let mut edits = std::mem::take(&mut self.edits);
             edits.clear();
@@ -331,7 +333,7 @@ impl MergeBuffers {
         } else {
             Ok(self.apply(positions, k, new_pos, &mut scratch.region))
         };
-        self.scratch = scratch;
+        self.scratch = Some(scratch);
         result
     }
 
