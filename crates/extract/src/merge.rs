@@ -246,6 +246,12 @@ impl MergeBuffers {
         n
     }
 
+    /// Whether `v` has absorbed other vertices (`member_count(v) > 1`), without walking its
+    /// chain.
+    pub fn has_members(&self, v: u32) -> bool {
+        self.next_member[v as usize] != NONE
+    }
+
     /// The current vertices sharing a live triangle with current vertex `v`, sorted, without `v`.
     pub fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
         out.clear();
@@ -983,6 +989,11 @@ pub(crate) mod tests {
         for v in 0..p0.len() as u32 {
             if recorded.rep(v) == v {
                 assert_eq!(recorded.member_count(v), owners[v as usize], "vertex {v}");
+                assert_eq!(
+                    recorded.has_members(v),
+                    owners[v as usize] > 1,
+                    "vertex {v}"
+                );
             }
         }
         let (mut out_p, mut out_i) = (pr.clone(), Vec::new());

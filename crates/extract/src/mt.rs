@@ -1064,23 +1064,22 @@ pub fn extract(
             // beyond the dissertation's rules, worth about 5% fewer triangles and rounder ones.
             let mut near = Vec::new();
             for x in 0..total as u32 {
-                if merge.rep(x) != x || merge.member_count(x) != 1 {
+                if merge.rep(x) != x || merge.has_members(x) {
                     continue;
                 }
                 merge.neighbours(x, &mut near);
                 let px = glam::Vec3::from(mesh.positions[x as usize]);
                 let target = near
                     .iter()
-                    .map(|&u| (u, merge.member_count(u)))
-                    .filter(|&(u, n)| n > 1 && allowed(&[u, x], &keys))
-                    .min_by(|a, b| {
-                        let da =
-                            px.distance_squared(glam::Vec3::from(mesh.positions[a.0 as usize]));
-                        let db =
-                            px.distance_squared(glam::Vec3::from(mesh.positions[b.0 as usize]));
-                        da.total_cmp(&db).then(a.0.cmp(&b.0))
+                    .copied()
+                    .filter(|&u| merge.has_members(u) && allowed(&[u, x], &keys))
+                    .min_by(|&a, &b| {
+                        let da = px.distance_squared(glam::Vec3::from(mesh.positions[a as usize]));
+                        let db = px.distance_squared(glam::Vec3::from(mesh.positions[b as usize]));
+                        da.total_cmp(&db).then(a.cmp(&b))
                     });
-                if let Some((u, n)) = target {
+                if let Some(u) = target {
+                    let n = merge.member_count(u);
                     let pu = glam::Vec3::from(mesh.positions[u as usize]);
                     let centre = ((pu * n as f32 + px) / (n as f32 + 1.0)).to_array();
                     if let Ok(dropped) = merge.merge(&mut mesh.positions, &[u, x], centre, true) {
