@@ -249,14 +249,8 @@ pub fn summary(e: &Extraction, threads: usize, m: &Measurement) -> String {
     );
     if s.t_cluster_check_s > 0.0 {
         out += &format!(
-            "  merging:  of the vertex pass, adjacency {:.3} + cluster checks {:.3} (parallel) + \
-             apply {:.3} + lone crossings {:.3} + slivers {:.3} + mesh out {:.3}\n",
-            ms(s.t_adjacency_s),
-            ms(s.t_cluster_check_s),
-            ms(s.t_cluster_apply_s),
-            ms(s.t_lone_s),
-            ms(s.t_slivers_s),
-            ms(s.t_finish_s),
+            "  merging:  of the vertex pass, {} ms\n",
+            rmt_extract::Stats::merge_steps_text(s.merge_steps().map(ms), 3)
         );
     }
     out +=

@@ -85,14 +85,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     v.push(st.t_vertex_s);
                     g.push(st.t_geometry_s);
                     t.push(st.t_total_s);
-                    for (acc, x) in steps.iter_mut().zip([
-                        st.t_adjacency_s,
-                        st.t_cluster_check_s,
-                        st.t_cluster_apply_s,
-                        st.t_lone_s,
-                        st.t_slivers_s,
-                        st.t_finish_s,
-                    ]) {
+                    for (acc, x) in steps.iter_mut().zip(st.merge_steps()) {
                         acc.push(x);
                     }
                 }
@@ -107,16 +100,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     first.triangles
                 );
                 if clustering != Clustering::None {
-                    let [adj, check, apply, lone, slivers, finish] = steps.map(median);
                     println!(
-                        "{:36}   of the vertex pass: adjacency {:.2} + cluster checks {:.2} (parallel) + apply {:.2} + lone {:.2} + slivers {:.2} + finish {:.2} ms",
+                        "{:36}   of the vertex pass: {} ms",
                         "",
-                        adj * 1e3,
-                        check * 1e3,
-                        apply * 1e3,
-                        lone * 1e3,
-                        slivers * 1e3,
-                        finish * 1e3
+                        rmt_extract::Stats::merge_steps_text(steps.map(|s| median(s) * 1e3), 2)
                     );
                 }
             }

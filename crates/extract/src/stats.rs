@@ -82,3 +82,55 @@ pub struct Stats {
     /// Bytes of the output index buffer.
     pub bytes_indices: usize,
 }
+
+impl Stats {
+    /// Names of the merging steps of integrated clustering, in the order of
+    /// [`Stats::merge_steps`] (and of the work).
+    pub const MERGE_STEPS: [&'static str; 6] = [
+        "adjacency",
+        "cluster checks",
+        "apply",
+        "lone crossings",
+        "slivers",
+        "mesh out",
+    ];
+
+    /// Seconds of each merging step inside `t_vertex_s` (see [`Stats::MERGE_STEPS`]); all zero
+    /// without integrated clustering. Only the cluster checks run in parallel.
+    ///
+    /// ```
+    /// let s = rmt_extract::Stats { t_lone_s: 0.25, ..Default::default() };
+    /// assert_eq!(s.merge_steps()[3], 0.25);
+    /// assert_eq!(rmt_extract::Stats::MERGE_STEPS[3], "lone crossings");
+    /// ```
+    /// `values`, one per merging step in [`Stats::MERGE_STEPS`] order (in whatever unit the
+    /// caller prints), as one line: `adjacency 1.20 + cluster checks 9.00 (parallel) + ...`.
+    ///
+    /// ```
+    /// let line = rmt_extract::Stats::merge_steps_text([1.0, 2.0, 3.0, 4.0, 5.0, 6.0], 1);
+    /// assert!(line.starts_with("adjacency 1.0 + cluster checks 2.0 (parallel) + apply 3.0"));
+    /// ```
+    pub fn merge_steps_text(values: [f64; 6], decimals: usize) -> String {
+        let parts: Vec<String> = Self::MERGE_STEPS
+            .iter()
+            .zip(values)
+            .enumerate()
+            .map(|(i, (name, v))| {
+                let parallel = if i == 1 { " (parallel)" } else { "" };
+                format!("{name} {v:.decimals$}{parallel}")
+            })
+            .collect();
+        parts.join(" + ")
+    }
+
+    pub fn merge_steps(&self) -> [f64; 6] {
+        [
+            self.t_adjacency_s,
+            self.t_cluster_check_s,
+            self.t_cluster_apply_s,
+            self.t_lone_s,
+            self.t_slivers_s,
+            self.t_finish_s,
+        ]
+    }
+}

@@ -384,14 +384,7 @@ fn the_merge_steps_are_timed_inside_the_vertex_pass() {
                 .extract(&sphere, &settings, &mut mesh)
                 .expect("extracts");
             let what = format!("{lattice:?} {clustering:?}");
-            let steps = [
-                s.t_adjacency_s,
-                s.t_cluster_check_s,
-                s.t_cluster_apply_s,
-                s.t_lone_s,
-                s.t_slivers_s,
-                s.t_finish_s,
-            ];
+            let steps = s.merge_steps();
             assert!(steps.iter().all(|&t| t >= 0.0), "{what}: {steps:?}");
             assert!(
                 steps.iter().sum::<f64>() <= s.t_vertex_s,

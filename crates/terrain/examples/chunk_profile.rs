@@ -62,14 +62,7 @@ fn main() -> Result<()> {
             v.push(st.t_vertex_s);
             g.push(st.t_geometry_s);
             t.push(st.t_total_s);
-            for (acc, x) in steps.iter_mut().zip([
-                st.t_adjacency_s,
-                st.t_cluster_check_s,
-                st.t_cluster_apply_s,
-                st.t_lone_s,
-                st.t_slivers_s,
-                st.t_finish_s,
-            ]) {
+            for (acc, x) in steps.iter_mut().zip(st.merge_steps()) {
                 acc.push(x);
             }
         }
@@ -106,9 +99,9 @@ fn main() -> Result<()> {
         all_t / n * 1e3
     );
     if clustering != Clustering::None && clustering != Clustering::Postprocessed {
-        let [adj, check, apply, lone, slivers, finish] = all_steps.map(|s| s / n * 1e3);
         println!(
-            "  of the vertex pass: adjacency {adj:.3} + cluster checks {check:.3} + apply {apply:.3} + lone {lone:.3} + slivers {slivers:.3} + finish {finish:.3} ms"
+            "  of the vertex pass: {} ms",
+            rmt_extract::Stats::merge_steps_text(all_steps.map(|s| s / n * 1e3), 3)
         );
     }
     Ok(())
