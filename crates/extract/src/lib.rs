@@ -13,6 +13,12 @@
 //!
 //! The [`Extractor`] keeps every buffer between calls, as a game would.
 //!
+//! Cost, on a 2-vCPU Xeon VM at 128^3 cells on one thread: about 14 ns per sample point for
+//! marching tetrahedra on the body-centred lattice without clustering, about 42-50 ns with
+//! integrated clustering (mostly its exact checks; [`Stats::merge_steps`] splits that time).
+//! Reproduce with `cargo run --release -p experiments -- bench` (side by side with
+//! fast-surface-nets and isomesh) or `cargo run --release -p rmt-extract --example passes`.
+//!
 //! ```
 //! use rmt_extract::{Extractor, ExtractSettings, Grid, Lattice, Clustering};
 //! use rmt_fields::Sphere;
