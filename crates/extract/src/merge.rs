@@ -801,7 +801,7 @@ impl MergeBuffers {
     pub fn finish(&mut self, positions: &mut Vec<[f32; 3]>, indices: &mut Vec<u32>) -> usize {
         let new_id = &mut self.next_member;
         new_id.clear();
-        new_id.resize(positions.len(), NONE);
+        new_id.resize(positions.len(), rmt_mesh::UNUSED_VERTEX);
         let mut live = 0;
         for tri in &self.tris {
             if *tri != DEAD {
@@ -811,17 +811,7 @@ impl MergeBuffers {
                 }
             }
         }
-        let mut next = 0u32;
-        let mut write = 0;
-        for v in 0..positions.len() {
-            if new_id[v] != NONE {
-                new_id[v] = next;
-                positions[write] = positions[v];
-                write += 1;
-                next += 1;
-            }
-        }
-        positions.truncate(write);
+        let kept = rmt_mesh::compact_marked_vertices(new_id, positions, None);
         indices.clear();
         indices.reserve_exact(3 * live);
         for tri in &self.tris {
@@ -829,7 +819,7 @@ impl MergeBuffers {
                 indices.extend(tri.iter().map(|&v| new_id[v as usize]));
             }
         }
-        write
+        kept
     }
 }
 

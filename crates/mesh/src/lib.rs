@@ -44,6 +44,44 @@ pub struct Mesh {
     pub indices: Vec<u32>,
 }
 
+/// Marks a vertex that no triangle uses, in the table of [`compact_marked_vertices`].
+pub const UNUSED_VERTEX: u32 = u32::MAX;
+
+/// Moves the vertices whose entry in `id` is not [`UNUSED_VERTEX`] to the front, in increasing
+/// old order, truncates the rest, and writes each kept vertex's new index into its entry of
+/// `id` (one entry per vertex). `normals`, when given (one per vertex), follow their vertices.
+/// Returns the number of vertices kept. The step shared by [`Mesh::drop_unused_vertices`] and
+/// other compactions that mark the used vertices their own way.
+///
+/// ```
+/// let mut id = vec![0, rmt_mesh::UNUSED_VERTEX, 0];
+/// let mut p = vec![[0.0; 3], [1.0; 3], [2.0; 3]];
+/// assert_eq!(rmt_mesh::compact_marked_vertices(&mut id, &mut p, None), 2);
+/// assert_eq!((id[0], id[2], p), (0, 1, vec![[0.0; 3], [2.0; 3]]));
+/// ```
+pub fn compact_marked_vertices(
+    id: &mut [u32],
+    positions: &mut Vec<[f32; 3]>,
+    mut normals: Option<&mut Vec<[f32; 3]>>,
+) -> usize {
+    let mut next = 0;
+    for (v, slot) in id.iter_mut().enumerate() {
+        if *slot != UNUSED_VERTEX {
+            *slot = next as u32;
+            positions[next] = positions[v];
+            if let Some(n) = normals.as_deref_mut() {
+                n[next] = n[v];
+            }
+            next += 1;
+        }
+    }
+    positions.truncate(next);
+    if let Some(n) = normals {
+        n.truncate(next);
+    }
+    next
+}
+
 impl Mesh {
     /// A mesh from positions and a flat index list (no normals).
     pub fn from_triangles(positions: Vec<[f32; 3]>, indices: Vec<u32>) -> Self {
@@ -82,32 +120,17 @@ impl Mesh {
     /// assert_eq!((m.vertex_count(), m.indices.clone()), (3, vec![0, 1, 2]));
     /// ```
     pub fn drop_unused_vertices(&mut self, scratch: &mut Vec<u32>) {
-        const UNUSED: u32 = u32::MAX;
         let id = scratch;
         id.clear();
-        id.resize(self.positions.len(), UNUSED);
+        id.resize(self.positions.len(), UNUSED_VERTEX);
         for &v in &self.indices {
             id[v as usize] = 0;
         }
         if id.iter().all(|&i| i == 0) {
             return;
         }
-        let with_normals = self.normals.len() == self.positions.len();
-        let mut next = 0u32;
-        for (v, slot) in id.iter_mut().enumerate() {
-            if *slot != UNUSED {
-                *slot = next;
-                self.positions[next as usize] = self.positions[v];
-                if with_normals {
-                    self.normals[next as usize] = self.normals[v];
-                }
-                next += 1;
-            }
-        }
-        self.positions.truncate(next as usize);
-        if with_normals {
-            self.normals.truncate(next as usize);
-        }
+        let normals = (self.normals.len() == self.positions.len()).then_some(&mut self.normals);
+        compact_marked_vertices(id, &mut self.positions, normals);
         for v in &mut self.indices {
             *v = id[*v as usize];
         }
