@@ -1,7 +1,7 @@
 //! `experiments extract`: one extraction of one object, printed as a summary or as one JSON
 //! object (the [`Measurement`] keys, preceded by the configuration keys `object`, `lattice`,
 //! `clustering`, `method`, `resolution`, `bounds`, `collapse_threshold`, `iso`, `normals`,
-//! `threads`), optionally saved as PLY.
+//! `threads`), optionally saved as PLY, OBJ or binary glTF (by the extension of `--out`).
 //!
 //! ```text
 //! experiments extract --object sphere --radius 1.0 --resolution 50 --lattice bcdl \
@@ -36,9 +36,10 @@ pub struct Args {
     /// Lattice: bcdl or simple (ignored by marching cubes).
     #[arg(long, default_value = "bcdl", value_parser = config::parse_lattice)]
     pub lattice: Lattice,
-    /// Clustering: none, integrated, integrated-unchecked, postprocessed or meshopt.
-    #[arg(long, default_value = "integrated", value_parser = config::parse_clustering)]
-    pub clustering: Clustering,
+    /// Clustering: none, integrated, integrated-unchecked, postprocessed or meshopt (default:
+    /// integrated for marching tetrahedra, none for marching cubes).
+    #[arg(long, value_parser = config::parse_clustering)]
+    pub clustering: Option<Clustering>,
     /// Method: mt (marching tetrahedra) or mc (marching cubes).
     #[arg(long, default_value = "mt", value_parser = config::parse_method)]
     pub method: Method,
@@ -54,10 +55,11 @@ pub struct Args {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Write the mesh to this PLY file (binary unless --ascii).
+    /// Write the mesh to this file, in the format its extension names: .ply (binary unless
+    /// --ascii), .obj or .glb (binary glTF).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Write ASCII PLY instead of binary.
+    /// Write ASCII PLY instead of binary (with a .ply --out).
     #[arg(long)]
     pub ascii: bool,
     /// Render a turntable GIF of the mesh (default turntable settings) to this file.
@@ -92,7 +94,9 @@ pub fn extraction(args: &Args) -> Result<(Extraction, usize)> {
         resolution: args.resolution,
         method: args.method,
         lattice: args.lattice,
-        clustering: args.clustering,
+        clustering: args
+            .clustering
+            .unwrap_or_else(|| config::default_clustering(args.method)),
         collapse_threshold: args
             .collapse_threshold
             .unwrap_or_else(config::default_collapse_threshold),
@@ -139,6 +143,10 @@ pub fn measurement_json(m: &Measurement) -> Result<Map<String, Value>> {
 /// Runs `extract`.
 pub fn run(args: Args) -> Result<()> {
     let (e, threads) = extraction(&args)?;
+    if let Some(out) = &args.out {
+        // Refuse an unknown format before the (possibly long) extraction.
+        config::check_mesh_path(out)?;
+    }
     let field = e
         .object
         .build_for_spacing(
@@ -175,7 +183,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let m = rmt_extract::measure(&mesh, &stats, Some(field.as_ref()), &settings);
     if let Some(out) = &args.out {
-        rmt_mesh::io::save_ply(out, &mesh, !args.ascii)
+        rmt_mesh::io::save_mesh(out, &mesh, args.ascii)
             .with_context(|| format!("saving the mesh to {}", out.display()))?;
     }
     if let Some(gif) = &args.gif {
@@ -349,11 +357,21 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("marching cubes"));
+        let mc_unchecked = parse(&["--method", "mc", "--clustering", "none"]).unwrap();
+        assert!(extraction(&mc_unchecked).is_ok());
         let threads = parse(&["--threads", "0"]).unwrap();
         assert!(extraction(&threads)
             .unwrap_err()
             .to_string()
             .contains("threads"));
+    }
+
+    #[test]
+    fn the_default_clustering_follows_the_method() {
+        let (mc, _) = extraction(&parse(&["--method", "mc"]).unwrap()).unwrap();
+        assert_eq!(mc.clustering, Clustering::None);
+        let (mt, _) = extraction(&parse(&[]).unwrap()).unwrap();
+        assert_eq!(mt.clustering, Clustering::Integrated);
     }
 
     #[test]

@@ -168,6 +168,29 @@ impl Extraction {
     }
 }
 
+/// The clustering a method takes when none is named: integrated (RMT) for marching tetrahedra,
+/// none for marching cubes (which takes no other).
+pub fn default_clustering(method: Method) -> Clustering {
+    match method {
+        Method::Mt => Clustering::Integrated,
+        Method::Mc => Clustering::None,
+    }
+}
+
+/// Checks that `path` names a mesh format the writers know (`.ply`, `.obj`, `.glb`, any case).
+pub fn check_mesh_path(path: &std::path::Path) -> anyhow::Result<()> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("ply" | "obj" | "glb") => Ok(()),
+        _ => anyhow::bail!(
+            "{}: unknown mesh format (the extension must be .ply, .obj or .glb)",
+            path.display()
+        ),
+    }
+}
+
 /// Estimated bytes of working memory per sample slot: the extractor keeps 10 per slot (a 4-byte
 /// value, 2 bytes of crossing flags, a 4-byte first-crossing id); the rest is headroom for the
 /// buffers that grow with the surface (crossings, clusters, triangles, the output mesh), which for

@@ -69,6 +69,65 @@ fn extract_json_has_the_config_keys_then_the_measurement() {
 }
 
 #[test]
+fn extract_writes_the_format_its_out_extension_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut meshes = Vec::new();
+    for name in ["t.ply", "t.obj", "t.glb", "T.GLB"] {
+        let path = dir.path().join(name);
+        let o = experiments(&[
+            "extract",
+            "--object",
+            "torus",
+            "--resolution",
+            "12",
+            "--threads",
+            "1",
+            "--out",
+            path.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let bytes = std::fs::read(&path).unwrap();
+        match name {
+            "t.ply" => assert!(bytes.starts_with(b"ply\n")),
+            "t.obj" => assert!(bytes.starts_with(b"# written by rmt-mesh\nv ")),
+            _ => assert!(bytes.starts_with(b"glTF")),
+        }
+        meshes.push(rmt_mesh::io::read_mesh(&path).unwrap());
+    }
+    // Every format holds the same oriented triangles, f32 for f32 (OBJ may renumber vertices in
+    // order of first use, so triangles are compared by their corners' positions).
+    let triangles = |m: &Mesh| {
+        let mut t: Vec<[[u32; 3]; 3]> = m
+            .triangles()
+            .map(|t| {
+                let c = t.map(|i| m.positions[i as usize].map(f32::to_bits));
+                let first = (0..3).min_by_key(|&k| c[k]).unwrap();
+                [c[first], c[(first + 1) % 3], c[(first + 2) % 3]]
+            })
+            .collect();
+        t.sort_unstable();
+        t
+    };
+    assert!(meshes[0].triangle_count() > 0);
+    assert!(meshes.iter().all(|m| triangles(m) == triangles(&meshes[0])));
+    let bad = dir.path().join("t.stl");
+    let o = experiments(&["extract", "--out", bad.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("unknown mesh format"), "{}", stderr(&o));
+    assert!(!bad.exists());
+}
+
+#[test]
+fn extract_with_marching_cubes_alone_takes_no_clustering() {
+    let o = experiments(&["extract", "--method", "mc", "--resolution", "10", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["method"], "mc");
+    assert_eq!(v["clustering"], "none");
+    assert!(v["triangles"].as_u64().unwrap() > 0);
+}
+
+#[test]
 fn extract_prints_a_readable_summary_without_json() {
     let o = experiments(&[
         "extract",

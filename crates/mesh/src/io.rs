@@ -1,4 +1,4 @@
-//! PLY and OBJ input and output.
+//! PLY, OBJ and binary glTF (`.glb`, through [`crate::glb`]) input and output.
 //!
 //! Writers take any [`Write`] (they buffer internally) and produce deterministic bytes:
 //!
@@ -97,8 +97,17 @@ pub enum MeshIoError {
         /// What is wrong, with the header line or element where it was found.
         message: String,
     },
-    /// The file name's extension is neither `.ply` nor `.obj`.
-    #[error("{}: unknown mesh format (expected a .ply or .obj extension)", path.display())]
+    /// The binary glTF file could not be written or read.
+    #[error("{}: {source}", path.display())]
+    Glb {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        #[source]
+        source: crate::glb::GlbError,
+    },
+    /// The file name's extension is none of `.ply`, `.obj` and `.glb`.
+    #[error("{}: unknown mesh format (expected a .ply, .obj or .glb extension)", path.display())]
     UnknownFormat {
         /// The file.
         path: PathBuf,
@@ -106,7 +115,7 @@ pub enum MeshIoError {
 }
 
 /// Checks that `mesh` can be written; returns whether it has normals to write.
-fn check_writable(mesh: &Mesh) -> io::Result<bool> {
+pub(crate) fn check_writable(mesh: &Mesh) -> io::Result<bool> {
     let invalid = |msg: String| Err(io::Error::new(io::ErrorKind::InvalidInput, msg));
     if !mesh.normals.is_empty() && mesh.normals.len() != mesh.positions.len() {
         return invalid(format!(
@@ -246,6 +255,37 @@ pub fn save_obj(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshIoError> 
     save_atomically(path.as_ref(), |file| write_obj(file, mesh))
 }
 
+/// Writes `mesh` to `path` as binary glTF, atomically (like [`save_ply`]).
+pub fn save_glb(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshIoError> {
+    let path = path.as_ref();
+    let bytes = crate::glb::to_glb(mesh).map_err(|source| MeshIoError::Glb {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    save_atomically(path, |file| file.write_all(&bytes))
+}
+
+/// Writes `mesh` to `path` in the format its extension names (any case): `.ply` (binary unless
+/// `ascii_ply`), `.obj` or `.glb`; atomically (like [`save_ply`]). Any other extension is
+/// [`MeshIoError::UnknownFormat`], and nothing is written.
+pub fn save_mesh(path: impl AsRef<Path>, mesh: &Mesh, ascii_ply: bool) -> Result<(), MeshIoError> {
+    let path = path.as_ref();
+    match extension(path).as_deref() {
+        Some("ply") => save_ply(path, mesh, !ascii_ply),
+        Some("obj") => save_obj(path, mesh),
+        Some("glb") => save_glb(path, mesh),
+        _ => Err(MeshIoError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// The lower-case extension of `path`, if any.
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+}
+
 /// Makes temporary names unique between threads of one process (the process id separates
 /// processes).
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -287,19 +327,31 @@ fn save_atomically(
     })
 }
 
-/// Reads a mesh from `path`, choosing the format by extension (`.ply` or `.obj`, any case).
+/// Reads a mesh from `path`, choosing the format by extension (`.ply`, `.obj` or `.glb`, any
+/// case).
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<Mesh, MeshIoError> {
     let path = path.as_ref();
-    let extension = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    match extension.as_deref() {
+    match extension(path).as_deref() {
         Some("ply") => read_ply(path),
         Some("obj") => read_obj(path),
+        Some("glb") => read_glb(path),
         _ => Err(MeshIoError::UnknownFormat {
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// Reads a binary glTF file (see [`crate::glb::from_glb`]); errors name the file.
+pub fn read_glb(path: impl AsRef<Path>) -> Result<Mesh, MeshIoError> {
+    let path = path.as_ref();
+    let bytes = fs::read(path).map_err(|source| MeshIoError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    crate::glb::from_glb(&bytes).map_err(|source| MeshIoError::Glb {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Reads an OBJ file through `tobj`: faces triangulated (fans), one index per vertex (a vertex is

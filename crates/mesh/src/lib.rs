@@ -4,7 +4,8 @@
 //! that decide whether a mesh is fit for a game: [`validate()`] (closed, manifold, consistently
 //! oriented, no duplicate or zero-area triangles, Euler characteristic, components) and
 //! [`quality()`] (radius ratio, minimum angle, area statistics). It also reads and writes meshes
-//! ([`io`]: binary and ASCII PLY, OBJ; OBJ input through `tobj`).
+//! ([`io`]: binary and ASCII PLY, OBJ, binary glTF; OBJ input through `tobj`, glTF through
+//! `gltf`).
 //!
 //! It knows nothing about scalar fields or lattices: the extractor tells [`validate()`] which
 //! points lie on the sampled domain's boundary through a closure.
@@ -19,6 +20,7 @@
 //! assert_eq!(mesh.triangle_count(), 4);
 //! ```
 
+pub mod glb;
 pub mod io;
 pub mod quality;
 pub mod validate;
