@@ -7,6 +7,8 @@
 //! - [`store`]: the SQLite store (WAL, one transaction per answer) and its rules;
 //! - [`export`]: the stored answers as the files `experiments analyse` reads;
 //! - [`survey`]: the survey's routes (participants, animations, admin);
+//! - [`studio`]: the studio's routes (live extraction, compare, sculpt; three.js page) on a
+//!   [`studio::Backend`] that the application provides;
 //! - [`http`]: what any page of this crate shares (JSON errors, bounded bodies, tokens, embedded
 //!   assets, running a router). Another page (a studio) would be one more router module beside
 //!   [`survey`], merged into the same server.
@@ -28,5 +30,6 @@
 pub mod export;
 pub mod http;
 pub mod store;
+pub mod studio;
 pub mod study;
 pub mod survey;

@@ -82,6 +82,11 @@ impl World {
         self.put_values(record, true)
     }
 
+    /// Whether chunk `i` waits for [`World::remesh_dirty`] (false past the last chunk).
+    pub fn chunk_is_dirty(&self, i: usize) -> bool {
+        self.dirty.get(i).copied().unwrap_or(false)
+    }
+
     fn put_values(&mut self, record: &StrokeRecord, after: bool) -> usize {
         let values = if after { &record.after } else { &record.before };
         for (&i, &v) in record.indices.iter().zip(values) {
