@@ -12,7 +12,9 @@ use rmt_analysis::{analyse, write_outputs, InputFormat, Inputs, Options};
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Responses: wide (participant + one column per question), long (participant, question,
-    /// response) or a survey-tool export ("Question 7 - ..." columns).
+    /// response, optionally order, swapped, seconds), a survey-tool export ("Question 7 - ..."
+    /// columns), or a survey database (`experiments survey serve`; its questions,
+    /// configurations and controls are used, and its export is written to OUT/survey_export).
     #[arg(long, default_value = "data/questionnaire/responses.csv")]
     pub responses: PathBuf,
     /// Questions: question,left,right (configuration names).
@@ -49,16 +51,54 @@ pub struct Args {
     /// Family-wise error rate of the Holm-corrected sign tests.
     #[arg(long, default_value_t = 0.05)]
     pub alpha: f64,
+    /// Control answers of a survey export (controls.csv) for the position effect.
+    #[arg(long)]
+    pub controls: Option<PathBuf>,
+    /// Add the power table (participants needed for 80% power with these answers as the
+    /// pilot); always on for survey data.
+    #[arg(long)]
+    pub power: bool,
+}
+
+/// Whether the file starts like an SQLite database.
+fn is_sqlite(path: &std::path::Path) -> bool {
+    let mut magic = [0u8; 16];
+    std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
+        .is_ok()
+        && &magic == b"SQLite format 3\0"
 }
 
 /// Runs `analyse`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let inputs = Inputs {
+    let mut inputs = Inputs {
         responses: args.responses,
         questions: args.questions,
         configurations: args.configurations,
         format: args.format,
     };
+    let mut controls = args.controls;
+    if is_sqlite(&inputs.responses) {
+        // A survey database: analyse its export (written beside the results).
+        let store = rmt_server::store::Store::open_existing(&inputs.responses)?;
+        let dir = args.out.join("survey_export");
+        store
+            .export()?
+            .write_to(&dir)
+            .with_context(|| format!("writing the survey export to {}", dir.display()))?;
+        println!(
+            "Survey database {}: exported to {}",
+            inputs.responses.display(),
+            dir.display()
+        );
+        inputs = Inputs {
+            responses: dir.join(rmt_server::export::RESPONSES_FILE),
+            questions: dir.join(rmt_server::export::QUESTIONS_FILE),
+            configurations: dir.join(rmt_server::export::CONFIGURATIONS_FILE),
+            format: None,
+        };
+        controls = controls.or_else(|| Some(dir.join(rmt_server::export::CONTROLS_FILE)));
+    }
     let options = Options {
         exclude: args.exclude,
         allow_missing: args.allow_missing,
@@ -70,6 +110,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         resamples: args.resamples,
         seed: args.seed,
         alpha: args.alpha,
+        controls,
+        power: args.power,
         ..Options::default()
     };
     let analysis = analyse(&inputs, &options).context("questionnaire analysis failed")?;
@@ -101,6 +143,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     for line in &significant {
         println!("  {line}");
+    }
+    for line in rmt_analysis::effects::summary_lines(&analysis) {
+        println!("{line}");
     }
     for line in &analysis.ungrouped {
         println!("Outside all groups: {line}");

@@ -13,6 +13,9 @@
 //! - [`cmd_render`], [`cmd_questionnaire`]: turntable GIFs of a run's meshes and the questionnaire
 //!   built from them (`rmt-render`);
 //! - [`cmd_analyse`]: the questionnaire analysis (`rmt-analysis`);
+//! - [`studio`], [`cmd_studio`]: the studio's backend (page parameters parsed and checked as
+//!   `extract` options) and the `studio` subcommand (`rmt-server`);
+//! - [`cmd_survey`]: the survey server and its export (`rmt-server`);
 //! - [`cmd_report`]: figures, tables and README of `reports/` rebuilt from a run (`rmt-report`);
 //! - [`bench`](mod@bench), [`cmd_bench`]: extraction speed against peer crates on pre-sampled values.
 
@@ -24,9 +27,12 @@ pub mod cmd_questionnaire;
 pub mod cmd_render;
 pub mod cmd_report;
 pub mod cmd_run;
+pub mod cmd_studio;
+pub mod cmd_survey;
 pub mod config;
 pub mod edit;
 pub mod manifest;
 pub mod objects;
 pub mod provenance;
 pub mod runner;
+pub mod studio;

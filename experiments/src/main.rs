@@ -28,6 +28,10 @@ enum Command {
     Analyse(experiments::cmd_analyse::Args),
     /// Benchmark extraction against peer crates (medians of interleaved repetitions).
     Bench(experiments::cmd_bench::Args),
+    /// Run the questionnaire for real: serve it to participants, store answers, export them.
+    Survey(experiments::cmd_survey::Args),
+    /// The interactive studio in the browser: live parameters, compare, sculpt terrain.
+    Studio(experiments::cmd_studio::Args),
     /// Rebuild reports/ (figures, tables, README) from a run folder and the questionnaire data.
     Report(experiments::cmd_report::Args),
 }
@@ -42,5 +46,7 @@ fn main() -> Result<()> {
         Command::Analyse(args) => experiments::cmd_analyse::run(args),
         Command::Bench(args) => experiments::cmd_bench::run(args),
         Command::Report(args) => experiments::cmd_report::run(args),
+        Command::Survey(args) => experiments::cmd_survey::run(args),
+        Command::Studio(args) => experiments::cmd_studio::run(args),
     }
 }

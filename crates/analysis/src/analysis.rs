@@ -42,6 +42,11 @@ pub struct Options {
     /// Virtual wins each way between every two items when a Bradley-Terry fit has no finite
     /// estimate without them.
     pub prior: f64,
+    /// Control answers (`controls.csv` of a survey export) for the position effect.
+    pub controls: Option<std::path::PathBuf>,
+    /// Add the power table (participants needed for 80% power, this data as the pilot); always
+    /// on for survey data (responses with `order` and `swapped` columns).
+    pub power: bool,
 }
 
 impl Default for Options {
@@ -55,6 +60,8 @@ impl Default for Options {
             seed: 1,
             alpha: 0.05,
             prior: 0.5,
+            controls: None,
+            power: false,
         }
     }
 }
@@ -294,6 +301,9 @@ pub struct Analysis {
     pub position: PositionBias,
     /// Agreement.
     pub agreement: Agreement,
+    /// Position, order and power from survey data (`None` for data without the survey columns,
+    /// controls or a power request: the output is then as before).
+    pub survey: Option<crate::effects::SurveyEffects>,
 }
 
 /// Looks up the bootstrap interval of the statistic that a closure picks from each resample.
@@ -513,6 +523,19 @@ pub fn analyse_dataset(inputs: &Inputs, options: &Options, dataset: &Dataset) ->
         raters: participants,
     };
 
+    let controls = match &options.controls {
+        // A controls file without rows (no controls asked) adds nothing.
+        Some(path) => Some(crate::effects::read_controls(path, &responses.excluded)?)
+            .filter(|c| c.left + c.none + c.right > 0),
+        None => None,
+    };
+    let with_meta = responses.meta.is_some();
+    let survey = (with_meta || controls.is_some() || options.power).then(|| {
+        let power = (with_meta || options.power)
+            .then(|| crate::effects::power(dataset, &design, options.alpha));
+        crate::effects::survey_effects(dataset, &design, controls, power)
+    });
+
     Ok(Analysis {
         inputs: inputs.clone(),
         options: options.clone(),
@@ -532,6 +555,7 @@ pub fn analyse_dataset(inputs: &Inputs, options: &Options, dataset: &Dataset) ->
         strengths,
         position,
         agreement,
+        survey,
     })
 }
 

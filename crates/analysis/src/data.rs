@@ -150,6 +150,18 @@ pub struct Question {
     pub row: usize,
 }
 
+/// What a survey server records with an answer besides the answer itself (the optional
+/// `order`, `swapped` and `seconds` columns of the long layout).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnswerMeta {
+    /// 1-based position at which the participant saw the question.
+    pub order: u32,
+    /// Whether the question's canonical left was shown on the right (the answer is canonical).
+    pub swapped: bool,
+    /// Seconds the participant took, when recorded.
+    pub seconds: Option<f64>,
+}
+
 /// Answers after validation, exclusion and (optionally) dropping of missing answers.
 #[derive(Clone, Debug)]
 pub struct Responses {
@@ -169,6 +181,9 @@ pub struct Responses {
     /// The same answers as a tidy frame: `participant` (str), `question` (u32 index),
     /// `answer` (str `L`/`N`/`R`), one row per answer, excluded participants removed.
     pub long: DataFrame,
+    /// `meta[p][q]`, aligned with `answers`, when the file has the survey columns `order` and
+    /// `swapped` (long layout only); `None` otherwise.
+    pub meta: Option<Vec<Vec<Option<AnswerMeta>>>>,
 }
 
 /// The three inputs after validation.

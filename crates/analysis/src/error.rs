@@ -154,6 +154,21 @@ pub enum AnalysisError {
         /// The answer as written.
         value: String,
     },
+    /// A survey column (`order`, `swapped`, `seconds`, a control's `response`) holds a value of
+    /// the wrong kind.
+    #[error("{path}, row {row}, column '{column}': invalid value '{value}' (expected {expected})")]
+    InvalidValue {
+        /// The file.
+        path: PathBuf,
+        /// 1-based data row.
+        row: usize,
+        /// The column title.
+        column: String,
+        /// The value as written.
+        value: String,
+        /// What the column holds.
+        expected: String,
+    },
     /// The same participant appears twice (wide, survey) or answers a question twice (long).
     #[error(
         "{path}, row {row}, column '{column}': duplicate participant '{participant}' for \

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use polars::prelude::*;
 
-use crate::data::{Answer, Configurations, Dataset, InputFormat, Question, Responses};
+use crate::data::{Answer, AnswerMeta, Configurations, Dataset, InputFormat, Question, Responses};
 use crate::error::{io_error, AnalysisError, Result};
 
 /// Paths of the three input files and the responses' layout (`None`: detect it).
@@ -175,6 +175,9 @@ const PARTICIPANT_COLUMNS: [&str; 5] = [
     "id",
 ];
 const RESPONSE_COLUMNS: [&str; 3] = ["response", "answer", "value"];
+/// Optional columns of the long layout written by `experiments survey export`: the position at
+/// which the question was shown, whether its sides were swapped, and the answer time.
+pub const SURVEY_COLUMNS: [&str; 3] = ["order", "swapped", "seconds"];
 
 /// Reads the configurations file: a `name` column (or the first column) and one column per
 /// variable.
@@ -434,7 +437,9 @@ fn tidy_long(path: &Path, df: DataFrame) -> Result<TidyAnswers> {
     let question_column = require_column(path, &header, &["question"])?;
     let response_column = require_column(path, &header, &RESPONSE_COLUMNS)?;
     for title in &header {
-        if ![&participant_column, &question_column, &response_column].contains(&title) {
+        if ![&participant_column, &question_column, &response_column].contains(&title)
+            && !SURVEY_COLUMNS.contains(&title.trim().to_ascii_lowercase().as_str())
+        {
             return Err(AnalysisError::UnexpectedColumn {
                 path: path.to_path_buf(),
                 column: title.clone(),
@@ -443,13 +448,19 @@ fn tidy_long(path: &Path, df: DataFrame) -> Result<TidyAnswers> {
     }
     // Ids are trimmed before the join with the questions (a survey tool may pad them).
     let rows: Vec<u32> = (1..=df.height() as u32).collect();
-    let frame = df!(
+    let mut frame = df!(
         "participant" => strings(&df, &participant_column)?,
         "question" => strings(&df, &question_column)?,
         "value" => strings(&df, &response_column)?,
         "column" => vec![response_column.clone(); df.height()],
         "row" => rows,
     )?;
+    // The survey server's columns ride along under fixed names.
+    for name in SURVEY_COLUMNS {
+        if let Some(title) = find_column(&header, &[name]) {
+            frame.with_column(Column::new(name.into(), strings(&df, &title)?))?;
+        }
+    }
     Ok(TidyAnswers {
         frame,
         question_column: Some(question_column),
@@ -519,6 +530,21 @@ fn validate_cells(
     let question_text = strings(cells, "question")?;
     let question_index = u64s(cells, "question_index")?;
     let values = strings(cells, "value")?;
+    let has = |name: &str| cells.get_column_names().iter().any(|c| c.as_str() == name);
+    let with_meta = has("order") && has("swapped");
+    let optional = |name: &str| -> Result<Vec<Option<String>>> {
+        if has(name) {
+            strings(cells, name)
+        } else {
+            Ok(vec![None; cells.height()])
+        }
+    };
+    let (orders, swaps, seconds) = (
+        optional("order")?,
+        optional("swapped")?,
+        optional("seconds")?,
+    );
+    let mut meta_of: BTreeMap<(usize, usize), AnswerMeta> = BTreeMap::new();
 
     let mut participants: Vec<String> = Vec::new();
     let mut participant_index: BTreeMap<String, usize> = BTreeMap::new();
@@ -576,6 +602,43 @@ fn validate_cells(
                 question: questions[q].id.clone(),
             });
         }
+        if with_meta {
+            let invalid = |column: &str, value: &str, expected: &str| AnalysisError::InvalidValue {
+                path: path.to_path_buf(),
+                row,
+                column: column.to_string(),
+                value: value.to_string(),
+                expected: expected.to_string(),
+            };
+            let order_text = orders[k].clone().unwrap_or_default();
+            let order = order_text
+                .parse::<u32>()
+                .ok()
+                .filter(|&o| o > 0)
+                .ok_or_else(|| invalid("order", &order_text, "a position 1, 2, ..."))?;
+            let swapped = match swaps[k].as_deref().unwrap_or("") {
+                "0" | "false" => false,
+                "1" | "true" => true,
+                other => return Err(invalid("swapped", other, "0 or 1")),
+            };
+            let seconds = match &seconds[k] {
+                None => None,
+                Some(text) => Some(
+                    text.parse::<f64>()
+                        .ok()
+                        .filter(|s| s.is_finite() && *s >= 0.0)
+                        .ok_or_else(|| invalid("seconds", text, "a non-negative number"))?,
+                ),
+            };
+            meta_of.insert(
+                (p, q),
+                AnswerMeta {
+                    order,
+                    swapped,
+                    seconds,
+                },
+            );
+        }
         cell_of.insert((p, q), (row, answer, column));
     }
 
@@ -625,8 +688,14 @@ fn validate_cells(
     let keep: Vec<bool> = participants.iter().map(|p| !excluded.contains(p)).collect();
     let mut kept_participants = Vec::new();
     let mut kept_answers = Vec::new();
-    for ((name, row), keep) in participants.into_iter().zip(answers).zip(keep) {
+    let mut kept_meta = Vec::new();
+    for (p, ((name, row), keep)) in participants.into_iter().zip(answers).zip(keep).enumerate() {
         if keep {
+            kept_meta.push(
+                (0..questions.len())
+                    .map(|q| row[q].and_then(|_| meta_of.get(&(p, q)).copied()))
+                    .collect::<Vec<_>>(),
+            );
             kept_participants.push(name);
             kept_answers.push(row);
         }
@@ -646,6 +715,7 @@ fn validate_cells(
         excluded,
         dropped_missing,
         long,
+        meta: with_meta.then_some(kept_meta),
     })
 }
 

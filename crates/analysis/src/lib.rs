@@ -14,6 +14,8 @@
 //! - [`method`]: the dissertation's factors, means and weights, exactly;
 //! - [`stats`], [`bradley_terry`]: the statistics, in plain Rust;
 //! - [`analysis`]: all of it together with the seeded bootstrap;
+//! - [`effects`]: what survey-server data adds (position effect from swaps and controls, order
+//!   effect on ties and times, participants needed for 80% power);
 //! - [`tables`], [`charts`], [`output`]: CSV, Markdown, PNG and SVG, byte-deterministic.
 //!
 //! ```no_run
@@ -37,6 +39,7 @@ pub mod bradley_terry;
 pub mod charts;
 pub mod data;
 pub mod design;
+pub mod effects;
 pub mod error;
 pub mod input;
 pub mod method;

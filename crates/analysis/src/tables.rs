@@ -811,7 +811,7 @@ pub fn summary_table(analysis: &Analysis) -> Table {
 
 /// All tables in output order.
 pub fn all_tables(analysis: &Analysis) -> Vec<Table> {
-    vec![
+    let mut tables = vec![
         factors_table(analysis),
         weights_table(analysis),
         weight_intervals_table(analysis),
@@ -820,7 +820,237 @@ pub fn all_tables(analysis: &Analysis) -> Vec<Table> {
         questions_table(analysis),
         strengths_table(analysis),
         summary_table(analysis),
-    ]
+    ];
+    tables.extend(survey_tables(analysis));
+    tables
+}
+
+fn count_or_dash(n: Option<u64>) -> Cell {
+    match n {
+        Some(n) => Cell::Count(n),
+        None => text("-"),
+    }
+}
+
+/// The tables of [`crate::effects`] (none without survey data, controls or a power request).
+pub fn survey_tables(analysis: &Analysis) -> Vec<Table> {
+    let Some(effects) = &analysis.survey else {
+        return Vec::new();
+    };
+    let mut tables = Vec::new();
+    if !effects.position.is_empty() {
+        let rows: Vec<Vec<Cell>> = effects
+            .position
+            .iter()
+            .map(|p| {
+                vec![
+                    text(p.source.clone()),
+                    Cell::Count(p.left),
+                    Cell::Count(p.none),
+                    Cell::Count(p.right),
+                    Cell::Number(p.tie_rate()),
+                    Cell::WithInterval(p.share_left, p.wilson),
+                    lo(&p.wilson),
+                    hi(&p.wilson),
+                    Cell::P(p.p_value),
+                ]
+            })
+            .collect();
+        let csv = Block {
+            caption: None,
+            header: header(&[
+                "source",
+                "left_screen",
+                "no_preference",
+                "right_screen",
+                "tie_rate",
+                "share_left",
+                "share_left_lo",
+                "share_left_hi",
+                "p_value",
+            ]),
+            rows: rows.clone(),
+        };
+        let markdown = Block {
+            caption: None,
+            header: header(&[
+                "source",
+                "left screen",
+                "no preference",
+                "right screen",
+                "tie rate",
+                "share left [95% CI]",
+                "p (vs 1/2)",
+            ]),
+            rows: rows
+                .into_iter()
+                .map(|r| {
+                    let mut r = r;
+                    r.remove(7);
+                    r.remove(6);
+                    r
+                })
+                .collect(),
+        };
+        tables.push(Table {
+            name: "position_effect".into(),
+            title: "Position effect (left/right screen)".into(),
+            notes: vec![
+                "Decided answers by the screen side clicked, tested against 1/2 (exact                  binomial, Wilson interval). With swaps balanced across participants this                  separates a preference for a side from a preference for a configuration. On                  controls both sides show the same animation: any side chosen is position bias                  or inattention, and their tie rate measures attention."
+                    .into(),
+            ],
+            csv,
+            markdown: vec![markdown],
+        });
+    }
+    if let Some(order) = &effects.order {
+        let rows: Vec<Vec<Cell>> = order
+            .bins
+            .iter()
+            .map(|b| {
+                vec![
+                    text(format!("{}-{}", b.first, b.last)),
+                    Cell::Count(b.answers),
+                    Cell::Count(b.ties),
+                    Cell::WithInterval(b.tie_rate, b.wilson),
+                    lo(&b.wilson),
+                    hi(&b.wilson),
+                    Cell::Number(b.median_seconds),
+                ]
+            })
+            .collect();
+        let csv = Block {
+            caption: None,
+            header: header(&[
+                "positions",
+                "answers",
+                "no_preference",
+                "tie_rate",
+                "tie_rate_lo",
+                "tie_rate_hi",
+                "median_seconds",
+            ]),
+            rows: rows.clone(),
+        };
+        let markdown = Block {
+            caption: None,
+            header: header(&[
+                "positions shown",
+                "answers",
+                "no preference",
+                "tie rate [95% CI]",
+                "median s",
+            ]),
+            rows: rows
+                .into_iter()
+                .map(|mut r| {
+                    r.remove(5);
+                    r.remove(4);
+                    r
+                })
+                .collect(),
+        };
+        tables.push(Table {
+            name: "order_effect".into(),
+            title: "Order effect (fatigue)".into(),
+            notes: vec![
+                format!(
+                    "Ties over positions: Cochran-Armitage z = {}, p = {} (answers treated as                      independent, so optimistic).",
+                    Cell::Number(order.tie_trend_z).markdown(),
+                    Cell::P(order.tie_trend_p).markdown()
+                ),
+                format!(
+                    "Answer time, last third over first third (median over participants): {}x;                      {} participants faster, {} slower (sign test p = {}).",
+                    Cell::Number(order.time_ratio).markdown(),
+                    order.faster,
+                    order.slower,
+                    Cell::P(order.time_p).markdown()
+                ),
+            ],
+            csv,
+            markdown: vec![markdown],
+        });
+    }
+    if let Some(power) = &effects.power {
+        let group_rows: Vec<Vec<Cell>> = power
+            .groups
+            .iter()
+            .map(|g| {
+                vec![
+                    text(g.group.clone()),
+                    Cell::Count(g.questions as u64),
+                    count_or_dash(g.strongest),
+                    count_or_dash(g.all),
+                    count_or_dash(g.strongest_holm),
+                    count_or_dash(g.all_holm),
+                ]
+            })
+            .collect();
+        let block = Block {
+            caption: None,
+            header: header(&[
+                "group",
+                "questions",
+                "strongest",
+                "all",
+                "strongest_holm",
+                "all_holm",
+            ]),
+            rows: group_rows,
+        };
+        let pilot = analysis.participants.len();
+        tables.push(Table {
+            name: "power".into(),
+            title: "Participants needed for 80% power".into(),
+            notes: vec![format!(
+                "Pilot: these {pilot} participants. Per comparison group: participants needed                  so that a two-sided sign test (alpha {}) detects the pilot's effect with 80%                  power, for the group's strongest question (strongest) and for every question                  of the group (all; '-' when a question showed no effect); the _holm columns use                  alpha/{} (Holm's worst case over all questions). Ties are assumed at the pilot's                  rate. Per question: power_questions.",
+                power.alpha, power.m
+            )],
+            csv: block.clone(),
+            markdown: vec![block],
+        });
+        let rows: Vec<Vec<Cell>> = power
+            .questions
+            .iter()
+            .map(|q| {
+                vec![
+                    text(q.question.clone()),
+                    text(q.group.clone()),
+                    Cell::Count(q.pilot),
+                    Cell::Number(q.majority_share),
+                    Cell::Number(q.tie_rate),
+                    count_or_dash(q.needed),
+                    Cell::Number(q.exact_power),
+                    count_or_dash(q.needed_holm),
+                ]
+            })
+            .collect();
+        let block = Block {
+            caption: None,
+            header: header(&[
+                "question",
+                "group",
+                "pilot",
+                "majority_share",
+                "tie_rate",
+                "needed",
+                "exact_power",
+                "needed_holm",
+            ]),
+            rows,
+        };
+        tables.push(Table {
+            name: "power_questions".into(),
+            title: "Participants needed for 80% power, per question".into(),
+            notes: vec![
+                "needed: normal approximation of the sign test's sample size, divided by the                  share of decided answers; exact_power: the exact power of the sign test with                  that many participants."
+                    .into(),
+            ],
+            csv: block.clone(),
+            markdown: vec![block],
+        });
+    }
+    tables
 }
 
 #[cfg(test)]

@@ -71,7 +71,7 @@ mod world;
 
 pub use brush::{Brush, BrushMode};
 pub use strokes::{run_strokes, StrokeParams, StrokeReport};
-pub use world::{canonical_triangles, weld, RemeshStats, World, WorldSettings, HALO};
+pub use world::{canonical_triangles, weld, RemeshStats, StrokeRecord, World, WorldSettings, HALO};
 
 /// Why a world could not be built, edited or meshed.
 #[derive(Debug, thiserror::Error)]

@@ -17,6 +17,9 @@ use rmt_mesh::Mesh;
 
 use crate::{Brush, TerrainError};
 
+mod undo;
+pub use undo::StrokeRecord;
+
 /// Cells of halo around a chunk's own cells (clipped at the world box): enough for the
 /// body-centred tetrahedra on the chunk's faces and for the cluster proposals of the points on
 /// them (see the crate doc).
