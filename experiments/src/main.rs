@@ -28,6 +28,11 @@ enum Command {
     Analyse(experiments::cmd_analyse::Args),
     /// Benchmark extraction against peer crates (medians of interleaved repetitions).
     Bench(experiments::cmd_bench::Args),
+    /// Merge the shard folders of `run --shard I/N` into one run folder.
+    Merge(experiments::cmd_cluster::MergeArgs),
+    /// Write (and with --submit, submit) a Slurm job array running a manifest in N shards, and a
+    /// merge job that depends on it.
+    Slurm(experiments::cmd_cluster::SlurmArgs),
     /// Rebuild reports/ (figures, tables, README) from a run folder and the questionnaire data.
     Report(experiments::cmd_report::Args),
 }
@@ -42,5 +47,7 @@ fn main() -> Result<()> {
         Command::Analyse(args) => experiments::cmd_analyse::run(args),
         Command::Bench(args) => experiments::cmd_bench::run(args),
         Command::Report(args) => experiments::cmd_report::run(args),
+        Command::Merge(args) => experiments::cmd_cluster::merge(args),
+        Command::Slurm(args) => experiments::cmd_cluster::slurm(args),
     }
 }
