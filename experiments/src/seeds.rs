@@ -59,7 +59,7 @@ pub fn t975(df: usize) -> f64 {
     if df <= 30 {
         return TABLE[df - 1];
     }
-    let z = 1.959_963_984_540_054_f64;
+    let z = 1.959_964_f64;
     let n = df as f64;
     let (z3, z5, z7, z9) = (z.powi(3), z.powi(5), z.powi(7), z.powi(9));
     z + (z3 + z) / (4.0 * n)
