@@ -5,7 +5,11 @@
 //! experiments run experiments/manifests/paper.toml [--out DIR] [--reps N] [--warmup N]
 //!     [--threads N] [--no-meshes] [--quiet] [--dry-run]
 //! experiments run --resume results/paper-20260301-120000
+//! experiments run experiments/manifests/paper.toml --shard 2/8 --out shards/shard-2
 //! ```
+//!
+//! `--shard I/N` runs only shard I of N of the manifest's work units (see [`crate::shard`]);
+//! `experiments merge` combines the shards into one run.
 
 use std::path::PathBuf;
 
@@ -44,6 +48,9 @@ pub struct Args {
     /// Check the manifest and list its configurations without running them.
     #[arg(long)]
     pub dry_run: bool,
+    /// Run only shard I of N of the work units (`2/8`); merge the shards with `experiments merge`.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::shard::ShardSpec>,
     /// Stop after K configurations, as if killed (for testing resume).
     #[arg(long, hide = true)]
     pub stop_after: Option<usize>,
@@ -56,7 +63,12 @@ pub fn run(args: Args) -> Result<()> {
         stop_after: args.stop_after,
     };
     let report = match (&args.resume, &args.manifest) {
-        (Some(folder), _) => runner::resume(folder, &opts)?,
+        (Some(folder), _) => {
+            if args.shard.is_some() {
+                anyhow::bail!("--shard applies to a new run; a resumed shard keeps its own");
+            }
+            runner::resume(folder, &opts)?
+        }
         (None, Some(path)) => {
             let overrides = Overrides {
                 repetitions: args.reps,
@@ -66,6 +78,16 @@ pub fn run(args: Args) -> Result<()> {
             };
             if args.dry_run {
                 let plan = manifest::load(path, &overrides)?.plan;
+                if let Some(spec) = args.shard {
+                    let ids: Vec<String> =
+                        plan.configurations.iter().map(|c| c.id.clone()).collect();
+                    let (split, units) = crate::shard::units_of(&ids, plan.repetitions, spec)?;
+                    println!("shard {spec} ({split:?}): {} work units", units.len());
+                    for u in &units {
+                        println!("{} repetitions {}-{}", u.id, u.first, u.last);
+                    }
+                    return Ok(());
+                }
                 println!(
                     "{}: {} configurations x ({} warm-up + {} repetitions), {} thread(s)",
                     plan.name,
@@ -80,7 +102,7 @@ pub fn run(args: Args) -> Result<()> {
                 );
                 return Ok(());
             }
-            runner::start(path, &overrides, args.out.as_deref(), &opts)?
+            runner::start_shard(path, &overrides, args.out.as_deref(), &opts, args.shard)?
         }
         (None, None) => anyhow::bail!("give a manifest or --resume FOLDER"),
     };

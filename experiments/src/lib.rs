@@ -9,6 +9,10 @@
 //! - [`runner`]: runs a manifest's configurations N times into raw and summary CSV files,
 //!   crash-safe and resumable; [`provenance`] records where and how;
 //! - [`cmd_run`]: the `run` subcommand;
+//! - [`shard`], [`merge`], [`slurm`]: runs split over many machines (`run --shard I/N`), merged
+//!   back into one run folder (`merge`), and submitted to Slurm as a job array plus a merge job
+//!   (`slurm`); [`cmd_cluster`] holds the `merge` and `slurm` subcommands;
+//! - [`seeds`]: seed studies, every noise configuration over many seeds, summarised in `seeds.csv`;
 //! - [`edit`]: chunked terrain (`rmt-terrain`): `extract --chunks` and the `edit` workload;
 //! - [`cmd_render`], [`cmd_questionnaire`]: turntable GIFs of a run's meshes and the questionnaire
 //!   built from them (`rmt-render`);
@@ -22,6 +26,7 @@
 pub mod bench;
 pub mod cmd_analyse;
 pub mod cmd_bench;
+pub mod cmd_cluster;
 pub mod cmd_extract;
 pub mod cmd_questionnaire;
 pub mod cmd_render;
@@ -32,7 +37,11 @@ pub mod cmd_survey;
 pub mod config;
 pub mod edit;
 pub mod manifest;
+pub mod merge;
 pub mod objects;
 pub mod provenance;
 pub mod runner;
 pub mod studio;
+pub mod seeds;
+pub mod shard;
+pub mod slurm;

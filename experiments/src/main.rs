@@ -32,6 +32,11 @@ enum Command {
     Survey(experiments::cmd_survey::Args),
     /// The interactive studio in the browser: live parameters, compare, sculpt terrain.
     Studio(experiments::cmd_studio::Args),
+    /// Merge the shard folders of `run --shard I/N` into one run folder.
+    Merge(experiments::cmd_cluster::MergeArgs),
+    /// Write (and with --submit, submit) a Slurm job array running a manifest in N shards, and a
+    /// merge job that depends on it.
+    Slurm(experiments::cmd_cluster::SlurmArgs),
     /// Rebuild reports/ (figures, tables, README) from a run folder and the questionnaire data.
     Report(experiments::cmd_report::Args),
 }
@@ -48,5 +53,7 @@ fn main() -> Result<()> {
         Command::Report(args) => experiments::cmd_report::run(args),
         Command::Survey(args) => experiments::cmd_survey::run(args),
         Command::Studio(args) => experiments::cmd_studio::run(args),
+        Command::Merge(args) => experiments::cmd_cluster::merge(args),
+        Command::Slurm(args) => experiments::cmd_cluster::slurm(args),
     }
 }

@@ -41,6 +41,10 @@
 //! resolution = [16, 32, 64]
 //! collapse_threshold = [0.3, 0.5]
 //!
+//! seeds = { from = 1, count = 200 }   # seed study: every configuration of a noise object
+//!                           # (asteroid, terrain, caves) once per seed, ids `<id>_s<seed>`;
+//!                           # `seeds.csv` then gives each configuration's distribution over seeds
+//!
 //! workload = "edit"         # instead of repeated extractions: a chunked terrain session
 //! [edit]                    # (see `crate::edit`; every key optional)
 //! chunk = 32                # chunk edge in cells
@@ -215,6 +219,29 @@ pub struct Manifest {
     /// Parameter sweeps applied to every configuration.
     #[serde(default)]
     pub sweep: Option<Sweep>,
+    /// A seed study: every configuration of a seeded (noise) object once per seed.
+    #[serde(default)]
+    pub seeds: Option<SeedRange>,
+}
+
+/// `seeds = { from = 1, count = 200 }`: the noise seeds `from .. from + count - 1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeedRange {
+    /// First seed.
+    pub from: u32,
+    /// Number of seeds (1 to 100,000).
+    pub count: u32,
+}
+
+/// Where a configuration of a seed study belongs: its configuration without the seed, and the
+/// seed.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct SeedOf {
+    /// The configuration's id without the `_s<seed>` suffix.
+    pub base_id: String,
+    /// The object's noise seed.
+    pub seed: u32,
 }
 
 /// One `[[objects]]` entry.
@@ -422,6 +449,19 @@ pub struct Configuration {
     pub object: String,
     /// Everything that decides the extraction.
     pub extraction: Extraction,
+    /// Set in seed studies for configurations of a seeded object.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed_of: Option<SeedOf>,
+}
+
+impl Configuration {
+    /// The key of the field it extracts: the object's name, with `#s<seed>` in seed studies.
+    pub fn field_key(&self) -> String {
+        match &self.seed_of {
+            Some(s) => format!("{}#s{}", self.object, s.seed),
+            None => self.object.clone(),
+        }
+    }
 }
 
 /// Values that command-line flags override.
@@ -771,6 +811,32 @@ impl Manifest {
             None => vec![None],
         };
 
+        if let Some(range) = self.seeds {
+            if !(1..=100_000).contains(&range.count) {
+                return Err(invalid(
+                    "seeds.count",
+                    format!("must be 1 to 100000, got {}", range.count),
+                ));
+            }
+            if range.from.checked_add(range.count - 1).is_none() {
+                return Err(invalid(
+                    "seeds",
+                    format!(
+                        "seeds {} .. {} + {} leave the 32-bit range",
+                        range.from, range.from, range.count
+                    ),
+                ));
+            }
+            if !bases
+                .iter()
+                .any(|b| objs[b.obj].spec.kind.accepted().contains(&"seed"))
+            {
+                return Err(invalid(
+                    "seeds",
+                    "no configuration uses a seeded object (asteroid, terrain, caves)".into(),
+                ));
+            }
+        }
         let mut configurations = Vec::new();
         let mut ids = HashSet::new();
         for b in &bases {
@@ -810,11 +876,37 @@ impl Manifest {
                     extraction
                         .check(threads)
                         .map_err(|e| invalid(&format!("configuration {id}"), e))?;
-                    configurations.push(Configuration {
-                        id,
-                        object: o.name.clone(),
-                        extraction,
-                    });
+                    let seeded = o.spec.kind.accepted().contains(&"seed");
+                    match self.seeds {
+                        Some(range) if seeded => {
+                            for seed in range.from..=range.from + (range.count - 1) {
+                                let mut e = extraction.clone();
+                                e.object.params.seed = Some(seed);
+                                let sid = format!("{id}_s{seed}");
+                                if !ids.insert(sid.clone()) {
+                                    return Err(invalid(
+                                        &b.key,
+                                        format!("configuration id `{sid}` is used twice"),
+                                    ));
+                                }
+                                configurations.push(Configuration {
+                                    id: sid,
+                                    object: o.name.clone(),
+                                    extraction: e,
+                                    seed_of: Some(SeedOf {
+                                        base_id: id.clone(),
+                                        seed,
+                                    }),
+                                });
+                            }
+                        }
+                        _ => configurations.push(Configuration {
+                            id,
+                            object: o.name.clone(),
+                            extraction,
+                            seed_of: None,
+                        }),
+                    }
                 }
             }
         }
@@ -893,12 +985,13 @@ impl Manifest {
 
 /// The fields of a plan's objects, built once and shared by their configurations.
 pub struct Fields {
-    /// `(object name, its field)`, one per distinct object used.
+    /// `(field key, its field)`, one per distinct object (and seed) used; see
+    /// [`Configuration::field_key`].
     pub fields: Vec<(String, Box<dyn rmt_fields::ScalarField>)>,
 }
 
 impl Fields {
-    /// The field of object `name`.
+    /// The field of key `name` ([`Configuration::field_key`]).
     pub fn get(&self, name: &str) -> Option<&dyn rmt_fields::ScalarField> {
         self.fields
             .iter()
@@ -913,7 +1006,8 @@ impl Plan {
     pub fn build_fields(&self, path: &Path) -> Result<Fields, ManifestError> {
         let mut fields: Vec<(String, Box<dyn rmt_fields::ScalarField>)> = Vec::new();
         for c in &self.configurations {
-            if fields.iter().any(|(n, _)| *n == c.object) {
+            let key = c.field_key();
+            if fields.iter().any(|(n, _)| *n == key) {
                 continue;
             }
             let e = &c.extraction;
@@ -939,7 +1033,7 @@ impl Plan {
                     key: "building objects".to_string(),
                     message: err.to_string(),
                 })?;
-            fields.push((c.object.clone(), field));
+            fields.push((key, field));
         }
         Ok(Fields { fields })
     }

@@ -31,6 +31,12 @@ pub struct Provenance {
     pub kernel: Option<String>,
     /// Start of the session, UTC, ISO 8601.
     pub date: String,
+    /// The machine's host name, if known (tells the shards of a cluster run apart).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hostname: Option<String>,
+    /// The Slurm job this session ran in (`job 123_4 on node n01`), when run by Slurm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slurm: Option<String>,
 }
 
 impl Provenance {
@@ -59,8 +65,24 @@ impl Provenance {
                 .ok()
                 .map(|s| s.trim().to_string()),
             date: utc_now_iso(),
+            hostname: std::fs::read_to_string("/proc/sys/kernel/hostname")
+                .ok()
+                .map(|s| s.trim().to_string())
+                .filter(|s| !s.is_empty()),
+            slurm: slurm_job(),
         }
     }
+}
+
+/// `job <id> on node <name>` from Slurm's environment (array tasks as `<array>_<task>`).
+fn slurm_job() -> Option<String> {
+    let var = |k: &str| std::env::var(k).ok().filter(|v| !v.is_empty());
+    let job = match (var("SLURM_ARRAY_JOB_ID"), var("SLURM_ARRAY_TASK_ID")) {
+        (Some(a), Some(t)) => format!("{a}_{t}"),
+        _ => var("SLURM_JOB_ID")?,
+    };
+    let node = var("SLURMD_NODENAME").unwrap_or_else(|| "?".into());
+    Some(format!("job {job} on node {node}"))
 }
 
 /// Output of `git -C dir args`, trimmed, when git runs and succeeds.

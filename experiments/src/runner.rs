@@ -46,6 +46,7 @@ use crate::cmd_extract::measurement_json;
 use crate::config;
 use crate::manifest::{self, Configuration, Overrides, Plan};
 use crate::provenance::{self, Provenance};
+use crate::shard::{self, ShardRecord, ShardSpec, WorkUnit};
 
 /// The columns that precede the measurement in `raw.csv`.
 pub const RAW_PREFIX: [&str; 15] = [
@@ -188,23 +189,44 @@ pub struct RunRecord {
     pub sessions: Vec<Session>,
     /// Files of the run folder.
     pub files: Vec<String>,
+    /// Set when this folder is one shard of a run (`run --shard I/N`): which work units it ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<ShardRecord>,
+    /// Set when this folder was merged from shards (`experiments merge`): every shard's
+    /// units, sessions and machines.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merged_from: Option<Vec<MergedShard>>,
+}
+
+/// One shard of a merged run, as recorded in the merged `run.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MergedShard {
+    /// The shard's run id (its folder name).
+    pub run_id: String,
+    /// The shard's index, count, split and units.
+    pub shard: ShardRecord,
+    /// The shard's sessions (machine, build, start and end of each).
+    pub sessions: Vec<Session>,
 }
 
 /// `progress.json`: configurations whose rows are in `raw.csv`, and its length after them.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
-struct Progress {
-    completed: Vec<String>,
-    raw_bytes: u64,
+pub(crate) struct Progress {
+    /// Keys of finished work units ([`WorkUnit::key`]: the configuration id unless sharded in
+    /// repetition blocks).
+    pub(crate) completed: Vec<String>,
+    /// Length of `raw.csv` holding their rows.
+    pub(crate) raw_bytes: u64,
 }
 
-const RUN_JSON: &str = "run.json";
-const MANIFEST_COPY: &str = "manifest.toml";
-const CONFIGURATIONS_CSV: &str = "configurations.csv";
-const RAW_CSV: &str = "raw.csv";
-const PROGRESS_JSON: &str = "progress.json";
-const SUMMARY_CSV: &str = "summary.csv";
-const PAPER_CSV: &str = "paper_comparison.csv";
-const MESHES: &str = "meshes";
+pub(crate) const RUN_JSON: &str = "run.json";
+pub(crate) const MANIFEST_COPY: &str = "manifest.toml";
+pub(crate) const CONFIGURATIONS_CSV: &str = "configurations.csv";
+pub(crate) const RAW_CSV: &str = "raw.csv";
+pub(crate) const PROGRESS_JSON: &str = "progress.json";
+pub(crate) const SUMMARY_CSV: &str = "summary.csv";
+pub(crate) const PAPER_CSV: &str = "paper_comparison.csv";
+pub(crate) const MESHES: &str = "meshes";
 const EDITS_CSV: &str = "edits.csv";
 
 /// Starts a run of the manifest at `manifest_path` in `out` (which must be new or empty) or in
@@ -215,7 +237,41 @@ pub fn start(
     out: Option<&Path>,
     opts: &RunOptions,
 ) -> Result<RunReport> {
+    start_shard(manifest_path, overrides, out, opts, None)
+}
+
+/// Like [`start`], for shard `shard` of the plan when given (see [`crate::shard`]): only its work
+/// units run, and `run.json` records the shard (index, count, manifest hash, split, units). The
+/// default folder is `<output>/<name>-shard-I-of-N-<UTC timestamp>`.
+pub fn start_shard(
+    manifest_path: &Path,
+    overrides: &Overrides,
+    out: Option<&Path>,
+    opts: &RunOptions,
+    shard: Option<ShardSpec>,
+) -> Result<RunReport> {
     let manifest::Loaded { plan, text, fields } = manifest::load(manifest_path, overrides)?;
+    let shard_record = match shard {
+        None => None,
+        Some(spec) => {
+            if plan.edit.is_some() {
+                bail!(
+                    "{}: the `edit` workload cannot be sharded (its runs are short: run it whole)",
+                    manifest_path.display()
+                );
+            }
+            let ids: Vec<String> = plan.configurations.iter().map(|c| c.id.clone()).collect();
+            let (split, units) = shard::units_of(&ids, plan.repetitions, spec)
+                .with_context(|| format!("sharding {}", manifest_path.display()))?;
+            Some(ShardRecord {
+                index: spec.index,
+                count: spec.count,
+                manifest_sha256: shard::manifest_hash(&text),
+                split,
+                units,
+            })
+        }
+    };
     let folder = match out {
         Some(dir) => {
             if dir.exists() {
@@ -234,7 +290,13 @@ pub fn start(
             }
             dir.to_path_buf()
         }
-        None => new_folder(&plan.output, &plan.name)?,
+        None => match shard {
+            Some(s) => new_folder(
+                &plan.output,
+                &format!("{}-shard-{}-of-{}", plan.name, s.index, s.count),
+            )?,
+            None => new_folder(&plan.output, &plan.name)?,
+        },
     };
     fs::create_dir_all(&folder).with_context(|| format!("creating {}", folder.display()))?;
     let run_id = folder
@@ -265,7 +327,8 @@ pub fn start(
         &serde_json::to_vec_pretty(&progress)?,
     )?;
     let provenance = Provenance::collect();
-    let record = run_record(&plan, manifest_path, provenance.clone(), &run_id)?;
+    let mut record = run_record(&plan, manifest_path, provenance.clone(), &run_id)?;
+    record.shard = shard_record;
     // run.json last: its presence means the folder is initialised and resumable.
     execute(&folder, &plan, &fields, record, progress, provenance, opts)
 }
@@ -303,6 +366,8 @@ fn run_record(
         configurations: serde_json::to_value(&plan.configurations)?,
         sessions: Vec::new(),
         files: Vec::new(),
+        shard: None,
+        merged_from: None,
     })
 }
 
@@ -337,7 +402,10 @@ pub fn resume(folder: &Path, opts: &RunOptions) -> Result<RunReport> {
             status: Status::Finished,
             configurations_run: 0,
             configurations_done: progress.completed.len(),
-            configurations_total: record.configuration_ids.len(),
+            configurations_total: record
+                .shard
+                .as_ref()
+                .map_or(record.configuration_ids.len(), |s| s.units.len()),
         });
     }
     let copy = folder.join(MANIFEST_COPY);
@@ -364,9 +432,12 @@ pub fn resume(folder: &Path, opts: &RunOptions) -> Result<RunReport> {
             folder.display()
         );
     }
-    if let Some(unknown) = progress.completed.iter().find(|id| !ids.contains(id)) {
+    let units =
+        work_units(&plan, &record).with_context(|| format!("{}: run.json", folder.display()))?;
+    let keys: Vec<String> = units.iter().map(|u| u.key(plan.repetitions)).collect();
+    if let Some(unknown) = progress.completed.iter().find(|k| !keys.contains(k)) {
         bail!(
-            "{}: finished configuration `{unknown}` is not in the plan",
+            "{}: finished work unit `{unknown}` is not in the plan",
             progress_path.display()
         );
     }
@@ -435,41 +506,53 @@ fn execute(
             .with_context(|| format!("creating {}", folder.join(MESHES).display()))?;
     }
 
-    let todo: Vec<&Configuration> = plan
-        .configurations
+    let units = work_units(plan, &record)?;
+    let todo: Vec<(&WorkUnit, &Configuration)> = units
         .iter()
-        .filter(|c| !progress.completed.contains(&c.id))
-        .collect();
-    let per_config = (plan.warmup + plan.repetitions) as u64;
+        .filter(|u| !progress.completed.contains(&u.key(plan.repetitions)))
+        .map(|u| {
+            plan.configurations
+                .iter()
+                .find(|c| c.id == u.id)
+                .map(|c| (u, c))
+                .with_context(|| format!("work unit {} names no configuration", u.id))
+        })
+        .collect::<Result<_>>()?;
+    let extractions: u64 = todo
+        .iter()
+        .map(|(u, _)| (plan.warmup + u.len()) as u64)
+        .sum();
     let bar = progress_bar(
         opts.quiet,
-        per_config * todo.len() as u64,
+        extractions,
         "{msg:>16} [{bar:30}] {pos}/{len} extractions, {elapsed} elapsed, ETA {eta}",
     );
 
     let mut ran = 0;
     let mut status = Status::Finished;
-    for (k, c) in todo.iter().enumerate() {
+    for (k, &(unit, c)) in todo.iter().enumerate() {
         if opts.stop_after.is_some_and(|limit| k >= limit) {
             status = Status::Stopped;
             break;
         }
         bar.set_message(c.id.clone());
         let field = fields
-            .get(&c.object)
-            .with_context(|| format!("no field built for object {}", c.object))?;
-        let result = run_configuration(c, field, plan, &bar).with_context(|| {
-            format!(
-                "configuration {} failed; the finished configurations are kept: fix the cause \
+            .get(&c.field_key())
+            .with_context(|| format!("no field built for object {}", c.field_key()))?;
+        let result =
+            run_repetitions(c, field, plan, unit.first, unit.last, &bar).with_context(|| {
+                format!(
+                    "configuration {} failed; the finished configurations are kept: fix the cause \
                  and continue with `experiments run --resume {}`",
-                c.id,
-                folder.display()
-            )
-        })?;
-        let rows = raw_rows(
+                    c.id,
+                    folder.display()
+                )
+            })?;
+        let rows = raw_rows_from(
             &record.run_id,
             c,
             plan.threads,
+            unit.first,
             &result.stats,
             &result.measurement,
         )?;
@@ -479,7 +562,7 @@ fn execute(
             rmt_mesh::io::save_ply(&path, &result.mesh, true)
                 .with_context(|| format!("saving {}", path.display()))?;
         }
-        progress.completed.push(c.id.clone());
+        progress.completed.push(unit.key(plan.repetitions));
         progress.raw_bytes = raw_bytes;
         write_json(&folder.join(PROGRESS_JSON), &progress)?;
         ran += 1;
@@ -487,24 +570,7 @@ fn execute(
     bar.finish_and_clear();
 
     if status == Status::Finished {
-        let summary = summarise(&folder.join(RAW_CSV))?;
-        write_atomic(&folder.join(SUMMARY_CSV), &summary.to_csv()?)?;
-        let mut files = vec![
-            MANIFEST_COPY,
-            RUN_JSON,
-            CONFIGURATIONS_CSV,
-            RAW_CSV,
-            SUMMARY_CSV,
-        ];
-        if let Some(bench) = &plan.paper_benchmark {
-            let comparison = paper_comparison(&summary, bench)?;
-            write_atomic(&folder.join(PAPER_CSV), &comparison.to_csv()?)?;
-            files.push(PAPER_CSV);
-        }
-        if plan.save_meshes {
-            files.push(MESHES);
-        }
-        record.files = files.into_iter().map(String::from).collect();
+        record.files = write_summaries(folder, plan)?;
     }
     close_session(folder, &mut record, status, ran)?;
     Ok(RunReport {
@@ -512,8 +578,64 @@ fn execute(
         status,
         configurations_run: ran,
         configurations_done: progress.completed.len(),
-        configurations_total: plan.configurations.len(),
+        configurations_total: units.len(),
     })
+}
+
+/// Writes `summary.csv` and `paper_comparison.csv` (when the plan names the dissertation's
+/// table) from the folder's `raw.csv`; returns the files of a finished run folder.
+pub(crate) fn write_summaries(folder: &Path, plan: &Plan) -> Result<Vec<String>> {
+    let seeds = crate::seeds::seed_map(plan);
+    let summary = summarise_seeded(&folder.join(RAW_CSV), &seeds)?;
+    write_atomic(&folder.join(SUMMARY_CSV), &summary.to_csv()?)?;
+    let mut files = vec![
+        MANIFEST_COPY,
+        RUN_JSON,
+        CONFIGURATIONS_CSV,
+        RAW_CSV,
+        SUMMARY_CSV,
+    ];
+    if let Some(bench) = &plan.paper_benchmark {
+        let single = crate::seeds::single_seed_view(&summary, plan);
+        let comparison = paper_comparison(&single, bench)?;
+        write_atomic(&folder.join(PAPER_CSV), &comparison.to_csv()?)?;
+        files.push(PAPER_CSV);
+    }
+    if let Some(table) = crate::seeds::seed_summary(&summary, plan)? {
+        write_atomic(&folder.join(crate::seeds::SEEDS_CSV), &table.to_csv()?)?;
+        files.push(crate::seeds::SEEDS_CSV);
+    }
+    if plan.save_meshes {
+        files.push(MESHES);
+    }
+    Ok(files.into_iter().map(String::from).collect())
+}
+
+/// The work units a run folder runs: its shard's (checked against the plan's split), or every
+/// configuration whole.
+pub(crate) fn work_units(plan: &Plan, record: &RunRecord) -> Result<Vec<WorkUnit>> {
+    match &record.shard {
+        None => Ok(plan
+            .configurations
+            .iter()
+            .map(|c| WorkUnit::whole(&c.id, plan.repetitions))
+            .collect()),
+        Some(s) => {
+            let ids: Vec<String> = plan.configurations.iter().map(|c| c.id.clone()).collect();
+            let spec = ShardSpec {
+                index: s.index,
+                count: s.count,
+            };
+            let (split, units) = shard::units_of(&ids, plan.repetitions, spec)?;
+            if split != s.split || units != s.units {
+                bail!(
+                    "shard {spec}: the recorded work units differ from the plan's split; the \
+                     run folder was edited or made by another version"
+                );
+            }
+            Ok(units)
+        }
+    }
 }
 
 /// Runs the `edit` workload: one chunked terrain session per configuration
@@ -556,8 +678,8 @@ fn execute_edits(
         }
         bar.set_message(c.id.clone());
         let field = fields
-            .get(&c.object)
-            .with_context(|| format!("no field built for object {}", c.object))?;
+            .get(&c.field_key())
+            .with_context(|| format!("no field built for object {}", c.field_key()))?;
         let session = run_edit_session(field, &c.extraction, edit, plan.threads)
             .with_context(|| format!("edit session of configuration {}", c.id))?;
         edits.extend(edit_rows(&c.id, &session));
@@ -646,6 +768,20 @@ pub fn run_configuration(
     plan: &Plan,
     bar: &ProgressBar,
 ) -> Result<ConfigResult> {
+    run_repetitions(c, field, plan, 1, plan.repetitions, bar)
+}
+
+/// Runs timed repetitions `first..=last` of one configuration (a work unit of a shard), after
+/// the plan's warm-up, with one reused extractor; checks that every repetition's mesh is
+/// identical.
+pub fn run_repetitions(
+    c: &Configuration,
+    field: &dyn ScalarField,
+    plan: &Plan,
+    first: usize,
+    last: usize,
+    bar: &ProgressBar,
+) -> Result<ConfigResult> {
     let settings = c.extraction.settings(plan.threads);
     let mut extractor = Extractor::new();
     let mut mesh = Mesh::default();
@@ -653,16 +789,17 @@ pub fn run_configuration(
         extractor.extract(field, &settings, &mut mesh)?;
         bar.inc(1);
     }
-    let mut stats = Vec::with_capacity(plan.repetitions);
-    let mut first = None;
-    for rep in 1..=plan.repetitions {
+    let mut stats = Vec::with_capacity(last + 1 - first.min(last + 1));
+    let mut first_print = None;
+    for rep in first..=last {
         stats.push(extractor.extract(field, &settings, &mut mesh)?);
         let print = mesh_fingerprint(&mesh);
-        match first {
-            None => first = Some(print),
+        match first_print {
+            None => first_print = Some(print),
             Some(f) if f != print => bail!(
-                "repetition {rep} produced a different mesh than repetition 1: the extraction is \
-                 not deterministic, so metrics measured on one mesh would not hold for all"
+                "repetition {rep} produced a different mesh than repetition {first}: the \
+                 extraction is not deterministic, so metrics measured on one mesh would not hold \
+                 for all"
             ),
             Some(_) => {}
         }
@@ -747,12 +884,24 @@ pub fn raw_rows(
     stats: &[Stats],
     measured: &Measurement,
 ) -> Result<Vec<Vec<String>>> {
+    raw_rows_from(run_id, c, threads, 1, stats, measured)
+}
+
+/// Like [`raw_rows`], numbering the repetitions from `first` (a block of a sharded run).
+pub fn raw_rows_from(
+    run_id: &str,
+    c: &Configuration,
+    threads: usize,
+    first: usize,
+    stats: &[Stats],
+    measured: &Measurement,
+) -> Result<Vec<Vec<String>>> {
     let mut values = config_values(c);
     values.insert("run_id", run_id.to_string());
     values.insert("threads", threads.to_string());
     let mut rows = Vec::with_capacity(stats.len());
     for (i, s) in stats.iter().enumerate() {
-        values.insert("repetition", (i + 1).to_string());
+        values.insert("repetition", (first + i).to_string());
         let m = Measurement {
             stats: s.clone(),
             ..measured.clone()
@@ -785,7 +934,7 @@ pub fn configurations_csv(plan: &Plan) -> Result<Vec<u8>> {
     csv_bytes(&rows)
 }
 
-fn csv_bytes(rows: &[Vec<String>]) -> Result<Vec<u8>> {
+pub(crate) fn csv_bytes(rows: &[Vec<String>]) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
     for r in rows {
         w.write_record(r)?;
@@ -890,6 +1039,12 @@ const SUMMARY_PREFIX: [&str; 13] = [
 /// `discard_share` (discarded / (triangles + discarded)), `tetrahedra_share` (processed / total)
 /// and `share_<stage>` (mean stage time / mean total time).
 pub fn summarise(raw_path: &Path) -> Result<Table> {
+    summarise_seeded(raw_path, &HashMap::new())
+}
+
+/// Like [`summarise`] for a seed study: `seeds` maps configuration ids to their noise seed, and
+/// `triangle_reduction` compares with the unclustered configuration of the same seed.
+pub fn summarise_seeded(raw_path: &Path, seeds: &HashMap<String, u32>) -> Result<Table> {
     let raw = Table::read(raw_path)?;
     let first_measure = RAW_PREFIX.len();
     if raw.header.len() < first_measure || raw.header[..first_measure] != RAW_PREFIX {
@@ -1016,7 +1171,8 @@ pub fn summarise(raw_path: &Path) -> Result<Table> {
         if with_threshold {
             cols.push("collapse_threshold");
         }
-        cols.iter()
+        let mut key: Vec<String> = cols
+            .iter()
             .map(|c| {
                 header
                     .iter()
@@ -1024,7 +1180,11 @@ pub fn summarise(raw_path: &Path) -> Result<Table> {
                     .map(|i| row[i].clone())
                     .unwrap_or_default()
             })
-            .collect()
+            .collect();
+        if let Some(seed) = seeds.get(&row[0]) {
+            key.push(seed.to_string());
+        }
+        key
     };
     let clustering_col = header.iter().position(|h| h == "clustering").unwrap_or(0);
     let mut baselines: HashMap<(Vec<String>, bool), usize> = HashMap::new();
@@ -1183,7 +1343,7 @@ pub fn paper_comparison(summary: &Table, benchmark: &Path) -> Result<Table> {
 }
 
 /// A new folder `<parent>/<name>-<UTC stamp>` (with `-2`, `-3`, ... if taken).
-fn new_folder(parent: &Path, name: &str) -> Result<PathBuf> {
+pub(crate) fn new_folder(parent: &Path, name: &str) -> Result<PathBuf> {
     let base = format!("{name}-{}", provenance::stamp(provenance::unix_now()));
     for n in 1..1000 {
         let candidate = if n == 1 {
@@ -1231,7 +1391,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     result.with_context(|| format!("writing {}", path.display()))
 }
 
-fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+pub(crate) fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     let mut bytes = serde_json::to_vec_pretty(value)?;
     bytes.push(b'\n');
     write_atomic(path, &bytes)

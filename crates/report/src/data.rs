@@ -449,6 +449,9 @@ pub struct Run {
     pub configurations: Vec<Configuration>,
     /// The comparison with the dissertation, when the run has one.
     pub paper: Option<Vec<PaperRow>>,
+    /// A seed study's distributions (`seeds.csv`); its per-seed configurations are then left out
+    /// of [`Run::configurations`] except one seed each ([`crate::seeds::representative_seed`]).
+    pub seeds: Option<Vec<crate::seeds::SeedRow>>,
 }
 
 impl Run {
@@ -469,7 +472,7 @@ impl Run {
             RUN_JSON,
             "the run folder's provenance, written by `experiments run`",
         )?)?;
-        let configurations = read_summary(&need(
+        let mut configurations = read_summary(&need(
             SUMMARY_CSV,
             "written when a run finishes; continue an unfinished run with `experiments run \
              --resume <folder>`",
@@ -480,11 +483,31 @@ impl Run {
         } else {
             None
         };
+        let seeds_path = folder.join(crate::seeds::SEEDS_CSV);
+        let seeds = if seeds_path.is_file() {
+            Some(crate::seeds::read_seeds(&seeds_path)?)
+        } else {
+            None
+        };
+        if let Some(rows) = &seeds {
+            // Keep one seed of each seeded configuration: `<id>_s<seed>`.
+            configurations.retain(|c| {
+                !rows.iter().any(|r| {
+                    c.id.strip_prefix(r.id.as_str())
+                        .and_then(|rest| rest.strip_prefix("_s"))
+                        .and_then(|s| s.parse::<u64>().ok())
+                        .is_some_and(|seed| {
+                            seed != crate::seeds::representative_seed(r.seeds.1, r.seeds.2)
+                        })
+                })
+            });
+        }
         Ok(Run {
             folder: folder.to_path_buf(),
             info,
             configurations,
             paper,
+            seeds,
         })
     }
 

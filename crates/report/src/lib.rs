@@ -16,6 +16,7 @@
 //! - [`data`]: the run folder read by column name ([`csv_file`]), with errors naming file, line
 //!   and column;
 //! - [`tables`], [`figures`], [`scaling`]: what the report shows; [`plot`] draws it;
+//! - [`seeds`]: the section "Across N asteroids" of a seed study (`seeds.csv`);
 //! - [`readme`]: the one-page README; [`report`]: building and checking the folder.
 //!
 //! ```no_run
@@ -48,6 +49,7 @@ pub mod plot;
 pub mod readme;
 pub mod report;
 pub mod scaling;
+pub mod seeds;
 pub mod tables;
 
 pub use error::{ReportError, Result};

@@ -309,6 +309,9 @@ fn figure_heading(name: &str) -> &str {
         "aspect_ratio" => "Triangle aspect ratio",
         "fidelity" => "Triangle count against fidelity",
         "scaling" => "Time against resolution",
+        "seed_triangles" => "Triangles over the seeds",
+        "seed_reduction" => "Triangle reduction over the seeds",
+        "seed_radius_ratio" => "Radius ratio over the seeds",
         other => other,
     }
 }
@@ -406,6 +409,14 @@ pub fn readme(input: &ReadmeInput) -> String {
         }
     }
 
+    if let Some(rows) = &run.seeds {
+        out.push_str(&crate::seeds::readme_section(
+            rows,
+            input.figures,
+            table_link(input.tables, "seed_distributions"),
+        ));
+    }
+
     if let Some(q) = input.questionnaire {
         out.push_str("## Questionnaire\n\n");
         out.push_str(&format!(
@@ -482,6 +493,7 @@ pub fn readme(input: &ReadmeInput) -> String {
             "raw.csv" => "one row per timed repetition",
             "summary.csv" => "one row per configuration (the source of every benchmark figure)",
             "paper_comparison.csv" => "ours against the dissertation, per configuration and metric",
+            "seeds.csv" => "each configuration's distribution over the noise seeds (seed study)",
             _ => "input",
         };
         let scope = if file.starts_with("scaling/") {

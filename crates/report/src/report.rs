@@ -28,13 +28,14 @@ use crate::scaling::{fit_scaling, ScalingFit};
 use crate::tables;
 
 /// The run files copied into `data/` (when present), in this order.
-pub const DATA_FILES: [&str; 6] = [
+pub const DATA_FILES: [&str; 7] = [
     RUN_JSON,
     MANIFEST_TOML,
     CONFIGURATIONS_CSV,
     SUMMARY_CSV,
     RAW_CSV,
     PAPER_CSV,
+    crate::seeds::SEEDS_CSV,
 ];
 
 /// The questionnaire part of a report.
@@ -170,6 +171,9 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
     if let Some((scaling_run, fits)) = &scaling {
         all_tables.push(tables::scaling_table(scaling_run, fits));
     }
+    if let Some(rows) = &run.seeds {
+        all_tables.push(crate::seeds::seed_table(rows));
+    }
     let mut kept = BTreeSet::new();
     for table in &all_tables {
         for path in write_table(&tables_dir, table)? {
@@ -206,6 +210,11 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
     if let Some((scaling_run, fits)) = &scaling {
         if let Some(chart) = figures::scaling(scaling_run, fits) {
             all_figures.push(("scaling".into(), AnyFigure::Xy(chart)));
+        }
+    }
+    if let Some(rows) = &run.seeds {
+        for (name, chart) in crate::seeds::seed_figures(&run, rows) {
+            all_figures.push((name, AnyFigure::Rows(chart)));
         }
     }
     let mut kept = BTreeSet::new();
