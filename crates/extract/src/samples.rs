@@ -378,71 +378,126 @@ impl Samples {
         let z0 = j * self.block_planes();
         let planes = out.len() / plane;
         let mut result = SlabResult::default();
+        let mut slab = Slab {
+            z0,
+            out,
+            scratch,
+            result: &mut result,
+        };
         for y0 in (0..dy).step_by(BLOCK) {
             let y1 = (y0 + BLOCK).min(dy);
             for x0 in (0..dx).step_by(BLOCK) {
                 let x1 = (x0 + BLOCK).min(dx);
-                result.blocks += 1;
-                let (lo, hi) = self.block_box([x0, x1], [y0, y1], [z0, z0 + planes]);
-                // The side of the whole block, when its range excludes the isovalue: a
-                // placeholder no closer to iso than any true value there.
-                let known = field.range(lo, hi).and_then(|(a, b)| {
-                    let inside = if b.is_finite() { b } else { f32::MIN };
-                    let outside = if a.is_finite() { a } else { f32::MAX };
-                    if inside < iso {
-                        Some(inside)
-                    } else if outside >= iso {
-                        Some(outside)
-                    } else {
-                        None
-                    }
-                });
-                let rows = (0..planes).flat_map(|z| (y0..y1).map(move |y| (y, z)));
-                // Each row of the block: its real points `a..b`, unused slots (NaN, as dense
-                // sampling leaves them) on either side.
-                let rows = rows.map(|(y, z)| {
-                    let (s0, s1) = self.row_span(y, z0 + z);
-                    let a = s0.clamp(x0, x1);
-                    let b = s1.clamp(a, x1);
-                    (y, z, z * plane + y * dx, a, b)
-                });
-                if let Some(v) = known {
-                    result.skipped += 1;
-                    for (_, _, row, a, b) in rows {
-                        out[row + x0..row + a].fill(f32::NAN);
-                        out[row + a..row + b].fill(v);
-                        out[row + b..row + x1].fill(f32::NAN);
-                    }
-                    continue;
-                }
-                scratch.points.clear();
-                scratch.slots.clear();
-                for (y, z, row, a, b) in rows {
-                    out[row + x0..row + a].fill(f32::NAN);
-                    out[row + b..row + x1].fill(f32::NAN);
-                    for x in a..b {
-                        scratch.points.push(self.slot_position(x, y, z0 + z));
-                        scratch.slots.push(row + x);
-                    }
-                }
-                scratch.values.clear();
-                scratch.values.resize(scratch.points.len(), 0.0);
-                field.sample_batch(&scratch.points, &mut scratch.values);
-                result.evaluated += scratch.points.len();
-                for ((&s, &v), &p) in scratch
-                    .slots
-                    .iter()
-                    .zip(&scratch.values)
-                    .zip(&scratch.points)
-                {
-                    out[s] = v;
-                    if !v.is_finite() && result.bad.is_none_or(|(b, _, _)| s < b) {
-                        result.bad = Some((s, p, v));
-                    }
-                }
+                slab.result.blocks += self.leaves([x0, x1], [y0, y1], [0, planes]);
+                self.sample_block(field, iso, [x0, x1], [y0, y1], [0, planes], true, &mut slab);
             }
         }
         result
+    }
+
+    /// Sub-blocks (of `BLOCK / 2` cells per axis) in the block of slots `x`, `y`, planes `z`.
+    fn leaves(&self, x: [usize; 2], y: [usize; 2], z: [usize; 2]) -> usize {
+        let (s, p) = (BLOCK / 2, self.block_planes() / 2);
+        (x[1] - x[0]).div_ceil(s) * (y[1] - y[0]).div_ceil(s) * (z[1] - z[0]).div_ceil(p)
+    }
+
+    /// Samples the block of slots `x`, `y` and planes `z` (local to the slab): skipped when its
+    /// range excludes the isovalue, else split once into sub-blocks of half the size (when
+    /// `split`), else evaluated.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_block(
+        &self,
+        field: &dyn ScalarField,
+        iso: f32,
+        x: [usize; 2],
+        y: [usize; 2],
+        z: [usize; 2],
+        split: bool,
+        slab: &mut Slab<'_>,
+    ) {
+        let [dx, dy, _] = self.dims;
+        let plane = dx * dy;
+        let z0 = slab.z0;
+        let (lo, hi) = self.block_box(x, y, [z0 + z[0], z0 + z[1]]);
+        // The side of the whole block, when its range excludes the isovalue: a placeholder no
+        // closer to iso than any true value there.
+        let known = field.range(lo, hi).and_then(|(a, b)| {
+            let inside = if b.is_finite() { b } else { f32::MIN };
+            let outside = if a.is_finite() { a } else { f32::MAX };
+            if inside < iso {
+                Some(inside)
+            } else if outside >= iso {
+                Some(outside)
+            } else {
+                None
+            }
+        });
+        let (x0, x1) = (x[0], x[1]);
+        // Each row of the block: its real points `a..b`, unused slots (NaN, as dense sampling
+        // leaves them) on either side.
+        let rows = (z[0]..z[1]).flat_map(|z| (y[0]..y[1]).map(move |y| (y, z)));
+        let rows = rows.map(|(y, z)| {
+            let (s0, s1) = self.row_span(y, z0 + z);
+            let a = s0.clamp(x0, x1);
+            let b = s1.clamp(a, x1);
+            (y, z, z * plane + y * dx, a, b)
+        });
+        let out = &mut *slab.out;
+        if let Some(v) = known {
+            slab.result.skipped += self.leaves(x, y, z);
+            for (_, _, row, a, b) in rows {
+                out[row + x0..row + a].fill(f32::NAN);
+                out[row + a..row + b].fill(v);
+                out[row + b..row + x1].fill(f32::NAN);
+            }
+            return;
+        }
+        if split {
+            let (s, p) = (BLOCK / 2, self.block_planes() / 2);
+            for zz in (z[0]..z[1]).step_by(p) {
+                for yy in (y[0]..y[1]).step_by(s) {
+                    for xx in (x0..x1).step_by(s) {
+                        self.sample_block(
+                            field,
+                            iso,
+                            [xx, (xx + s).min(x1)],
+                            [yy, (yy + s).min(y[1])],
+                            [zz, (zz + p).min(z[1])],
+                            false,
+                            slab,
+                        );
+                    }
+                }
+            }
+            return;
+        }
+        let scratch = &mut *slab.scratch;
+        scratch.points.clear();
+        scratch.slots.clear();
+        for (y, z, row, a, b) in rows {
+            out[row + x0..row + a].fill(f32::NAN);
+            out[row + b..row + x1].fill(f32::NAN);
+            for x in a..b {
+                scratch.points.push(self.slot_position(x, y, z0 + z));
+                scratch.slots.push(row + x);
+            }
+        }
+        scratch.values.clear();
+        scratch.values.resize(scratch.points.len(), 0.0);
+        field.sample_batch(&scratch.points, &mut scratch.values);
+        let result = &mut *slab.result;
+        result.evaluated += scratch.points.len();
+        for ((&s, &v), &p) in scratch
+            .slots
+            .iter()
+            .zip(&scratch.values)
+            .zip(&scratch.points)
+        {
+            out[s] = v;
+            if !v.is_finite() && result.bad.is_none_or(|(b, _, _)| s < b) {
+                result.bad = Some((s, p, v));
+            }
+        }
     }
 
     /// Fills one storage plane; returns the first non-finite sample.
@@ -511,12 +566,21 @@ struct Scratch {
     values: Vec<f32>,
 }
 
+/// One slab's output and working memory, passed down the blocks.
+struct Slab<'a> {
+    /// First storage plane of the slab.
+    z0: usize,
+    out: &'a mut [f32],
+    scratch: &'a mut Scratch,
+    result: &'a mut SlabResult,
+}
+
 /// What one slab of blocks did.
 #[derive(Default)]
 struct SlabResult {
     /// Points evaluated.
     evaluated: usize,
-    /// Blocks visited and skipped.
+    /// Sub-blocks visited and skipped.
     blocks: usize,
     skipped: usize,
     /// The non-finite value at the lowest slot of the slab: (slot, position, value).
