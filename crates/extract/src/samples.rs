@@ -29,6 +29,8 @@
 //! their clamped positions). When that range excludes the isovalue `T`, the block is not
 //! evaluated: its points get a placeholder on the known side, the range's end nearest `T`
 //! (`hi < T` inside, `lo >= T` outside; never closer to `T` than a true value of the block).
+//! A block whose range does not exclude `T` is split once into 8 sub-blocks of `BLOCK / 2`
+//! cells per axis, each tested (with its own one-cell margin) and skipped or evaluated alone.
 //!
 //! Why the meshes are unchanged (byte for byte): (1) every stored value has the same side of
 //! `T` as the true value (a skipped point's true value is in its block's range), so the inside

@@ -24,11 +24,12 @@ pub struct Stats {
     /// of the blocks not skipped with sparse sampling, 0 for pre-sampled extraction.
     #[serde(default)]
     pub points_sampled: usize,
-    /// Blocks of sparse sampling (0 with dense sampling; see `rmt_extract::samples`).
+    /// Blocks of sparse sampling, of `samples::BLOCK / 2` = 4 cells per axis (0 with dense
+    /// sampling; see `rmt_extract::samples`).
     #[serde(default)]
     pub blocks: usize,
-    /// Blocks whose field range excluded the isovalue, so that none of their points was
-    /// evaluated.
+    /// Blocks whose field range (or that of the 8^3-cell block holding them) excluded the
+    /// isovalue, so that none of their points was evaluated.
     #[serde(default)]
     pub blocks_skipped: usize,
     /// Lattice edges (each counted once).

@@ -477,7 +477,7 @@ impl BatchFbm {
     /// The octaves are then summed with their weights and scaled, as `get` does. The `f64`
     /// evaluation of `get` itself differs from the exact formula by a few units of `2^-53`; the
     /// result is widened by `1e-9`, and intersected with the global bound `[-1, 1]` (see
-    /// `asteroid::fbm_bound`; widened by `2^-52`). Boxes that cover more than 64 cells in an
+    /// `asteroid::fbm_bound`; widened by `2^-52`). Boxes that cover more than 8 cells in an
     /// octave take that octave's whole range `[-1, 1]`.
     pub fn range(&self, lo: [f64; 3], hi: [f64; 3]) -> (f64, f64) {
         let full = (-1.0 - 1e-15, 1.0 + 1e-15);
@@ -511,7 +511,7 @@ fn octave_range(perm: &[u8; 256], lo: [f64; 3], hi: [f64; 3]) -> (f64, f64) {
     let cells: [(i64, i64); 3] =
         std::array::from_fn(|a| (lo[a].floor() as i64, hi[a].floor() as i64));
     let count: i64 = cells.iter().map(|(c0, c1)| c1 - c0 + 1).product();
-    if count > 64 || count <= 0 {
+    if count > 8 || count <= 0 {
         return (-1.0, 1.0);
     }
     let (mut rlo, mut rhi) = (f64::INFINITY, f64::NEG_INFINITY);

@@ -274,8 +274,8 @@ pub fn benchmark_summary(run: &Run) -> TextTable {
              seconds, `f_*` in percent, bytes) followed by ours."
                 .into(),
             "Points sampled: the share of the lattice points at which the field was evaluated; \
-             blocks skipped: the share of the sampling blocks (8 cells per axis) whose value \
-             range excluded the isovalue, so that only the sign of their points was stored \
+             blocks skipped: the share of the sampling blocks (4 cells per axis, tested 8 at a \
+             time first) whose value range excluded the isovalue, so that only the sign of their points was stored \
              (blank for runs made before sparse sampling)."
                 .into(),
         ],
