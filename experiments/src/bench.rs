@@ -439,6 +439,8 @@ impl Case {
                     message: format!("{} has no settings", method.name()),
                 })?;
             let mut extractor = Extractor::new();
+            // Every stored value is the field's: the peers are fed these samples.
+            extractor.set_sampling(rmt_extract::Sampling::Dense);
             let mut mesh = Mesh::default();
             extractor
                 .extract(&*f, &settings, &mut mesh)

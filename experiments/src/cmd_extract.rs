@@ -255,6 +255,14 @@ pub fn summary(e: &Extraction, threads: usize, m: &Measurement) -> String {
         ms(s.t_normals_s),
         ms(s.t_allocation_s),
     );
+    out += &format!(
+        "  sampling: field evaluated at {} of {} points ({:.1}%), {} of {} blocks skipped\n",
+        s.points_sampled,
+        s.sample_points,
+        100.0 * s.points_sampled as f64 / s.sample_points.max(1) as f64,
+        s.blocks_skipped,
+        s.blocks,
+    );
     if s.t_cluster_check_s > 0.0 {
         out += &format!(
             "  merging:  of the vertex pass, {} ms\n",

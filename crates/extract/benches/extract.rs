@@ -65,6 +65,8 @@ impl Prepared {
         settings.normals = NormalMode::Skip;
         settings.threads = 1;
         let mut extractor = Extractor::new();
+        // Every stored value is the field's: the peers are fed these samples.
+        extractor.set_sampling(rmt_extract::Sampling::Dense);
         let mut mesh = Mesh::default();
         if let Err(e) = extractor.extract(field, &settings, &mut mesh) {
             panic!("benchmark setup failed: {e}");

@@ -2,13 +2,19 @@
 //! fields, sizes, lattices, clustering modes and thread counts, with and without the tile rule of
 //! chunked worlds: run it before and after a change
 //! that must not change the meshes and compare the two listings.
-//! `cargo run --release -p rmt-extract --example mesh_hashes [lean]` (`lean`: extractors with
-//! [`rmt_extract::BufferPolicy::Lean`], whose listing must equal the default one).
+//! `cargo run --release -p rmt-extract --example mesh_hashes [lean] [dense]` (`lean`: extractors
+//! with [`rmt_extract::BufferPolicy::Lean`]; `dense`: [`rmt_extract::Sampling::Dense`] instead of
+//! the default sparse sampling; every listing must equal the default one). Marching cubes, the
+//! meshopt mode and the terrains come after the original listing, so an older listing is a
+//! prefix-free subset: compare with `comm`.
 use rmt_extract::{
-    BufferPolicy, CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode,
-    Tiling,
+    BufferPolicy, CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Method,
+    NormalMode, Sampling, Tiling,
 };
-use rmt_fields::{Asteroid, AsteroidParams, Gyroid, ScalarField, Sphere};
+use rmt_fields::{
+    Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, ScalarField, Sphere, SvobodaParams,
+    SvobodaTerrain, Torus,
+};
 use rmt_mesh::Mesh;
 
 /// FNV-1a over 64-bit words.
@@ -20,9 +26,16 @@ fn fnv(h: &mut u64, x: u64) {
 }
 
 fn main() -> Result<(), rmt_extract::ExtractError> {
-    let policy = match std::env::args().nth(1).as_deref() {
-        Some("lean") => BufferPolicy::Lean,
-        _ => BufferPolicy::Reuse,
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let policy = if args.iter().any(|a| a == "lean") {
+        BufferPolicy::Lean
+    } else {
+        BufferPolicy::Reuse
+    };
+    let sampling = if args.iter().any(|a| a == "dense") {
+        Sampling::Dense
+    } else {
+        Sampling::Sparse
     };
     let fields: Vec<(&str, Box<dyn ScalarField>)> = vec![
         ("sphere", Box::new(Sphere::new(glam::Vec3::ZERO, 0.8))),
@@ -40,62 +53,106 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
             }),
         ),
     ];
-    for (name, field) in &fields {
-        for n in [16, 33, 64] {
-            for lattice in [Lattice::BodyCentred, Lattice::Simple] {
-                for clustering in [
-                    Clustering::None,
-                    Clustering::Integrated,
-                    Clustering::IntegratedUnchecked,
-                    Clustering::Postprocessed,
-                ] {
-                    for (threads, tiled) in [(1, false), (2, false), (2, true)] {
-                        let mut s = ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);
-                        s.threads = threads;
-                        s.normals = NormalMode::Skip;
-                        if tiled {
-                            // The tile rule of chunked worlds, for a sub-box at global cell
-                            // (5, 0, 3) of a larger volume, keeping the triangles of some cells.
-                            s.tiles = Some(Tiling::new([8, 16, 8], [5, 0, 3]));
-                            s.keep_cells = Some(CellRange {
-                                lo: [1, 0, 2],
-                                hi: [n - 1, n, n - 3],
-                            });
+    let more: Vec<(&str, Box<dyn ScalarField>)> = vec![
+        (
+            "torus",
+            Box::new(Torus {
+                centre: glam::Vec3::new(0.05, -0.1, 0.0),
+                major: 0.6,
+                minor: 0.25,
+            }),
+        ),
+        (
+            "terrain",
+            Box::new(SvobodaTerrain::new(SvobodaParams::default())),
+        ),
+        ("caves", Box::new(CaveTerrain::new(CaveParams::default()))),
+    ];
+    // The original listing, then marching cubes and meshopt for its fields, then the terrains
+    // and the torus in every mode.
+    let original = [
+        (Method::Mt, Clustering::None),
+        (Method::Mt, Clustering::Integrated),
+        (Method::Mt, Clustering::IntegratedUnchecked),
+        (Method::Mt, Clustering::Postprocessed),
+    ];
+    let added = [
+        (Method::Mt, Clustering::Meshopt),
+        (Method::Mc, Clustering::None),
+    ];
+    let all: Vec<(Method, Clustering)> = original.iter().chain(&added).copied().collect();
+    let runs = [
+        (&fields, &original[..]),
+        (&fields, &added[..]),
+        (&more, &all[..]),
+    ];
+    for (fields, modes) in runs {
+        for (name, field) in fields {
+            for n in [16, 33, 64] {
+                for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+                    for &(method, clustering) in modes {
+                        if method == Method::Mc && lattice != Lattice::Simple {
+                            continue;
                         }
-                        let mut mesh = Mesh::default();
-                        let mut ex = Extractor::new();
-                        ex.set_buffer_policy(policy);
-                        let st = ex.extract(field.as_ref(), &s, &mut mesh)?;
-                        let mut h = 0xcbf2_9ce4_8422_2325u64;
-                        for p in &mesh.positions {
-                            for c in p {
-                                fnv(&mut h, u64::from(c.to_bits()));
+                        for (threads, tiled) in [(1, false), (2, false), (2, true)] {
+                            if method == Method::Mc && tiled {
+                                continue;
                             }
-                        }
-                        for &i in &mesh.indices {
-                            fnv(&mut h, u64::from(i));
-                        }
-                        for c in [
-                            st.edges,
-                            st.crossings,
-                            st.tetrahedra_processed,
-                            st.clusters_proposed,
-                            st.clusters_committed,
-                            st.clusters_rejected,
-                            st.lone_absorbed,
-                            st.slivers_collapsed,
-                            st.collapses,
-                            st.discarded,
-                        ] {
-                            fnv(&mut h, c as u64);
-                        }
-                        println!(
+                            let mut s =
+                                ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);
+                            s.method = method;
+                            s.threads = threads;
+                            s.normals = NormalMode::Skip;
+                            if tiled {
+                                // The tile rule of chunked worlds, for a sub-box at global cell
+                                // (5, 0, 3) of a larger volume, keeping the triangles of some cells.
+                                s.tiles = Some(Tiling::new([8, 16, 8], [5, 0, 3]));
+                                s.keep_cells = Some(CellRange {
+                                    lo: [1, 0, 2],
+                                    hi: [n - 1, n, n - 3],
+                                });
+                            }
+                            let mut mesh = Mesh::default();
+                            let mut ex = Extractor::new();
+                            ex.set_buffer_policy(policy);
+                            ex.set_sampling(sampling);
+                            let st = ex.extract(field.as_ref(), &s, &mut mesh)?;
+                            let mut h = 0xcbf2_9ce4_8422_2325u64;
+                            for p in &mesh.positions {
+                                for c in p {
+                                    fnv(&mut h, u64::from(c.to_bits()));
+                                }
+                            }
+                            for &i in &mesh.indices {
+                                fnv(&mut h, u64::from(i));
+                            }
+                            for c in [
+                                st.edges,
+                                st.crossings,
+                                st.tetrahedra_processed,
+                                st.clusters_proposed,
+                                st.clusters_committed,
+                                st.clusters_rejected,
+                                st.lone_absorbed,
+                                st.slivers_collapsed,
+                                st.collapses,
+                                st.discarded,
+                            ] {
+                                fnv(&mut h, c as u64);
+                            }
+                            let mode = if method == Method::Mc {
+                                "marching-cubes"
+                            } else {
+                                clustering.name()
+                            };
+                            println!(
                             "{name:9} n={n:2} {:6} {:20} t={threads}{}: {:6} triangles {h:016x}",
                             lattice.name(),
-                            clustering.name(),
+                            mode,
                             if tiled { " tiled" } else { "" },
                             st.triangles
                         );
+                        }
                     }
                 }
             }

@@ -1,7 +1,9 @@
 //! Isosurface extraction: regularised marching tetrahedra (RMT) and its baselines.
 //!
 //! Pipeline of one extraction (see ARCHITECTURE.md for the picture):
-//! 1. **sampling**: evaluate the field at every point of the lattice ([`samples`]), in parallel;
+//! 1. **sampling**: evaluate the field at the points of the lattice ([`samples`]), in parallel,
+//!    block by block; blocks whose [`ScalarField::range`] excludes the isovalue are skipped
+//!    (their points only need a sign; [`Sampling`]), so the cost follows the surface;
 //! 2. **vertex pass**: find crossed lattice edges, give each crossing to its nearer end point and
 //!    number it ([`mt`]); with integrated clustering, group each point's nearby crossings into
 //!    clusters ([`cluster`]);
@@ -49,7 +51,7 @@ pub mod stats;
 pub mod tiles;
 
 pub use measure::{measure, Measurement};
-pub use samples::Samples;
+pub use samples::{Samples, Sampling};
 pub use settings::{
     CellRange, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Tiling,
 };
@@ -126,6 +128,7 @@ pub struct Extractor {
     pub(crate) mt: mt::MtBuffers,
     pub(crate) merge: merge::MergeBuffers,
     pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>)>,
+    pub(crate) sampling: Sampling,
 }
 
 impl Extractor {
@@ -148,6 +151,26 @@ impl Extractor {
     /// ```
     pub fn set_buffer_policy(&mut self, policy: BufferPolicy) {
         self.mt.lean = policy == BufferPolicy::Lean;
+    }
+
+    /// Sets how [`Extractor::extract`] samples the field (default [`Sampling::Sparse`]: the same
+    /// meshes, fewer evaluations; [`Sampling::Dense`] when every stored value must be the
+    /// field's, e.g. to edit or export [`Extractor::samples`]).
+    ///
+    /// ```
+    /// use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, Sampling};
+    /// let s = ExtractSettings::new(Grid::cube(64, 1.0), Lattice::BodyCentred, Clustering::None);
+    /// let sphere = rmt_fields::Sphere::new(glam::Vec3::ZERO, 0.5);
+    /// let (mut a, mut b) = (rmt_mesh::Mesh::default(), rmt_mesh::Mesh::default());
+    /// let sparse = Extractor::new().extract(&sphere, &s, &mut a).unwrap();
+    /// let mut dense = Extractor::new();
+    /// dense.set_sampling(Sampling::Dense);
+    /// let all = dense.extract(&sphere, &s, &mut b).unwrap();
+    /// assert_eq!((a.positions, a.indices), (b.positions, b.indices));
+    /// assert!(sparse.points_sampled < all.points_sampled / 2 && sparse.blocks_skipped > 0);
+    /// ```
+    pub fn set_sampling(&mut self, sampling: Sampling) {
+        self.sampling = sampling;
     }
 
     /// Runs extractions with `pool.current_num_threads()` threads on `pool` instead of a pool of
@@ -192,7 +215,8 @@ impl Extractor {
         settings.check()?;
         let mut stats = Stats::default();
         let pool = self.pool(settings.threads)?;
-        self.samples.sample(field, settings, &pool, &mut stats)?;
+        self.samples
+            .sample_with(field, settings, &pool, &mut stats, self.sampling)?;
         self.mesh_samples(Some(field), settings, mesh, &mut stats)?;
         stats.t_total_s = start.elapsed().as_secs_f64();
         Ok(stats)
@@ -222,7 +246,8 @@ impl Extractor {
         &mut self.samples
     }
 
-    /// The sample array of the last extraction.
+    /// The sample array of the last extraction (with [`Sampling::Sparse`], skipped blocks hold
+    /// placeholders: right side of the isovalue, not the field's values).
     pub fn samples(&self) -> &Samples {
         &self.samples
     }

@@ -18,6 +18,31 @@
 //! Every plane has `(nx + 2) * (ny + 2)` slots; the point `(X, Y, Z)` sits at
 //! `((Z + 1) * (ny + 2) + (Y + 1) / 2) * (nx + 2) + (X + 1) / 2` (integer division rounding down).
 //! Unused slots hold NaN and are never read. World position: `min + clamp(X, 0, 2n) * h / 2`.
+//!
+//! **Sparse sampling** ([`Sampling::Sparse`], what [`crate::Extractor`] does by default): the
+//! storage is cut into blocks of [`BLOCK`] cells per axis (`BLOCK` slots along x and y, `BLOCK`
+//! storage planes along z, or `2 BLOCK` planes on the body-centred lattice, where each cell has
+//! a centre plane and a corner plane). For each block the field is asked for its
+//! [`ScalarField::range`] over the box of the block's points *and of all their lattice
+//! neighbours* (one cell of margin: every neighbour of a point, on either lattice, and every
+//! corner of a marching cube through it, is at most one cell away per axis; ghosts are taken at
+//! their clamped positions). When that range excludes the isovalue `T`, the block is not
+//! evaluated: its points get a placeholder on the known side, the range's end nearest `T`
+//! (`hi < T` inside, `lo >= T` outside; never closer to `T` than a true value of the block).
+//! A block whose range does not exclude `T` is split once into 8 sub-blocks of `BLOCK / 2`
+//! cells per axis, each tested (with its own one-cell margin) and skipped or evaluated alone.
+//!
+//! Why the meshes are unchanged (byte for byte): (1) every stored value has the same side of
+//! `T` as the true value (a skipped point's true value is in its block's range), so the inside
+//! bits, crossed edges, case indices and clustering masks are the same; (2) a crossed edge never
+//! touches a skipped point: its other end lies in the skipped block's margin box, so its true
+//! value is on the same side, and the edge would not be crossed; likewise every corner of a
+//! crossed cube (marching cubes) is evaluated. The extractors read values (interpolation,
+//! ownership of a crossing, the asymptotic decider) only at the ends of crossed edges and at
+//! the corners of crossed cubes, and signs everywhere else, so they read true values wherever
+//! the value matters. Positions are computed by the same functions as dense sampling, so the
+//! evaluated values are the same too. A non-finite value inside a skipped block is not seen
+//! (the field's range promised finite values there).
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -40,6 +65,22 @@ pub struct Samples {
     pub dims: [usize; 3],
     /// The values, `dims[0] * dims[1] * dims[2]` of them.
     pub values: Vec<f32>,
+}
+
+/// Cells per axis of a block of sparse sampling.
+pub const BLOCK: usize = 8;
+
+/// How the field is sampled (see the module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sampling {
+    /// Evaluate the field at every lattice point: every stored value is the field's value
+    /// (what edits of stored values, e.g. terrain brushes, and peers fed our samples need).
+    Dense,
+    /// Skip blocks whose [`ScalarField::range`] excludes the isovalue; their points hold a
+    /// placeholder on the right side. Same meshes as dense sampling; fields without a range
+    /// are sampled densely (block by block).
+    #[default]
+    Sparse,
 }
 
 /// The lattice that a method samples: marching cubes uses the simple cubic corners.
@@ -180,6 +221,7 @@ impl Samples {
         self.values = values;
         stats.t_sampling_s += t.elapsed().as_secs_f64();
         stats.sample_points = self.point_count();
+        stats.points_sampled = stats.sample_points;
         stats.bytes_lattice = self.bytes();
         match bad {
             Some((p, value)) => Err(ExtractError::NonFiniteSample {
@@ -189,6 +231,274 @@ impl Samples {
                 value,
             }),
             None => Ok(()),
+        }
+    }
+
+    /// Samples `field` for `settings` as `sampling` says: [`Samples::sample`] for
+    /// [`Sampling::Dense`], else block-sparse sampling (see the module doc). Fills
+    /// `stats.points_sampled`, `stats.blocks` and `stats.blocks_skipped`.
+    pub fn sample_with(
+        &mut self,
+        field: &dyn ScalarField,
+        settings: &ExtractSettings,
+        pool: &rayon::ThreadPool,
+        stats: &mut Stats,
+        sampling: Sampling,
+    ) -> Result<(), ExtractError> {
+        if sampling == Sampling::Dense {
+            return self.sample(field, settings, pool, stats);
+        }
+        let t = std::time::Instant::now();
+        self.prepare(settings);
+        stats.t_allocation_s += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let [dx, dy, _] = self.dims;
+        let slab = dx * dy * self.block_planes();
+        let iso = settings.iso;
+        let mut values = std::mem::take(&mut self.values);
+        let this = &*self;
+        let slabs: Vec<SlabResult> = pool.install(|| {
+            values
+                .par_chunks_mut(slab)
+                .enumerate()
+                .map_init(Scratch::default, |scratch, (j, out)| {
+                    this.sample_slab(field, iso, j, out, scratch)
+                })
+                .collect()
+        });
+        self.values = values;
+        stats.t_sampling_s += t.elapsed().as_secs_f64();
+        stats.sample_points = self.point_count();
+        stats.bytes_lattice = self.bytes();
+        stats.points_sampled = slabs.iter().map(|r| r.evaluated).sum();
+        stats.blocks = slabs.iter().map(|r| r.blocks).sum();
+        stats.blocks_skipped = slabs.iter().map(|r| r.skipped).sum();
+        // Slabs are consecutive in storage and each reports its lowest bad index: the first
+        // slab with one holds the lowest overall, whatever the thread count.
+        match slabs.iter().find_map(|r| r.bad) {
+            Some((_, p, value)) => Err(ExtractError::NonFiniteSample {
+                x: p.x,
+                y: p.y,
+                z: p.z,
+                value,
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Storage planes per block along z.
+    fn block_planes(&self) -> usize {
+        match self.lattice {
+            Some(Lattice::BodyCentred) => 2 * BLOCK,
+            _ => BLOCK,
+        }
+    }
+
+    /// The slots `[lo, hi)` of storage row `y` of plane `z` that hold a real point (they are
+    /// contiguous on both lattices).
+    #[inline]
+    pub fn row_span(&self, y: usize, z: usize) -> (usize, usize) {
+        let [dx, _, _] = self.dims;
+        match self.lattice {
+            Some(Lattice::BodyCentred) => {
+                let [nx, ny, nz] = self.cells;
+                if z % 2 == 1 {
+                    // Corner plane (Z = z - 1 even): corners with X, Y in 0 ..= 2n.
+                    if y <= ny {
+                        (0, nx + 1)
+                    } else {
+                        (0, 0)
+                    }
+                } else {
+                    // Centre plane: at most one of the three coordinates may be a ghost's.
+                    let outside =
+                        usize::from(y == 0 || y == ny + 1) + usize::from(z == 0 || z == 2 * nz + 2);
+                    match outside {
+                        0 => (0, dx),
+                        1 => (1, nx + 1),
+                        _ => (0, 0),
+                    }
+                }
+            }
+            _ => (0, dx),
+        }
+    }
+
+    /// The box of the points of the block with slots `x`, `y` and planes `z` (half-open ranges)
+    /// and of all their lattice neighbours, from the same position functions as the samples
+    /// (positions grow with the index, so the extreme indices give the extreme positions).
+    fn block_box(&self, x: [usize; 2], y: [usize; 2], z: [usize; 2]) -> (Vec3, Vec3) {
+        match self.lattice {
+            Some(Lattice::BodyCentred) => {
+                // Slot s holds X = 2 s - 1 (centres) and 2 s (corners); plane z holds Z = z - 1.
+                // Neighbours are at most 2 half-cells away per axis.
+                let lo = |s: usize| 2 * s as i32 - 3;
+                let hi = |s: usize| 2 * s as i32;
+                (
+                    self.bcdl_position([lo(x[0]), lo(y[0]), z[0] as i32 - 3]),
+                    self.bcdl_position([hi(x[1]), hi(y[1]), z[1] as i32]),
+                )
+            }
+            _ => {
+                let [nx, ny, nz] = self.cells;
+                (
+                    self.simple_position(
+                        x[0].saturating_sub(1),
+                        y[0].saturating_sub(1),
+                        z[0].saturating_sub(1),
+                    ),
+                    self.simple_position(x[1].min(nx), y[1].min(ny), z[1].min(nz)),
+                )
+            }
+        }
+    }
+
+    /// World position of the point in slot `(sx, sy)` of storage plane `z`.
+    #[inline]
+    fn slot_position(&self, sx: usize, sy: usize, z: usize) -> Vec3 {
+        match self.lattice {
+            Some(Lattice::BodyCentred) => {
+                let zz = z as i32 - 1;
+                let odd = zz & 1;
+                self.bcdl_position([2 * sx as i32 - odd, 2 * sy as i32 - odd, zz])
+            }
+            _ => self.simple_position(sx, sy, z),
+        }
+    }
+
+    /// Samples the blocks of slab `j` (storage planes `j * block_planes ..`) into `out`.
+    fn sample_slab(
+        &self,
+        field: &dyn ScalarField,
+        iso: f32,
+        j: usize,
+        out: &mut [f32],
+        scratch: &mut Scratch,
+    ) -> SlabResult {
+        let [dx, dy, _] = self.dims;
+        let plane = dx * dy;
+        let z0 = j * self.block_planes();
+        let planes = out.len() / plane;
+        let mut result = SlabResult::default();
+        let mut slab = Slab {
+            z0,
+            out,
+            scratch,
+            result: &mut result,
+        };
+        for y0 in (0..dy).step_by(BLOCK) {
+            let y1 = (y0 + BLOCK).min(dy);
+            for x0 in (0..dx).step_by(BLOCK) {
+                let x1 = (x0 + BLOCK).min(dx);
+                slab.result.blocks += self.leaves([x0, x1], [y0, y1], [0, planes]);
+                self.sample_block(field, iso, [x0, x1], [y0, y1], [0, planes], true, &mut slab);
+            }
+        }
+        result
+    }
+
+    /// Sub-blocks (of `BLOCK / 2` cells per axis) in the block of slots `x`, `y`, planes `z`.
+    fn leaves(&self, x: [usize; 2], y: [usize; 2], z: [usize; 2]) -> usize {
+        let (s, p) = (BLOCK / 2, self.block_planes() / 2);
+        (x[1] - x[0]).div_ceil(s) * (y[1] - y[0]).div_ceil(s) * (z[1] - z[0]).div_ceil(p)
+    }
+
+    /// Samples the block of slots `x`, `y` and planes `z` (local to the slab): skipped when its
+    /// range excludes the isovalue, else split once into sub-blocks of half the size (when
+    /// `split`), else evaluated.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_block(
+        &self,
+        field: &dyn ScalarField,
+        iso: f32,
+        x: [usize; 2],
+        y: [usize; 2],
+        z: [usize; 2],
+        split: bool,
+        slab: &mut Slab<'_>,
+    ) {
+        let [dx, dy, _] = self.dims;
+        let plane = dx * dy;
+        let z0 = slab.z0;
+        let (lo, hi) = self.block_box(x, y, [z0 + z[0], z0 + z[1]]);
+        // The side of the whole block, when its range excludes the isovalue: a placeholder no
+        // closer to iso than any true value there.
+        let known = field.range(lo, hi).and_then(|(a, b)| {
+            let inside = if b.is_finite() { b } else { f32::MIN };
+            let outside = if a.is_finite() { a } else { f32::MAX };
+            if inside < iso {
+                Some(inside)
+            } else if outside >= iso {
+                Some(outside)
+            } else {
+                None
+            }
+        });
+        let (x0, x1) = (x[0], x[1]);
+        // Each row of the block: its real points `a..b`, unused slots (NaN, as dense sampling
+        // leaves them) on either side.
+        let rows = (z[0]..z[1]).flat_map(|z| (y[0]..y[1]).map(move |y| (y, z)));
+        let rows = rows.map(|(y, z)| {
+            let (s0, s1) = self.row_span(y, z0 + z);
+            let a = s0.clamp(x0, x1);
+            let b = s1.clamp(a, x1);
+            (y, z, z * plane + y * dx, a, b)
+        });
+        let out = &mut *slab.out;
+        if let Some(v) = known {
+            slab.result.skipped += self.leaves(x, y, z);
+            for (_, _, row, a, b) in rows {
+                out[row + x0..row + a].fill(f32::NAN);
+                out[row + a..row + b].fill(v);
+                out[row + b..row + x1].fill(f32::NAN);
+            }
+            return;
+        }
+        if split {
+            let (s, p) = (BLOCK / 2, self.block_planes() / 2);
+            for zz in (z[0]..z[1]).step_by(p) {
+                for yy in (y[0]..y[1]).step_by(s) {
+                    for xx in (x0..x1).step_by(s) {
+                        self.sample_block(
+                            field,
+                            iso,
+                            [xx, (xx + s).min(x1)],
+                            [yy, (yy + s).min(y[1])],
+                            [zz, (zz + p).min(z[1])],
+                            false,
+                            slab,
+                        );
+                    }
+                }
+            }
+            return;
+        }
+        let scratch = &mut *slab.scratch;
+        scratch.points.clear();
+        scratch.slots.clear();
+        for (y, z, row, a, b) in rows {
+            out[row + x0..row + a].fill(f32::NAN);
+            out[row + b..row + x1].fill(f32::NAN);
+            for x in a..b {
+                scratch.points.push(self.slot_position(x, y, z0 + z));
+                scratch.slots.push(row + x);
+            }
+        }
+        scratch.values.clear();
+        scratch.values.resize(scratch.points.len(), 0.0);
+        field.sample_batch(&scratch.points, &mut scratch.values);
+        let result = &mut *slab.result;
+        result.evaluated += scratch.points.len();
+        for ((&s, &v), &p) in scratch
+            .slots
+            .iter()
+            .zip(&scratch.values)
+            .zip(&scratch.points)
+        {
+            out[s] = v;
+            if !v.is_finite() && result.bad.is_none_or(|(b, _, _)| s < b) {
+                result.bad = Some((s, p, v));
+            }
         }
     }
 
@@ -249,3 +559,32 @@ impl Samples {
 }
 
 use rmt_fields::ScalarField;
+
+/// Per-thread working memory of sparse sampling (reused across blocks).
+#[derive(Default)]
+struct Scratch {
+    points: Vec<Vec3>,
+    slots: Vec<usize>,
+    values: Vec<f32>,
+}
+
+/// One slab's output and working memory, passed down the blocks.
+struct Slab<'a> {
+    /// First storage plane of the slab.
+    z0: usize,
+    out: &'a mut [f32],
+    scratch: &'a mut Scratch,
+    result: &'a mut SlabResult,
+}
+
+/// What one slab of blocks did.
+#[derive(Default)]
+struct SlabResult {
+    /// Points evaluated.
+    evaluated: usize,
+    /// Sub-blocks visited and skipped.
+    blocks: usize,
+    skipped: usize,
+    /// The non-finite value at the lowest slot of the slab: (slot, position, value).
+    bad: Option<(usize, Vec3, f32)>,
+}

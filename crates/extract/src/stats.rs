@@ -18,8 +18,20 @@ pub struct Stats {
     pub tetrahedra_total: usize,
     /// Tetrahedra (or cubes, for marching cubes) with at least one crossing.
     pub tetrahedra_processed: usize,
-    /// Sample points evaluated.
+    /// Sample points of the lattice (evaluated or not; see `points_sampled`).
     pub sample_points: usize,
+    /// Sample points at which the field was evaluated: all of them with dense sampling, those
+    /// of the blocks not skipped with sparse sampling, 0 for pre-sampled extraction.
+    #[serde(default)]
+    pub points_sampled: usize,
+    /// Blocks of sparse sampling, of `samples::BLOCK / 2` = 4 cells per axis (0 with dense
+    /// sampling; see `rmt_extract::samples`).
+    #[serde(default)]
+    pub blocks: usize,
+    /// Blocks whose field range (or that of the 8^3-cell block holding them) excluded the
+    /// isovalue, so that none of their points was evaluated.
+    #[serde(default)]
+    pub blocks_skipped: usize,
     /// Lattice edges (each counted once).
     pub edges: usize,
     /// Lattice edges crossed by the surface (= vertices of the unmerged mesh).

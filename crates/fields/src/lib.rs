@@ -6,7 +6,8 @@
 //! Every field is a [`ScalarField`]: `Send + Sync`, sampled one point at a time or in batches
 //! (override [`ScalarField::sample_batch`] where a field can do better than a loop). Fields that
 //! know the distance to their own surface say so through [`ScalarField::surface_distance`], which
-//! the extractors use to measure fidelity.
+//! the extractors use to measure fidelity. Fields that can bound their values over a box say so
+//! through [`ScalarField::range`], which lets the extractors skip sampling far from the surface.
 //!
 //! ```
 //! use rmt_fields::{ScalarField, Sphere};
@@ -19,6 +20,8 @@
 mod analytic;
 mod asteroid;
 mod error;
+pub mod fbm;
+mod interval;
 mod mesh_sdf;
 mod terrain;
 
@@ -48,6 +51,25 @@ pub trait ScalarField: Send + Sync {
     fn surface_distance(&self, _p: Vec3) -> Option<f32> {
         None
     }
+
+    /// A conservative range of the field over the axis-aligned box `[lo, hi]`: `Some((a, b))`
+    /// promises `a <= self.sample(p) <= b` (and the same for [`ScalarField::sample_batch`]) for
+    /// every `p` with `lo <= p <= hi` componentwise, *as the `f32` values the field returns*, so
+    /// rounding must be accounted for. `None` means unknown (the default, and the answer for an
+    /// empty or non-finite box). The extractors skip sampling boxes whose range excludes the
+    /// isovalue, so a wrong range changes meshes: implement it only with a proof.
+    ///
+    /// ```
+    /// use rmt_fields::{ScalarField, Sphere};
+    /// use glam::Vec3;
+    /// let s = Sphere::new(Vec3::ZERO, 1.0);
+    /// let (a, b) = s.range(Vec3::splat(2.0), Vec3::splat(3.0)).unwrap();
+    /// assert!(a <= s.sample(Vec3::splat(2.0)) && s.sample(Vec3::splat(3.0)) <= b);
+    /// assert!(a > 0.0, "the box is outside the sphere");
+    /// ```
+    fn range(&self, _lo: Vec3, _hi: Vec3) -> Option<(f32, f32)> {
+        None
+    }
 }
 
 impl<F: ScalarField + ?Sized> ScalarField for &F {
@@ -60,6 +82,9 @@ impl<F: ScalarField + ?Sized> ScalarField for &F {
     fn surface_distance(&self, p: Vec3) -> Option<f32> {
         (**self).surface_distance(p)
     }
+    fn range(&self, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+        (**self).range(lo, hi)
+    }
 }
 
 impl<F: ScalarField + ?Sized> ScalarField for Box<F> {
@@ -71,5 +96,8 @@ impl<F: ScalarField + ?Sized> ScalarField for Box<F> {
     }
     fn surface_distance(&self, p: Vec3) -> Option<f32> {
         (**self).surface_distance(p)
+    }
+    fn range(&self, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+        (**self).range(lo, hi)
     }
 }

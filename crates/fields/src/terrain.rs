@@ -10,6 +10,9 @@
 //! Neither is a signed distance, so neither reports a surface distance. Both surfaces leave the
 //! sampled box through its sides, where the extracted mesh is open by design.
 
+use crate::asteroid::fbm_bound;
+use crate::fbm::{BatchFbm, BatchPerlin, LANES};
+use crate::interval::{box64, widen};
 use crate::ScalarField;
 use glam::Vec3;
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
@@ -46,6 +49,7 @@ impl Default for SvobodaParams {
 pub struct SvobodaTerrain {
     params: SvobodaParams,
     fbm: Fbm<Perlin>,
+    batch: BatchFbm,
 }
 
 impl SvobodaTerrain {
@@ -54,7 +58,11 @@ impl SvobodaTerrain {
         let fbm = Fbm::<Perlin>::new(params.seed)
             .set_octaves(params.octaves.clamp(1, 32))
             .set_frequency(params.frequency);
-        Self { params, fbm }
+        Self {
+            params,
+            fbm,
+            batch: BatchFbm::new(params.seed, params.octaves.clamp(1, 32), params.frequency),
+        }
     }
 
     /// The parameters it was built with.
@@ -73,6 +81,37 @@ impl ScalarField for SvobodaTerrain {
     #[inline]
     fn sample(&self, p: Vec3) -> f32 {
         p.y - self.height(p.x, p.z)
+    }
+
+    /// The same values as `sample`, bit for bit ([`BatchFbm`]), `LANES` points at a time.
+    fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
+        let (base, a) = (self.params.base, self.params.amplitude);
+        let mut n = [0.0f64; LANES];
+        for (ps, os) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let lane = |f: fn(&Vec3) -> f32| -> [f64; LANES] {
+                std::array::from_fn(|k| ps.get(k).map_or(0.0, |p| f64::from(f(p))))
+            };
+            self.batch
+                .get_lanes_2d(&lane(|p| p.x), &lane(|p| p.z), &mut n);
+            for ((o, p), &n) in os.iter_mut().zip(ps).zip(&n) {
+                *o = p.y - (base + a * n as f32);
+            }
+        }
+    }
+
+    /// Bounded by the height amplitude: the noise lies in `[-1, 1]` (see `asteroid::fbm_bound`),
+    /// so the height lies in `[base - |A|, base + |A|]` and `f = y - height` in
+    /// `[y_lo - base - |A|, y_hi - base + |A|]`. Rounding: three roundings on operands of
+    /// magnitude at most `max|y| + |base| + |A|`, covered by the widening.
+    fn range(&self, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+        let (lo, hi) = box64(lo, hi)?;
+        let base = f64::from(self.params.base);
+        let a = f64::from(self.params.amplitude).abs() * f64::from(fbm_bound());
+        widen(
+            lo[1] - base - a,
+            hi[1] - base + a,
+            lo[1].abs().max(hi[1].abs()) + base.abs() + a,
+        )
     }
 }
 
@@ -123,6 +162,7 @@ pub struct CaveTerrain {
     fbm: Fbm<Perlin>,
     cave_a: Perlin,
     cave_b: Perlin,
+    batch: (BatchFbm, BatchPerlin, BatchPerlin),
 }
 
 impl CaveTerrain {
@@ -136,6 +176,11 @@ impl CaveTerrain {
             fbm,
             cave_a: Perlin::new(params.seed.wrapping_add(1)),
             cave_b: Perlin::new(params.seed.wrapping_add(2)),
+            batch: (
+                BatchFbm::new(params.seed, params.octaves.clamp(1, 32), params.frequency),
+                BatchPerlin::new(params.seed.wrapping_add(1)),
+                BatchPerlin::new(params.seed.wrapping_add(2)),
+            ),
         }
     }
 
@@ -172,6 +217,68 @@ impl ScalarField for CaveTerrain {
         let fade = (p.y - self.params.cave_ceiling).max(0.0);
         ground.max(-(self.tunnels(p) + fade))
     }
+
+    /// The same values as `sample`, bit for bit ([`BatchFbm`], [`BatchPerlin`]), `LANES`
+    /// points at a time.
+    fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
+        let p = &self.params;
+        let k = p.cave_frequency;
+        let (mut n, mut na, mut nb) = ([0.0f64; LANES], [0.0f64; LANES], [0.0f64; LANES]);
+        for (ps, os) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let lane = |f: fn(&Vec3) -> f32| -> [f64; LANES] {
+                std::array::from_fn(|i| ps.get(i).map_or(0.0, |q| f64::from(f(q))))
+            };
+            let (x, y, z) = (lane(|q| q.x), lane(|q| q.y), lane(|q| q.z));
+            self.batch.0.get_lanes(&x, &y, &z, &mut n);
+            let caves = p.cave_radius > 0.0;
+            if caves {
+                let (kx, ky, kz) = (x.map(|v| v * k), y.map(|v| v * k), z.map(|v| v * k));
+                self.batch.1.get_lanes(&kx, &ky, &kz, &mut na);
+                self.batch.2.get_lanes(&kx, &ky, &kz, &mut nb);
+            }
+            for (i, (o, q)) in os.iter_mut().zip(ps).enumerate() {
+                let ground = q.y - p.base + p.amplitude * n[i] as f32;
+                *o = if caves {
+                    let (a, b) = (na[i] as f32, nb[i] as f32);
+                    let tunnels = (a * a + b * b).sqrt() - p.cave_radius;
+                    let fade = (q.y - p.cave_ceiling).max(0.0);
+                    ground.max(-(tunnels + fade))
+                } else {
+                    ground
+                };
+            }
+        }
+    }
+
+    /// Interval arithmetic on the formula. The noises lie in `[-1, 1]` (Perlin clamps its
+    /// result; `asteroid::fbm_bound` for the fractal), so:
+    /// - `ground = y - base + A fbm` lies in `[y_lo - base - |A|, y_hi - base + |A|]`;
+    /// - `tunnels = sqrt(a^2 + b^2) - radius` in `[-radius, sqrt 2 - radius]`;
+    /// - `fade = max(y - ceiling, 0)` in `[max(y_lo - ceiling, 0), max(y_hi - ceiling, 0)]`;
+    /// - `max(ground, -(tunnels + fade))` in `[max(lo_g, lo_c), max(hi_g, hi_c)]` (max is
+    ///   increasing in both arguments), or `ground` alone without caves.
+    ///
+    /// Rounding: about ten roundings on operands of magnitude at most
+    /// `max|y| + |base| + |A| + 2 + |radius| + |ceiling|`, covered by the widening.
+    fn range(&self, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+        let (lo, hi) = box64(lo, hi)?;
+        let p = &self.params;
+        let (base, radius, ceiling) = (
+            f64::from(p.base),
+            f64::from(p.cave_radius),
+            f64::from(p.cave_ceiling),
+        );
+        let a = f64::from(p.amplitude).abs() * f64::from(fbm_bound());
+        let (g0, g1) = (lo[1] - base - a, hi[1] - base + a);
+        let magnitude =
+            lo[1].abs().max(hi[1].abs()) + base.abs() + a + 2.0 + radius.abs() + ceiling.abs();
+        if p.cave_radius <= 0.0 {
+            return widen(g0, g1, magnitude);
+        }
+        let (fade0, fade1) = ((lo[1] - ceiling).max(0.0), (hi[1] - ceiling).max(0.0));
+        let (c0, c1) = (-(std::f64::consts::SQRT_2 - radius + fade1), radius - fade0);
+        widen(g0.max(c0), g1.max(c1), magnitude)
+    }
 }
 
 #[cfg(test)]
@@ -183,6 +290,27 @@ mod tests {
             let (x, y, z) = (k % n, (k / n) % n, k / (n * n));
             Vec3::new(x as f32, y as f32, z as f32) * (2.0 / (n - 1) as f32) - 1.0
         })
+    }
+
+    #[test]
+    fn batches_give_the_same_bits_as_single_samples() {
+        let pts: Vec<Vec3> = lattice(23)
+            .map(|p| p * 1.3 + Vec3::new(0.01, 0.02, -0.03))
+            .chain(lattice(5))
+            .collect();
+        let svoboda = SvobodaTerrain::new(SvobodaParams::default());
+        let caves = CaveTerrain::new(CaveParams::default());
+        let plain = CaveTerrain::new(CaveParams {
+            cave_radius: 0.0,
+            ..Default::default()
+        });
+        for f in [&svoboda as &dyn ScalarField, &caves, &plain] {
+            let mut out = vec![0.0; pts.len()];
+            f.sample_batch(&pts, &mut out);
+            for (p, v) in pts.iter().zip(&out) {
+                assert_eq!(v.to_bits(), f.sample(*p).to_bits(), "at {p}");
+            }
+        }
     }
 
     #[test]

@@ -241,6 +241,12 @@ pub struct Configuration {
     pub tetrahedra_share: Option<f64>,
     /// Bytes of the lattice, edge data, vertex buffer and index buffer.
     pub bytes: [f64; 4],
+    /// Share of the lattice points at which the field was evaluated (`points_sampled /
+    /// sample_points`; runs made before sparse sampling lack the column).
+    pub points_sampled_share: Option<f64>,
+    /// Share of the sampling blocks skipped (`blocks_skipped / blocks`; none with dense
+    /// sampling or in older runs).
+    pub blocks_skipped_share: Option<f64>,
 }
 
 impl Configuration {
@@ -291,6 +297,14 @@ pub fn lattice_name(lattice: &str) -> String {
         "bcdl" => "BCDL".into(),
         "simple" => "simple cubic".into(),
         other => other.to_string(),
+    }
+}
+
+/// `part / whole` when both are known and `whole > 0`.
+fn share(part: Option<f64>, whole: Option<f64>) -> Option<f64> {
+    match (part, whole) {
+        (Some(p), Some(w)) if w > 0.0 => Some(p / w),
+        _ => None,
     }
 }
 
@@ -382,6 +396,14 @@ pub fn read_summary(path: &Path) -> Result<Vec<Configuration>> {
                 count("bytes_vertices")?,
                 count("bytes_indices")?,
             ],
+            points_sampled_share: share(
+                file.optional(r, "points_sampled")?,
+                file.optional(r, "sample_points")?,
+            ),
+            blocks_skipped_share: share(
+                file.optional(r, "blocks_skipped")?,
+                file.optional(r, "blocks")?,
+            ),
         };
         if c.id.is_empty() {
             return Err(ReportError::EmptyCell {

@@ -36,7 +36,7 @@ pub const PAPER_COLUMNS: [&str; 25] = [
 ];
 
 /// Our columns after the dissertation's.
-pub const EXTRA_COLUMNS: [&str; 13] = [
+pub const EXTRA_COLUMNS: [&str; 15] = [
     "object",
     "method",
     "repetitions",
@@ -50,6 +50,8 @@ pub const EXTRA_COLUMNS: [&str; 13] = [
     "fidelity_max_h",
     "closed_manifold",
     "euler",
+    "f_points_sampled",
+    "f_blocks_skipped",
 ];
 
 /// Share of the total time spent in `stage`, percent.
@@ -126,6 +128,8 @@ pub fn benchmark_summary(run: &Run) -> TextTable {
             opt(c.fidelity_max_h, |v| sig(v, 6)),
             c.closed_manifold.to_string(),
             fixed(c.euler, 0),
+            opt(c.points_sampled_share, |s| fixed(100.0 * s, 2)),
+            opt(c.blocks_skipped_share, |s| fixed(100.0 * s, 2)),
         ]);
         csv_rows.push(row);
     }
@@ -229,6 +233,8 @@ pub fn benchmark_summary(run: &Run) -> TextTable {
             "index buffer",
             "tetrahedra processed",
             "triangles discarded",
+            "points sampled",
+            "blocks skipped",
         ]
         .map(String::from)
         .to_vec(),
@@ -243,6 +249,8 @@ pub fn benchmark_summary(run: &Run) -> TextTable {
                     format::bytes(c.bytes[3]),
                     opt(c.tetrahedra_share, percent),
                     opt(c.discard_share, percent),
+                    opt(c.points_sampled_share, percent),
+                    opt(c.blocks_skipped_share, percent),
                 ]
             })
             .collect(),
@@ -264,6 +272,11 @@ pub fn benchmark_summary(run: &Run) -> TextTable {
             ),
             "The CSV has the dissertation's columns (`data/paper/benchmark.csv`: times in \
              seconds, `f_*` in percent, bytes) followed by ours."
+                .into(),
+            "Points sampled: the share of the lattice points at which the field was evaluated; \
+             blocks skipped: the share of the sampling blocks (4 cells per axis, tested 8 at a \
+             time first) whose value range excluded the isovalue, so that only the sign of their points was stored \
+             (blank for runs made before sparse sampling)."
                 .into(),
         ],
         csv_header,
