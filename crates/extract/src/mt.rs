@@ -1,5 +1,5 @@
-//! Marching tetrahedra on both lattices: the vertex pass, the geometry pass, and the commit of
-//! clusters.
+//! Marching tetrahedra on both lattices: the vertex pass, the clustering, and the geometry pass
+//! (emission).
 //!
 //! **Vertex pass** (parallel over storage planes): for each sample point C and each of its
 //! neighbours S, the edge C-S is crossed when C and S lie on opposite sides of the threshold T
@@ -18,21 +18,26 @@
 //! the triangles stored once. Cubes (or body-centred faces) whose anchor has no crossed edge are
 //! skipped before any tetrahedron is looked at.
 //!
-//! **Commit** (clustering): clusters are merged one lattice colour at a time, each only after the
-//! exact check of [`crate::merge`] (integrated) or without it (integrated-unchecked).
+//! **Clustering** (between the two): the proposals are a partition of the crossings into groups
+//! ([`crate::cluster`]: a point's islands; with integrated clustering also the lone crossings,
+//! given to a neighbouring island). Integrated clustering keeps the groups that pass the exact
+//! quotient test, repairing failures by splitting groups in parallel rounds
+//! ([`crate::quotient`]); integrated-unchecked keeps them all. Every crossing then maps to an
+//! output vertex, and the geometry pass writes the triangles with those vertices directly,
+//! leaving out the ones that collapsed: no intermediate mesh.
 //!
 //! Border rule: points on the box faces (whose lattice edges are cut by the box) cluster too, with
 //! the missing neighbours counted as neither crossed nor uncrossed. A crossing that lies on the box
-//! face is a vertex of the mesh boundary, and the exact check refuses every cluster whose region
-//! reaches the mesh boundary through a merged vertex, so crossings on the box faces never move and
+//! face is a vertex of the mesh boundary, and the quotient test refuses every group whose link
+//! is not a closed cycle (one that reaches the mesh boundary), so crossings on the box faces never move and
 //! the mesh stays closed wherever the surface stays inside the box. (The unchecked mode has no such
 //! guarantee; that is its point.)
 
 use rayon::prelude::*;
 use rmt_mesh::Mesh;
 
-use crate::cluster::{self, Candidate, ProposalCounts, FULL};
-use crate::lattice::{self, LatticeTables, Offset};
+use crate::cluster::{self, Candidate, ProposalCounts, Rules, FULL};
+use crate::lattice::{LatticeTables, Offset};
 use crate::merge::MergeBuffers;
 use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
 
@@ -44,15 +49,28 @@ pub struct MtBuffers {
     /// Per storage plane, its crossed points in slot order as `owned | crossed << 16` (the vertex
     /// pass's output, numbered into [`CrossedIndex::points`]).
     plane_points: Vec<Vec<u32>>,
-    /// Cluster candidates, in storage order.
+    /// Proposed groups, in storage order of their owners.
     candidates: Vec<Candidate>,
-    /// The candidates of one commit round (see [`COMMIT_ROUND`]).
-    round: Vec<Candidate>,
+    /// Positions of the crossings (plain MT's vertices), with clustering.
+    cpos: Vec<[f32; 3]>,
+    /// Group of each crossing ([`crate::quotient::NONE`] if none).
+    group_of: Vec<u32>,
+    /// Vertex position of each group (the mean of its crossings).
+    centroid: Vec<[f32; 3]>,
+    /// Per group: 1 while it is kept.
+    active: Vec<u8>,
+    /// Output vertex of each crossing, with clustering.
+    vertex_of: Vec<u32>,
+    /// Lone crossings given to groups, by group (`lone_start`, one more than the groups).
+    lone: Vec<crate::quotient::Lone>,
+    lone_start: Vec<u32>,
+    /// Lowest crossing id of each group.
+    leader: Vec<u32>,
+    /// Working memory of the vertex compaction (integrated-unchecked).
+    scratch: Vec<u32>,
     /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
     /// of padding: 64 points are tested for crossings at once with a few word operations.
     inside: Vec<u64>,
-    /// Working memory of the cluster commit, one per block of candidates.
-    commits: Vec<CommitBlock>,
     /// [`crate::BufferPolicy::Lean`]: free every table when its last reader is done.
     pub(crate) lean: bool,
 }
@@ -64,13 +82,21 @@ impl MtBuffers {
             + self.plane_points.iter().map(|o| o.len() * 4).sum::<usize>()
             + self.inside.len() * 8
             + self.candidates.len() * std::mem::size_of::<Candidate>()
+            + self.cpos.len() * 12
+            + self.group_of.len() * 4
+            + self.centroid.len() * 12
+            + self.active.len()
+            + self.vertex_of.len() * 4
+            + self.lone.len() * 12
+            + self.lone_start.len() * 4
+            + self.leader.len() * 4
     }
 }
 
 /// A point with a crossed edge: the id of its first owned crossing and its owned crossings (bit d:
 /// the crossing on the edge to neighbour d). `id(C, d) = first + popcount(owned & ((1 << d) - 1))`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-struct CrossedPoint {
+pub(crate) struct CrossedPoint {
     first: u32,
     owned: u16,
     /// All its crossed edges (owned or not), by neighbour bit.
@@ -80,7 +106,7 @@ struct CrossedPoint {
 impl CrossedPoint {
     /// Id of the crossing this point owns on its edge to neighbour `d`.
     #[inline(always)]
-    fn id(self, d: u8) -> u32 {
+    pub(crate) fn id(self, d: u8) -> u32 {
         self.first + (self.owned & ((1u16 << d) - 1)).count_ones()
     }
 }
@@ -93,7 +119,7 @@ impl CrossedPoint {
 /// The bits are kept per storage plane ([`plane_words`] words each, the last one padding) so that
 /// planes are written in parallel; a slot's plane comes from a division by a multiplication.
 #[derive(Default)]
-struct CrossedIndex {
+pub(crate) struct CrossedIndex {
     /// One bit per storage slot, set where the point has a crossed edge (owned or not).
     bits: Vec<u64>,
     /// Per word of `bits`: how many bits are set in the words before it.
@@ -150,7 +176,7 @@ impl CrossedIndex {
 
     /// The entry of a crossed `slot` (meaningless for others).
     #[inline(always)]
-    fn get(&self, slot: usize) -> CrossedPoint {
+    pub(crate) fn get(&self, slot: usize) -> CrossedPoint {
         let z = self.plane_of(slot);
         self.points[self.rank_in(z, slot - z * self.plane)]
     }
@@ -216,45 +242,6 @@ fn for_each_bit(words: &[u64], start: usize, len: usize, mut visit: impl FnMut(u
     }
 }
 
-/// Candidates of one colour are checked in blocks of this many, in parallel.
-const COMMIT_BLOCK: usize = 64;
-
-/// At most this many candidates (a whole number of blocks) are checked before their records are
-/// applied: bounds the records' memory (a few hundred KiB) whatever the size.
-const COMMIT_ROUND: usize = 16 * COMMIT_BLOCK;
-
-/// A cluster that passed its check, waiting to be applied.
-struct Accepted {
-    /// Its crossings, in [`CommitBlock::members`].
-    members: std::ops::Range<u32>,
-    /// What the merge changes, in [`CommitBlock::edits`].
-    edits: std::ops::Range<u32>,
-    centre: [f32; 3],
-    /// Accepted without one of its proposed crossings.
-    reduced: bool,
-}
-
-/// Checks and records of one block of cluster candidates (kept between extractions).
-#[derive(Default)]
-struct CommitBlock {
-    scratch: crate::merge::Scratch,
-    /// Members of the cluster being tried.
-    k: Vec<u32>,
-    accepted: Vec<Accepted>,
-    members: Vec<u32>,
-    edits: Vec<crate::merge::TriangleEdit>,
-    rejected: usize,
-}
-
-impl CommitBlock {
-    fn clear(&mut self) {
-        self.accepted.clear();
-        self.members.clear();
-        self.edits.clear();
-        self.rejected = 0;
-    }
-}
-
 /// Bit k set where `values[k] < iso` (at most 64 values). A full word is built a byte at a time,
 /// which the compiler turns into wide comparisons (about 40% faster than bit by bit).
 #[inline(always)]
@@ -305,21 +292,21 @@ fn crossed_points(inside: &[u64], i: usize, delta: &[isize; 14], len: usize) -> 
     any
 }
 
-/// Edges shorter than this many grid spacings are welded after clustering (coincident crossings).
+/// Whether integrated clustering gives lone crossings to neighbouring groups.
+const LONE_CROSSINGS: bool = true;
+
+/// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
+/// sample points): the meshoptimizer mode welds them first.
 const WELD: f32 = 1e-4;
 
-/// Integrated clustering ends with one collapse per triangle whose aspect ratio R/(2r) is above
-/// this (see [`crate::collapse::collapse_slivers`]); triangles of a good RMT mesh stay below 2.5.
-const SLIVER_AR: f32 = 4.0;
-
 /// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
-const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+pub(crate) const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
 /// Case table: for the corners inside (bit i: f(v_i) < T), a directed cycle of crossed edges whose
 /// right-hand normal points toward increasing f for a positively oriented tetrahedron. Length 3
 /// (triangle) or 4 (quad, split along its shorter diagonal); `u8::MAX` pads. Checked against
 /// geometry by `case_table_orients_triangles_along_the_gradient`.
-const CASES: [[u8; 4]; 16] = {
+pub(crate) const CASES: [[u8; 4]; 16] = {
     const X: u8 = u8::MAX;
     [
         [X, X, X, X],
@@ -341,9 +328,59 @@ const CASES: [[u8; 4]; 16] = {
     ]
 };
 
+/// The triangles of one tetrahedron (none, one, or two from a quad split along its shorter
+/// diagonal) as crossing ids, oriented by the case table: the one definition that the emission
+/// and the quotient test share, so that the test sees exactly the triangles that are written.
+/// `val`: the corner values; `dir[i][j]`: neighbour index of corner j from corner i; `id(o, d)`:
+/// the id of the crossing owned by corner `o` on its edge to neighbour `d`.
+#[inline(always)]
+pub(crate) fn tet_triangles(
+    val: [f32; 4],
+    iso: f32,
+    dir: &[[u8; 4]; 4],
+    id: impl Fn(usize, u8) -> u32,
+    positions: &[[f32; 3]],
+    out: &mut [[u32; 3]; 2],
+) -> usize {
+    let case = (val[0] < iso) as usize
+        | ((val[1] < iso) as usize) << 1
+        | ((val[2] < iso) as usize) << 2
+        | ((val[3] < iso) as usize) << 3;
+    if case == 0 || case == 15 {
+        return 0;
+    }
+    let cycle = &CASES[case];
+    let n = if cycle[3] == u8::MAX { 3 } else { 4 };
+    let mut ids = [0u32; 4];
+    for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
+        let (a, b) = TET_EDGES[e as usize];
+        let (o, d) = if owns(val[a], val[b], iso) {
+            (a, dir[a][b])
+        } else {
+            (b, dir[b][a])
+        };
+        *slot = id(o, d);
+    }
+    if n == 3 {
+        out[0] = [ids[0], ids[1], ids[2]];
+        1
+    } else {
+        // Split along the shorter diagonal, chosen by a table index rather than a branch (the
+        // choice is data-dependent and mispredicts half the time).
+        const SPLITS: [[usize; 6]; 2] = [[1, 2, 3, 1, 3, 0], [0, 1, 2, 0, 2, 3]];
+        let p = |i: u32| glam::Vec3::from(positions[i as usize]);
+        let short02 =
+            p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
+        let s = &SPLITS[usize::from(short02)];
+        out[0] = [ids[s[0] & 3], ids[s[1] & 3], ids[s[2] & 3]];
+        out[1] = [ids[s[3] & 3], ids[s[4] & 3], ids[s[5] & 3]];
+        2
+    }
+}
+
 /// Whether the end with value `f` (inside iff `f < iso`) owns the crossing shared with `g`.
 #[inline(always)]
-fn owns(f: f32, g: f32, iso: f32) -> bool {
+pub(crate) fn owns(f: f32, g: f32, iso: f32) -> bool {
     let (df, dg) = ((f - iso).abs(), (g - iso).abs());
     df < dg || (df == dg && f < iso)
 }
@@ -427,8 +464,8 @@ fn case_triangles(case: usize) -> u8 {
 }
 
 /// The lattice in storage terms: neighbour deltas per parity and tetrahedron templates.
-struct Layout<'a> {
-    s: &'a Samples,
+pub(crate) struct Layout<'a> {
+    pub(crate) s: &'a Samples,
     lattice: Lattice,
     t: &'static LatticeTables,
     /// Storage-index delta of neighbour d, for even (`[0]`) and odd (`[1]`) points.
@@ -440,6 +477,25 @@ struct Layout<'a> {
     /// class of each coordinate ([`boundary_class`]) and its parity; empty for grids too small
     /// for the classes to be apart (then computed point by point).
     border_table: Vec<u32>,
+    /// The tetrahedra around a point of each parity (`[0]` even, `[1]` odd): 24 on both
+    /// lattices ([`StarTet`]).
+    pub(crate) around: [Vec<StarTet>; 2],
+}
+
+/// One of the tetrahedra around a lattice point, as the quotient test walks them: corners in
+/// the positive orientation of the lattice's templates (so the case table orients its
+/// triangles), relative to the point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StarTet {
+    /// Lattice offsets of the corners from the point (one of them is `[0, 0, 0]`).
+    pub(crate) off: [Offset; 4],
+    /// Storage-index deltas of the corners from the point.
+    pub(crate) delta: [isize; 4],
+    /// `dir[i][j]`: neighbour index of corner j seen from corner i.
+    pub(crate) dir: [[u8; 4]; 4],
+    /// The point's neighbour bits of the tetrahedron's other three corners (its edges from the
+    /// point).
+    pub(crate) from_point: u16,
 }
 
 /// Boundary classes per axis: the coordinates -1..=3, max-3..=max+1, and everything between.
@@ -513,6 +569,7 @@ impl<'a> Layout<'a> {
             Lattice::BodyCentred => tets.chunks(4).map(TetGroup::new).collect(),
             Lattice::Simple => vec![TetGroup::new(&tets)],
         };
+        let around = [0, 1].map(|par| star_tets(lattice, t, refs[par], &idx));
         let mut layout = Self {
             s,
             lattice,
@@ -521,6 +578,7 @@ impl<'a> Layout<'a> {
             tets,
             groups,
             border_table: Vec::new(),
+            around,
         };
         layout.border_table = layout.build_border_table();
         layout
@@ -603,6 +661,39 @@ impl<'a> Layout<'a> {
         }
     }
 
+    /// Lattice coordinates of storage slot `slot`.
+    #[inline]
+    pub(crate) fn coords_of(&self, slot: usize) -> Offset {
+        let [dx, dy, _] = self.s.dims;
+        let (z, local) = (slot / (dx * dy), slot % (dx * dy));
+        self.coords(local % dx, local / dx, z)
+    }
+
+    /// Whether lattice point `p` exists (the simple lattice: inside the box).
+    #[inline]
+    pub(crate) fn exists(&self, p: Offset) -> bool {
+        match self.lattice {
+            Lattice::BodyCentred => self.s.bcdl_exists(p),
+            Lattice::Simple => (0..3).all(|a| p[a] >= 0 && p[a] <= self.max_coord(a)),
+        }
+    }
+
+    /// Whether the tetrahedron `tet` around point `p` is one of the extraction's: all its
+    /// corners exist and at most one is a ghost (two ghosts are never joined by an edge), as for
+    /// the faces the geometry pass visits (body-centred), or inside the box (simple).
+    #[inline]
+    pub(crate) fn has_tet(&self, p: Offset, tet: &StarTet) -> bool {
+        let mut ghosts = 0;
+        for o in &tet.off {
+            let q = add(p, *o);
+            if !self.exists(q) {
+                return false;
+            }
+            ghosts += usize::from(self.lattice == Lattice::BodyCentred && self.is_ghost(q));
+        }
+        ghosts <= 1
+    }
+
     /// Lattice coordinates of storage slot (sx, sy) of plane z, and whether the point exists.
     #[inline]
     fn point(&self, sx: usize, sy: usize, z: usize) -> (Offset, bool) {
@@ -613,7 +704,7 @@ impl<'a> Layout<'a> {
         }
     }
 
-    fn position(&self, p: Offset) -> glam::Vec3 {
+    pub(crate) fn position(&self, p: Offset) -> glam::Vec3 {
         match self.lattice {
             Lattice::BodyCentred => self.s.bcdl_position(p),
             Lattice::Simple => self
@@ -644,7 +735,7 @@ impl<'a> Layout<'a> {
 
     /// Whether all 14 neighbours of `p` are regular lattice points (no border, no ghosts).
     #[inline]
-    fn is_regular(&self, p: Offset) -> bool {
+    pub(crate) fn is_regular(&self, p: Offset) -> bool {
         let margin = match self.lattice {
             Lattice::BodyCentred => 2 + (p[0] & 1),
             Lattice::Simple => 1,
@@ -679,6 +770,65 @@ impl<'a> Layout<'a> {
     }
 }
 
+/// The tetrahedra around lattice point `r` (which must be a lattice point of its parity), from
+/// the lattice's templates translated over the cells near it; `idx` gives storage indices.
+fn star_tets(
+    lattice: Lattice,
+    t: &LatticeTables,
+    r: Offset,
+    idx: &dyn Fn(Offset) -> isize,
+) -> Vec<StarTet> {
+    let mut out = Vec::with_capacity(24);
+    for x in -2..=2 {
+        for y in -2..=2 {
+            for z in -2..=2 {
+                let base = match lattice {
+                    // Templates are relative to a cell centre (odd point).
+                    Lattice::BodyCentred => {
+                        let c = |v: i32, k: i32| 2 * ((v - 1).div_euclid(2) + k) + 1;
+                        [c(r[0], x), c(r[1], y), c(r[2], z)]
+                    }
+                    Lattice::Simple => [r[0] + x, r[1] + y, r[2] + z],
+                };
+                for tet in &t.tetrahedra {
+                    let abs = tet.map(|o| add(base, o));
+                    if !abs.contains(&r) {
+                        continue;
+                    }
+                    let off = abs.map(|v| [v[0] - r[0], v[1] - r[1], v[2] - r[2]]);
+                    if out.iter().any(|s: &StarTet| s.off == off) {
+                        continue;
+                    }
+                    let mut dir = [[u8::MAX; 4]; 4];
+                    let mut from_point = 0u16;
+                    for i in 0..4 {
+                        for j in 0..4 {
+                            if i != j {
+                                let o = [
+                                    off[j][0] - off[i][0],
+                                    off[j][1] - off[i][1],
+                                    off[j][2] - off[i][2],
+                                ];
+                                dir[i][j] = t.direction(o).map_or(u8::MAX, |d| d as u8);
+                                if off[i] == [0; 3] {
+                                    from_point |= 1 << dir[i][j];
+                                }
+                            }
+                        }
+                    }
+                    out.push(StarTet {
+                        off,
+                        delta: abs.map(|v| idx(v) - idx(r)),
+                        dir,
+                        from_point,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
 fn add(a: Offset, b: Offset) -> Offset {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
@@ -709,16 +859,11 @@ pub fn extract(
         clustering,
         Clustering::Integrated | Clustering::IntegratedUnchecked
     );
-    // Tile rule (chunked extraction): lattice colours in global coordinates, and merges only
-    // inside one tile (`Tiling`).
-    let colour_shift: Offset = settings.tiles.map_or([0; 3], |t| {
-        let scale = if lattice == Lattice::BodyCentred {
-            2
-        } else {
-            1
-        };
-        t.grid_offset.map(|o| (o * scale) as i32)
-    });
+    let rules = if clustering == Clustering::Integrated {
+        Rules::Islands
+    } else {
+        Rules::Dissertation
+    };
     let mut keys: Vec<u64> = Vec::new();
 
     // Allocation: per-slot tables sized to the sample array.
@@ -774,9 +919,7 @@ pub fn extract(
                     inside,
                     z,
                     iso,
-                    propose,
-                    clustering == Clustering::Integrated,
-                    colour_shift,
+                    propose.then_some(rules),
                     owned,
                     crossed,
                 )
@@ -874,18 +1017,64 @@ pub fn extract(
         }
     }
     let tiled = settings.tiles.is_some();
-    let allowed = |k: &[u32], keys: &[u64]| !tiled || crate::tiles::same_tile(keys, k);
+    stats.clusters_proposed = proposals.proposed;
+    stats.clusters_rejected_prefilter = proposals.rejected;
+    if propose {
+        // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
+        std::mem::swap(&mut mesh.positions, &mut buf.cpos);
+        if tiled {
+            // Tile rule: a group only inside one tile.
+            let mut ids = Vec::with_capacity(14);
+            let before = buf.candidates.len();
+            buf.candidates.retain(|c| {
+                ids.clear();
+                ids.extend(c.ids());
+                crate::tiles::same_tile(&keys, &ids)
+            });
+            stats.clusters_rejected_prefilter += before - buf.candidates.len();
+        }
+        let step = std::time::Instant::now();
+        let lones = clustering == Clustering::Integrated && LONE_CROSSINGS;
+        build_groups(buf, &layout, iso, lones, tiled.then_some(&keys[..]), pool);
+        stats.lone_absorbed = buf.lone.len();
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+        let q = crate::quotient::Quotient {
+            l: &layout,
+            iso,
+            crossed: &buf.crossed,
+            cpos: &buf.cpos,
+            groups: &buf.candidates,
+            lones: &buf.lone,
+            lone_start: &buf.lone_start,
+            leader: &buf.leader,
+            group_of: &buf.group_of,
+            centroid: &buf.centroid,
+        };
+        buf.active.clear();
+        buf.active.resize(buf.candidates.len(), 1);
+        if clustering == Clustering::Integrated {
+            let settled = q.settle(&mut buf.active, pool);
+            stats.repair_rounds = settled.rounds;
+            stats.clusters_rejected_check = settled.split;
+            stats.t_tests_s += settled.t_tests_s;
+            stats.t_repair_s += settled.t_repair_s;
+        }
+        let step = std::time::Instant::now();
+        vertex_map(&q, &buf.active, &mut buf.vertex_of, &mut mesh.positions);
+        stats.clusters_committed = buf.active.iter().filter(|&&a| a != 0).count();
+        stats.t_vertices_s += step.elapsed().as_secs_f64();
+    }
     stats.t_vertex_s += t.elapsed().as_secs_f64();
 
-    // Geometry pass.
+    // Emission: the final triangles, written straight into the mesh.
     let t = std::time::Instant::now();
     let layers = match lattice {
         Lattice::BodyCentred => samples.cells[2] + 1,
         Lattice::Simple => samples.cells[2],
     };
-    // Triangles per layer, counted from the anchors' crossed edges, so that every layer writes its
-    // triangles straight into their final place (the mesh, or the merge buffers when clusters
-    // follow): no per-layer buffers, no second copy.
+    // Triangles of plain MT per layer, counted from the anchors' crossed edges, so that every
+    // layer writes its triangles straight into its own slice of the output (with clustering,
+    // collapsed triangles leave the slice's end unused; the layers are then moved together).
     let crossed = &buf.crossed;
     let keep = settings.keep_cells;
     let counts: Vec<usize> = pool.install(|| {
@@ -895,38 +1084,51 @@ pub fn extract(
             .collect()
     });
     let triangles: usize = counts.iter().sum();
-    let Mesh {
-        positions, indices, ..
-    } = &mut *mesh;
-    let out: &mut [u32] = if propose {
-        merge.triangles_to_fill(triangles)
-    } else {
-        indices.clear();
-        indices.resize(3 * triangles, 0);
-        indices
-    };
+    let indices = &mut mesh.indices;
+    indices.clear();
+    indices.resize(3 * triangles, 0);
     let mut parts = Vec::with_capacity(layers);
-    let mut rest = out;
+    let mut rest = &mut indices[..];
     for &n in &counts {
         let (head, tail) = rest.split_at_mut(3 * n);
         parts.push(head);
         rest = tail;
     }
-    let positions = &*positions;
-    stats.tetrahedra_processed += pool.install(|| {
+    let (positions, map) = if propose {
+        (&buf.cpos[..], Some(&buf.vertex_of[..]))
+    } else {
+        (&mesh.positions[..], None)
+    };
+    let written: Vec<(usize, usize)> = pool.install(|| {
         parts
             .into_par_iter()
             .enumerate()
-            .map(|(k, out)| geometry_layer(&layout, k, iso, keep, crossed, positions, out))
-            .sum::<usize>()
+            .map(|(k, out)| geometry_layer(&layout, k, iso, keep, crossed, positions, map, out))
+            .collect()
     });
+    stats.tetrahedra_processed += written.iter().map(|w| w.0).sum::<usize>();
+    if propose {
+        // Move the layers' triangles together.
+        let (mut from, mut to) = (0, 0);
+        for (&n, &(_, w)) in counts.iter().zip(&written) {
+            indices.copy_within(3 * from..3 * (from + w), 3 * to);
+            from += n;
+            to += w;
+        }
+        indices.truncate(3 * to);
+        stats.discarded += triangles - to;
+        if clustering == Clustering::IntegratedUnchecked {
+            // Without the test a vertex may lose all its triangles.
+            mesh.drop_unused_vertices(&mut buf.scratch);
+        }
+    }
     let [nx, ny, nz] = samples.cells;
     stats.tetrahedra_total = match lattice {
         Lattice::BodyCentred => 4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1)),
         Lattice::Simple => 6 * nx * ny * nz,
     };
     stats.t_geometry_s += t.elapsed().as_secs_f64();
-    // Lean: the per-point tables have no reader left (candidates name their crossings by id).
+    // Lean: the per-point tables have no reader left.
     let mut lean_bytes = 0;
     if buf.lean {
         lean_bytes = buf.table_bytes();
@@ -934,190 +1136,6 @@ pub fn extract(
         buf.inside = Vec::new();
         buf.plane_points = Vec::new();
         pool.broadcast(|_| LAYER_WINDOW.with_borrow_mut(|w| *w = Vec::new()));
-    }
-
-    // Clustering: commit one colour at a time (counted in the vertex pass, where the dissertation
-    // does its merging).
-    stats.clusters_proposed = proposals.proposed;
-    stats.clusters_rejected_prefilter = proposals.rejected;
-    if propose {
-        let t = std::time::Instant::now();
-        let check = clustering == Clustering::Integrated;
-        let step = std::time::Instant::now();
-        merge.load_filled(total);
-        stats.t_adjacency_s += step.elapsed().as_secs_f64();
-        lean_bytes += merge.bytes();
-        let MtBuffers {
-            candidates,
-            round,
-            commits,
-            ..
-        } = &mut *buf;
-        let members =
-            |c: &Candidate, members: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
-                k.clear();
-                let mut sum = glam::Vec3::ZERO;
-                for id in (Candidate { members, ..*c }).ids() {
-                    k.push(id);
-                    sum += glam::Vec3::from(positions[id as usize]);
-                }
-                (sum / k.len() as f32).to_array()
-            };
-        // Colour by colour, storage order inside a colour. Clusters of one colour share no
-        // tetrahedron, hence no triangle: check them in parallel against the mesh as the earlier
-        // colours left it, recording what each accepted merge changes, then apply the records in
-        // storage order. A round gathers at most `COMMIT_ROUND` candidates of the colour, so the
-        // records stay small (applying a round cannot change what the next round of the same
-        // colour sees), and the candidates need no sorting.
-        for colour in 0..lattice::colour_count(lattice) as u8 {
-            let mut of_colour = candidates.iter().filter(|c| c.colour == colour);
-            loop {
-                round.clear();
-                round.extend(of_colour.by_ref().take(COMMIT_ROUND));
-                if round.is_empty() {
-                    break;
-                }
-                let group = &round[..];
-                let blocks = group.len().div_ceil(COMMIT_BLOCK);
-                if commits.len() < blocks {
-                    commits.resize_with(blocks, CommitBlock::default);
-                }
-                let positions = &mesh.positions;
-                let merge_ref = &*merge;
-                let keys = &keys;
-                let try_block = |b: &mut CommitBlock, cands: &[Candidate]| {
-                    b.clear();
-                    for c in cands {
-                        let try_island = |island: u16, b: &mut CommitBlock| -> bool {
-                            let centre = members(c, island, positions, &mut b.k);
-                            if !allowed(&b.k, keys) {
-                                return false;
-                            }
-                            let first_edit = b.edits.len();
-                            if check {
-                                let (scratch, edits) = (&mut b.scratch, &mut b.edits);
-                                if merge_ref
-                                    .check_and_record(scratch, positions, &b.k, centre, edits)
-                                    .is_err()
-                                {
-                                    return false;
-                                }
-                            } else {
-                                merge_ref.record_unchecked(&mut b.scratch, &b.k, &mut b.edits);
-                            }
-                            let first_member = b.members.len();
-                            b.members.extend_from_slice(&b.k);
-                            b.accepted.push(Accepted {
-                                members: first_member as u32..b.members.len() as u32,
-                                edits: first_edit as u32..b.edits.len() as u32,
-                                centre,
-                                reduced: island != c.members,
-                            });
-                            true
-                        };
-                        // Refused: try the cluster without one of its crossings, in bit order,
-                        // before giving up (keeps most of the merge where one crossing is the
-                        // trouble).
-                        let mut without_one = (0..14)
-                            .filter(|d| c.members.count_ones() > 2 && c.members & (1 << d) != 0)
-                            .map(|d| c.members & !(1 << d));
-                        if !(try_island(c.members, b) || without_one.any(|sub| try_island(sub, b)))
-                        {
-                            b.rejected += 1;
-                        }
-                    }
-                };
-                let step = std::time::Instant::now();
-                pool.install(|| {
-                    commits[..blocks]
-                        .par_iter_mut()
-                        .zip(group.par_chunks(COMMIT_BLOCK))
-                        .for_each(|(b, cands)| try_block(b, cands));
-                });
-                stats.t_cluster_check_s += step.elapsed().as_secs_f64();
-                let step = std::time::Instant::now();
-                for b in &commits[..blocks] {
-                    for a in &b.accepted {
-                        stats.discarded += merge.apply_recorded(
-                            &mut mesh.positions,
-                            &b.members[a.members.start as usize..a.members.end as usize],
-                            a.centre,
-                            &b.edits[a.edits.start as usize..a.edits.end as usize],
-                        );
-                        stats.clusters_committed += 1;
-                        stats.clusters_reduced += usize::from(a.reduced);
-                    }
-                    stats.clusters_rejected_check += b.rejected;
-                }
-                stats.t_cluster_apply_s += step.elapsed().as_secs_f64();
-            }
-        }
-        if buf.lean {
-            buf.candidates = Vec::new();
-            buf.round = Vec::new();
-            buf.commits = Vec::new();
-        }
-        if check {
-            let step = std::time::Instant::now();
-            // Lone crossings (the only nearby crossing of their point on that sheet) join the
-            // nearest neighbouring cluster vertex when the exact check allows it: the one step
-            // beyond the dissertation's rules, worth about 5% fewer triangles and rounder ones.
-            let mut near = Vec::new();
-            for x in 0..total as u32 {
-                if merge.rep(x) != x || merge.has_members(x) {
-                    continue;
-                }
-                merge.neighbours(x, &mut near);
-                let px = glam::Vec3::from(mesh.positions[x as usize]);
-                let target = near
-                    .iter()
-                    .copied()
-                    .filter(|&u| merge.has_members(u) && allowed(&[u, x], &keys))
-                    .min_by(|&a, &b| {
-                        let da = px.distance_squared(glam::Vec3::from(mesh.positions[a as usize]));
-                        let db = px.distance_squared(glam::Vec3::from(mesh.positions[b as usize]));
-                        da.total_cmp(&db).then(a.cmp(&b))
-                    });
-                if let Some(u) = target {
-                    let n = merge.member_count(u);
-                    let pu = glam::Vec3::from(mesh.positions[u as usize]);
-                    let centre = ((pu * n as f32 + px) / (n as f32 + 1.0)).to_array();
-                    if let Ok(dropped) = merge.merge(&mut mesh.positions, &[u, x], centre, true) {
-                        stats.discarded += dropped;
-                        stats.lone_absorbed += 1;
-                    }
-                }
-            }
-            stats.t_lone_s += step.elapsed().as_secs_f64();
-            let step = std::time::Instant::now();
-            let (slivers, dropped) = crate::collapse::collapse_slivers(
-                merge,
-                &mut mesh.positions,
-                SLIVER_AR,
-                tiled.then_some(&keys[..]),
-            );
-            stats.slivers_collapsed += slivers;
-            stats.discarded += dropped;
-            stats.t_slivers_s += step.elapsed().as_secs_f64();
-        }
-        let step = std::time::Instant::now();
-        if buf.lean {
-            // Only the triangles and their liveness are read from here on: the adjacency goes
-            // before the output indices are allocated.
-            merge.release_adjacency();
-        }
-        merge.finish(&mut mesh.positions, &mut mesh.indices);
-        if tiled {
-            crate::tiles::compact_keys(merge, &mut keys, merge.triangle_count());
-        }
-        if check && (near_points > 0 || tiled) {
-            // Surfaces through sample points leave crossings on top of each other where a
-            // cluster could not take them (near the box, or refused): weld those, under the same
-            // check, so no flat triangle is left inside the box.
-            weld_coincident(merge, mesh, settings, tiled.then_some(&keys[..]), stats);
-        }
-        stats.t_finish_s += step.elapsed().as_secs_f64();
-        stats.t_vertex_s += t.elapsed().as_secs_f64();
     }
     stats.clusters_rejected = stats.clusters_rejected_prefilter + stats.clusters_rejected_check;
 
@@ -1151,7 +1169,12 @@ pub fn extract(
         // Measured before they were released.
         lean_bytes
     } else {
-        buf.table_bytes() + if propose { merge.bytes() } else { 0 }
+        buf.table_bytes()
+            + if matches!(clustering, Clustering::Postprocessed | Clustering::Meshopt) {
+                merge.bytes()
+            } else {
+                0
+            }
     };
     if buf.lean {
         *merge = MergeBuffers::default();
@@ -1163,6 +1186,199 @@ pub fn extract(
         mesh.indices.shrink_to_fit();
     }
     Ok(())
+}
+
+/// The group tables of the proposals in `buf.candidates`: each crossing's group, each group's
+/// leader (lowest crossing id) and vertex position (the mean of its crossings). With `lones`,
+/// every crossing left out of the islands joins the group of a neighbouring island (one with a
+/// crossing on a triangle of this crossing) whose island centre is nearest (ties: the earlier
+/// group), at most [`crate::quotient::MAX_LONES`] per group (the lowest ids): a function of the
+/// 2-ring, like the islands. `keys` (tile rule) keeps every group inside one tile.
+fn build_groups(
+    buf: &mut MtBuffers,
+    layout: &Layout,
+    iso: f32,
+    lones: bool,
+    keys: Option<&[u64]>,
+    pool: &rayon::ThreadPool,
+) {
+    use crate::quotient::{Lone, MAX_LONES, NONE};
+    let crossings = buf.cpos.len();
+    let MtBuffers {
+        candidates,
+        cpos,
+        group_of,
+        centroid,
+        lone,
+        lone_start,
+        leader,
+        crossed,
+        ..
+    } = buf;
+    group_of.clear();
+    group_of.resize(crossings, NONE);
+    for (g, c) in candidates.iter().enumerate() {
+        for id in c.ids() {
+            group_of[id as usize] = g as u32;
+        }
+    }
+    let cpos = &*cpos;
+    let mean = |c: &Candidate, extra: &[Lone]| {
+        let mut sum = glam::Vec3::ZERO;
+        for id in c.ids().chain(extra.iter().map(|l| l.id)) {
+            sum += glam::Vec3::from(cpos[id as usize]);
+        }
+        (sum / (c.size() as usize + extra.len()) as f32).to_array()
+    };
+    pool.install(|| {
+        candidates
+            .par_iter()
+            .map(|c| mean(c, &[]))
+            .collect_into_vec(centroid)
+    });
+    lone.clear();
+    lone_start.clear();
+    lone_start.resize(candidates.len() + 1, 0);
+    if lones {
+        let (group_of_ref, centroid_ref, crossed) = (&*group_of, &*centroid, &*crossed);
+        let plane = layout.s.dims[0] * layout.s.dims[1];
+        let planes = layout.s.dims[2];
+        let v = &layout.s.values;
+        // Per storage plane, the lone crossings of its points and their groups.
+        let found: Vec<Vec<(u32, Lone)>> = pool.install(|| {
+            (0..planes)
+                .into_par_iter()
+                .map(|z| {
+                    let mut out = Vec::new();
+                    let mut r = crossed.rank_in(z, 0);
+                    for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
+                        let entry = crossed.points[r];
+                        r += 1;
+                        let slot = z * plane + local;
+                        let mut own = entry.owned;
+                        while own != 0 {
+                            let d = own.trailing_zeros() as u8;
+                            own &= own - 1;
+                            let x = entry.id(d);
+                            if group_of_ref[x as usize] != NONE {
+                                continue;
+                            }
+                            let p = layout.coords_of(slot);
+                            let regular = layout.is_regular(p);
+                            let px = glam::Vec3::from(cpos[x as usize]);
+                            let mut best: Option<(f32, u32)> = None;
+                            for tet in &layout.around[(p[0] & 1) as usize] {
+                                if tet.from_point & (1 << d) == 0
+                                    || !(regular || layout.has_tet(p, tet))
+                                {
+                                    continue;
+                                }
+                                let idx = tet.delta.map(|dd| (slot as isize + dd) as usize);
+                                let val = idx.map(|i| v[i]);
+                                let id = |o: usize, dd: u8| crossed.get(idx[o]).id(dd);
+                                let mut tris = [[0u32; 3]; 2];
+                                let n = tet_triangles(val, iso, &tet.dir, id, cpos, &mut tris);
+                                for t in tris[..n].iter().filter(|t| t.contains(&x)) {
+                                    for &y in t {
+                                        let h = group_of_ref[y as usize];
+                                        if h == NONE {
+                                            continue;
+                                        }
+                                        if let Some(keys) = keys {
+                                            if keys[x as usize] != keys[y as usize]
+                                                || keys[x as usize] == crate::tiles::NO_TILE
+                                            {
+                                                continue;
+                                            }
+                                        }
+                                        let c = glam::Vec3::from(centroid_ref[h as usize]);
+                                        let dist = px.distance_squared(c);
+                                        if best.is_none_or(|(bd, bh)| (dist, h) < (bd, bh)) {
+                                            best = Some((dist, h));
+                                        }
+                                    }
+                                }
+                            }
+                            if let Some((_, h)) = best {
+                                out.push((
+                                    h,
+                                    Lone {
+                                        id: x,
+                                        slot: slot as u32,
+                                        dir: d,
+                                    },
+                                ));
+                            }
+                        }
+                    });
+                    out
+                })
+                .collect()
+        });
+        let mut all: Vec<(u32, Lone)> = found.into_iter().flatten().collect();
+        all.sort_unstable_by_key(|&(h, l)| (h, l.id));
+        let mut taken = 0;
+        let mut last = NONE;
+        for (h, l) in all {
+            taken = if h == last { taken + 1 } else { 1 };
+            last = h;
+            if taken > MAX_LONES {
+                continue;
+            }
+            group_of[l.id as usize] = h;
+            lone.push(l);
+            lone_start[h as usize + 1] += 1;
+        }
+        for g in 0..candidates.len() {
+            lone_start[g + 1] += lone_start[g];
+        }
+    }
+    let (lone, lone_start) = (&*lone, &*lone_start);
+    leader.clear();
+    leader.extend(candidates.iter().enumerate().map(|(g, c)| {
+        let extra = &lone[lone_start[g] as usize..lone_start[g + 1] as usize];
+        extra.iter().map(|l| l.id).fold(c.leader(), u32::min)
+    }));
+    if lones {
+        pool.install(|| {
+            candidates
+                .par_iter()
+                .enumerate()
+                .map(|(g, c)| mean(c, &lone[lone_start[g] as usize..lone_start[g + 1] as usize]))
+                .collect_into_vec(centroid)
+        });
+    }
+}
+
+/// The output vertices: one per crossing outside the kept groups and one per kept group, in
+/// order of their lowest crossing id; `vertex_of` maps every crossing to its vertex.
+fn vertex_map(
+    q: &crate::quotient::Quotient,
+    active: &[u8],
+    vertex_of: &mut Vec<u32>,
+    positions: &mut Vec<[f32; 3]>,
+) {
+    use crate::quotient::NONE;
+    let n = q.cpos.len();
+    vertex_of.clear();
+    vertex_of.resize(n, 0);
+    positions.clear();
+    for x in 0..n {
+        let g = q.group_of[x];
+        if g != NONE && active[g as usize] != 0 {
+            let leader = q.leader[g as usize] as usize;
+            if leader == x {
+                vertex_of[x] = positions.len() as u32;
+                positions.push(q.centroid[g as usize]);
+            } else {
+                // The leader has the lowest id of the group: numbered already.
+                vertex_of[x] = vertex_of[leader];
+            }
+        } else {
+            vertex_of[x] = positions.len() as u32;
+            positions.push(q.cpos[x]);
+        }
+    }
 }
 
 /// Welds crossings closer than `WELD` grid spacings (crossings on top of each other where the
@@ -1194,9 +1410,7 @@ fn vertex_plane(
     inside_bits: &[u64],
     z: usize,
     iso: f32,
-    propose: bool,
-    pinch_rule: bool,
-    colour_shift: Offset,
+    propose: Option<Rules>,
     owned: &mut Vec<u32>,
     crossed_bits: &mut [u64],
 ) -> (PlaneCounts, Vec<Candidate>) {
@@ -1225,7 +1439,6 @@ fn vertex_plane(
         );
         // One point with at least one crossed edge: owned crossings, flags, proposals.
         let point = |sx: usize,
-                     p: Offset,
                      valid: u16,
                      owned: &mut Vec<u32>,
                      crossed_bits: &mut [u64],
@@ -1257,10 +1470,9 @@ fn vertex_plane(
             // candidates are joined.
             let first = counts.crossings as u32;
             counts.crossings += own.count_ones() as usize;
-            if propose && own.count_ones() >= 2 {
-                let colour = lattice::colour(l.lattice, add(p, colour_shift)) as u8;
+            if let Some(rules) = propose.filter(|_| own.count_ones() >= 2) {
                 counts.proposals.add(cluster::propose(
-                    l.t, first, colour, valid, own, crossed, pinch_rule, cands,
+                    l.t, first, i as u32, valid, own, crossed, rules, cands,
                 ));
             }
         };
@@ -1276,7 +1488,7 @@ fn vertex_plane(
                 return;
             }
             counts.edges += valid.count_ones() as usize;
-            point(sx, p, valid, owned, crossed_bits, counts, cands);
+            point(sx, valid, owned, crossed_bits, counts, cands);
         };
         // The points tested 64 at a time: the whole row where every neighbour slot of it is in
         // storage (the test may then let through a border point whose only difference is with a
@@ -1308,17 +1520,16 @@ fn vertex_plane(
                 while block != 0 {
                     let x = sx + block.trailing_zeros() as usize;
                     block &= block - 1;
-                    let p = l.coords(x, sy, z);
                     let valid = if x >= lo && x < hi {
                         FULL
                     } else {
-                        let (exists, valid) = l.border_info(p);
+                        let (exists, valid) = l.border_info(l.coords(x, sy, z));
                         if !exists {
                             continue;
                         }
                         valid
                     };
-                    point(x, p, valid, owned, crossed_bits, &mut counts, &mut cands);
+                    point(x, valid, owned, crossed_bits, &mut counts, &mut cands);
                 }
                 sx += len;
             }
@@ -1473,8 +1684,11 @@ fn count_layer(l: &Layout, k: usize, keep: Option<CellRange>, crossed: &CrossedI
     n
 }
 
-/// Geometry pass over one z-layer: writes its triangles into `out`, sized by [`count_layer`];
-/// returns the tetrahedra processed.
+/// Emission over one z-layer: writes its triangles into `out`, sized by [`count_layer`] (the
+/// triangles of plain MT); with `map` (crossing id to output vertex, clustering) the triangles
+/// are written with the clustered vertices and those that collapsed are left out. Returns the
+/// tetrahedra processed and the triangles written.
+#[allow(clippy::too_many_arguments)]
 fn geometry_layer(
     l: &Layout,
     k: usize,
@@ -1482,8 +1696,9 @@ fn geometry_layer(
     keep: Option<CellRange>,
     crossed: &CrossedIndex,
     positions: &[[f32; 3]],
+    map: Option<&[u32]>,
     out: &mut [u32],
-) -> usize {
+) -> (usize, usize) {
     let plane = l.s.dims[0] * l.s.dims[1];
     // The crossed points of the storage planes this layer reads, copied into a dense window (one
     // entry per slot) of this thread: a crossing's id is then one load away, where the rank
@@ -1501,7 +1716,18 @@ fn geometry_layer(
                 r += 1;
             });
         }
-        geometry_in_window(l, k, iso, keep, crossed, positions, &window[..], z0, out)
+        geometry_in_window(
+            l,
+            k,
+            iso,
+            keep,
+            crossed,
+            positions,
+            map,
+            &window[..],
+            z0,
+            out,
+        )
     })
 }
 
@@ -1521,10 +1747,11 @@ fn geometry_in_window(
     keep: Option<CellRange>,
     crossed: &CrossedIndex,
     positions: &[[f32; 3]],
+    map: Option<&[u32]>,
     window: &[CrossedPoint],
     z0: usize,
     out: &mut [u32],
-) -> usize {
+) -> (usize, usize) {
     let v = &l.s.values;
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
@@ -1532,49 +1759,33 @@ fn geometry_in_window(
     let mut tet = |anchor: usize, tpl: &TetTemplate| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
-        let case = (val[0] < iso) as usize
-            | ((val[1] < iso) as usize) << 1
-            | ((val[2] < iso) as usize) << 2
-            | ((val[3] < iso) as usize) << 3;
-        if case == 0 || case == 15 {
-            return;
-        }
-        processed += 1;
-        let cycle = &CASES[case];
-        let n = if cycle[3] == u8::MAX { 3 } else { 4 };
-        let mut ids = [0u32; 4];
-        for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
-            let (a, b) = TET_EDGES[e as usize];
-            let (o, d) = if owns(val[a], val[b], iso) {
-                (a, tpl.dir[a][b])
-            } else {
-                (b, tpl.dir[b][a])
-            };
-            // The window starts at slot 0 of plane z0.
+        let mut tris = [[0u32; 3]; 2];
+        // The window starts at slot 0 of plane z0.
+        let id = |o: usize, d: u8| {
             let entry = window[idx[o] - z0 * plane];
             debug_assert_eq!(entry, crossed.get(idx[o]));
-            *slot = entry.id(d);
-        }
-        if n == 3 {
-            out[w..w + 3].copy_from_slice(&ids[..3]);
-            w += 3;
-        } else {
-            // Split along the shorter diagonal, chosen by a table index rather than a branch
-            // (the choice is data-dependent and mispredicts half the time).
-            const SPLITS: [[usize; 6]; 2] = [[1, 2, 3, 1, 3, 0], [0, 1, 2, 0, 2, 3]];
-            let p = |i: u32| glam::Vec3::from(positions[i as usize]);
-            let short02 =
-                p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
-            let s = &SPLITS[usize::from(short02)];
-            out[w..w + 6].copy_from_slice(&[
-                ids[s[0] & 3],
-                ids[s[1] & 3],
-                ids[s[2] & 3],
-                ids[s[3] & 3],
-                ids[s[4] & 3],
-                ids[s[5] & 3],
-            ]);
-            w += 6;
+            entry.id(d)
+        };
+        let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
+        processed += usize::from(n > 0);
+        match map {
+            None => {
+                for t in &tris[..n] {
+                    out[w..w + 3].copy_from_slice(t);
+                    w += 3;
+                }
+            }
+            Some(map) => {
+                // Clustered: the vertices of the groups' quotient; a triangle with two corners
+                // in one group collapsed and is dropped.
+                for t in &tris[..n] {
+                    let q = t.map(|i| map[i as usize]);
+                    if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
+                        out[w..w + 3].copy_from_slice(&q);
+                        w += 3;
+                    }
+                }
+            }
         }
     };
     for_each_group(l, k, keep, crossed, |anchor, _, g| {
@@ -1586,12 +1797,11 @@ fn geometry_in_window(
             tet(anchor, tpl);
         }
     });
-    debug_assert_eq!(
-        w,
-        out.len(),
+    debug_assert!(
+        w == out.len() || (map.is_some() && w <= out.len()),
         "layer {k}: triangles counted and written differ"
     );
-    processed
+    (processed, w / 3)
 }
 
 #[cfg(test)]
@@ -1703,6 +1913,88 @@ mod tests {
             }
         }
         assert!(checked > 100, "only {checked} points own crossings");
+    }
+
+    #[test]
+    fn the_tetrahedra_around_the_points_give_exactly_the_emitted_triangles() {
+        // Every point sees 24 tetrahedra; over all points each tetrahedron of the extraction is
+        // seen from its 4 corners, and their triangles (the quotient test's view) are exactly
+        // the triangles the geometry pass writes, with the same orientation.
+        let field = rmt_fields::FnField(|p: glam::Vec3| {
+            (p.x * 5.3).sin() * (p.y * 3.9 + 0.2).cos() + (p.z * 4.7).sin() * 0.7 - 0.15
+        });
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("a pool of one thread");
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[3, 4, 5], [9, 8, 7]] {
+                let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
+                let l = Layout::new(&samples, lattice);
+                assert_eq!(l.around[0].len(), 24, "{lattice:?}");
+                assert_eq!(l.around[1].len(), 24, "{lattice:?}");
+                for tet in l.around.iter().flatten() {
+                    assert_eq!(crate::lattice::det(&tet.off).signum(), 1, "{lattice:?}");
+                    assert_eq!(tet.from_point.count_ones(), 3);
+                }
+                let canonical = |t: [u32; 3]| {
+                    let k = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
+                    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+                };
+                let mut seen = std::collections::HashMap::new();
+                let mut tets = 0;
+                let [dx, dy, dz] = samples.dims;
+                for z in 0..dz {
+                    for sy in 0..dy {
+                        for sx in 0..dx {
+                            let (p, exists) = l.point(sx, sy, z);
+                            if !exists {
+                                continue;
+                            }
+                            let slot = (z * dy + sy) * dx + sx;
+                            for tet in &l.around[(p[0] & 1) as usize] {
+                                if !l.has_tet(p, tet) {
+                                    continue;
+                                }
+                                tets += 1;
+                                let idx = tet.delta.map(|d| (slot as isize + d) as usize);
+                                let val = idx.map(|i| samples.values[i]);
+                                let id = |o: usize, d: u8| buf.crossed.get(idx[o]).id(d);
+                                let mut tris = [[0; 3]; 2];
+                                let n = tet_triangles(
+                                    val,
+                                    settings.iso,
+                                    &tet.dir,
+                                    id,
+                                    &mesh.positions,
+                                    &mut tris,
+                                );
+                                for t in &tris[..n] {
+                                    *seen.entry(canonical(*t)).or_insert(0) += 1;
+                                }
+                            }
+                        }
+                    }
+                }
+                let stats_tets = match lattice {
+                    Lattice::BodyCentred => {
+                        let [nx, ny, nz] = cells;
+                        4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1))
+                    }
+                    Lattice::Simple => 6 * cells.iter().product::<usize>(),
+                };
+                assert_eq!(tets, 4 * stats_tets, "{lattice:?} {cells:?}");
+                let emitted: std::collections::HashSet<[u32; 3]> = mesh
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| canonical([t[0], t[1], t[2]]))
+                    .collect();
+                assert_eq!(emitted.len() * 3, mesh.indices.len());
+                assert!(seen.values().all(|&c| c == 4), "{lattice:?} {cells:?}");
+                let seen: std::collections::HashSet<[u32; 3]> = seen.into_keys().collect();
+                assert_eq!(seen, emitted, "{lattice:?} {cells:?}");
+            }
+        }
     }
 
     #[test]
