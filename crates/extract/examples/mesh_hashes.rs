@@ -82,6 +82,7 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             st.clusters_proposed,
                             st.clusters_committed,
                             st.clusters_rejected,
+                            st.lone_absorbed,
                             st.repair_rounds,
                             st.collapses,
                             st.discarded,

@@ -87,8 +87,10 @@ pub(crate) struct Star {
     /// Bit i: triangle i has a member of the group.
     touching: u128,
     /// The tetrahedra: the point they are taken around (slot) and their index in its
-    /// [`Layout::around`] list; and their corner slots, sorted (to list each once).
+    /// [`Layout::around`] list; and (for those of lone crossings, from `lone_from` on) their
+    /// corner slots, sorted (to list each once).
     ntets: usize,
+    lone_from: usize,
     tets: [(u32, u8); MAX_TETS],
     keys: [[u32; 4]; MAX_TETS],
 }
@@ -101,6 +103,7 @@ impl Default for Star {
             src: [0; MAX_TRIS],
             touching: 0,
             ntets: 0,
+            lone_from: 0,
             tets: [(0, 0); MAX_TETS],
             keys: [[0; 4]; MAX_TETS],
         }
@@ -162,15 +165,26 @@ impl Quotient<'_> {
         s.n = 0;
         s.ntets = 0;
         s.touching = 0;
-        self.add_tets(gi, g.slot as usize, g.dirs, s);
+        self.add_tets(gi, g.slot as usize, g.dirs, None, s);
+        s.lone_from = s.ntets;
         for lone in self.lones_of(gi) {
-            self.add_tets(gi, lone.slot as usize, 1 << lone.dir, s);
+            let owner = Some((g.slot as usize, g.dirs));
+            self.add_tets(gi, lone.slot as usize, 1 << lone.dir, owner, s);
         }
     }
 
-    /// Adds to `s` the tetrahedra around the point at `slot` that hold one of its edges `dirs`
-    /// (those not listed yet), with their triangles.
-    fn add_tets(&self, gi: usize, slot: usize, dirs: u16, s: &mut Star) {
+    /// Adds to `s` the tetrahedra around the point at `slot` that hold one of its edges `dirs`,
+    /// with their triangles. For a lone crossing's edge, `owner` (the group's owner slot and
+    /// island edges) leaves out the tetrahedra listed already: those holding an island edge, and
+    /// those of an earlier lone crossing.
+    fn add_tets(
+        &self,
+        gi: usize,
+        slot: usize,
+        dirs: u16,
+        owner: Option<(usize, u16)>,
+        s: &mut Star,
+    ) {
         let p = self.l.coords_of(slot);
         let par = (p[0] & 1) as usize;
         let regular = self.l.is_regular(p);
@@ -180,12 +194,22 @@ impl Quotient<'_> {
                 continue;
             }
             let idx = tet.delta.map(|d| (slot as isize + d) as usize);
-            let mut key = idx.map(|i| i as u32);
-            key.sort_unstable();
-            if s.keys[..s.ntets].contains(&key) || s.ntets == MAX_TETS {
+            if let Some((os, od)) = owner {
+                if let Some(i) = idx.iter().position(|&x| x == os) {
+                    if (0..4).any(|j| j != i && od & (1 << tet.dir[i][j]) != 0) {
+                        continue;
+                    }
+                }
+                let mut key = idx.map(|i| i as u32);
+                key.sort_unstable();
+                if s.keys[s.lone_from..s.ntets].contains(&key) {
+                    continue;
+                }
+                s.keys[s.ntets] = key;
+            }
+            if s.ntets == MAX_TETS {
                 continue;
             }
-            s.keys[s.ntets] = key;
             s.tets[s.ntets] = (slot as u32, k as u8);
             let val = idx.map(|i| v[i]);
             let mut tris = [[0u32; 3]; 2];
