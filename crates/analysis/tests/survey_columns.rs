@@ -152,7 +152,7 @@ fn data_without_survey_columns_gives_the_same_tables_as_before() {
             "group_factors",
             "configuration_weights",
             "questions",
-            "strengths",
+            "bradley_terry",
             "summary"
         ]
     );
