@@ -66,7 +66,7 @@ fn is_sqlite(path: &std::path::Path) -> bool {
     std::fs::File::open(path)
         .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
         .is_ok()
-        && &magic == b"SQLite format 3\0"
+        && magic == *b"SQLite format 3\0"
 }
 
 /// Runs `analyse`.

@@ -332,7 +332,7 @@ fn read_questionnaire_key(
             }
         }
         let kind = kind_column
-            .map(|c| get(c))
+            .map(&get)
             .filter(|k| !k.is_empty())
             .unwrap_or_else(|| {
                 if left == right {
@@ -346,7 +346,7 @@ fn read_questionnaire_key(
             kind,
             left,
             right,
-            variable: variable_column.map(|c| get(c)).unwrap_or_default(),
+            variable: variable_column.map(&get).unwrap_or_default(),
         });
     }
     if questions.is_empty() {
