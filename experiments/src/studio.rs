@@ -187,8 +187,8 @@ fn all_object_parameters() -> Vec<&'static str> {
     let mut out: Vec<&'static str> = Vec::new();
     for name in ObjectKind::names() {
         if let Ok(kind) = name.parse::<ObjectKind>() {
-            for p in kind.accepted() {
-                if !out.contains(p) && !FILE_PARAMETERS.contains(p) {
+            for &p in kind.accepted() {
+                if !out.contains(&p) && !FILE_PARAMETERS.contains(&p) {
                     out.push(p);
                 }
             }
@@ -240,7 +240,7 @@ impl Backend for StudioBackend {
                     json!({
                         "name": k.name(),
                         "parameters": k.accepted().iter()
-                            .filter(|p| !FILE_PARAMETERS.contains(p))
+                            .filter(|p| !FILE_PARAMETERS.contains(*p))
                             .map(|p| describe(&command, p))
                             .collect::<Vec<_>>(),
                     })

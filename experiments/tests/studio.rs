@@ -114,6 +114,11 @@ fn a_mesh_request_returns_the_triangles_of_experiments_extract() {
                 "gradient",
             ],
         ),
+        // Marching cubes alone: clustering none, as on the command line.
+        (
+            "object=sphere&resolution=16&method=mc",
+            vec!["--object", "sphere", "--resolution", "16", "--method", "mc"],
+        ),
     ] {
         let reply = get(server.addr, &format!("/studio/api/mesh?{query}&ratios=1"), None).unwrap();
         let (header, parts) = decode(&reply);

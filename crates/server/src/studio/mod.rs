@@ -276,7 +276,10 @@ pub fn export_file(mesh: &Mesh, format: &str) -> Result<(Vec<u8>, &'static str),
             rmt_mesh::io::write_obj(&mut out, mesh).map_err(io)?;
             Ok((out, "text/plain; charset=utf-8"))
         }
-        "glb" => Err(ApiError::bad_request("TODO-GLB until main is merged")),
+        "glb" => Ok((
+            rmt_mesh::glb::to_glb(mesh).map_err(ApiError::internal)?,
+            "model/gltf-binary",
+        )),
         other => Err(ApiError::bad_request(format!(
             "unknown export format `{other}` (expected ply, obj or glb)"
         ))),
