@@ -114,11 +114,13 @@ impl StudioBackend {
                 || id == "object"
                 || all_object_parameters().contains(&id.as_str());
             if !allowed {
-                return Err(if command.get_arguments().any(|a| a.get_id() == id.as_str()) {
-                    format!("`{key}` cannot be set from the studio")
-                } else {
-                    format!("unknown parameter `{key}`")
-                });
+                return Err(
+                    if command.get_arguments().any(|a| a.get_id() == id.as_str()) {
+                        format!("`{key}` cannot be set from the studio")
+                    } else {
+                        format!("unknown parameter `{key}`")
+                    },
+                );
             }
             line.push(format!("--{}={value}", id.replace('_', "-")));
         }
@@ -386,8 +388,10 @@ mod tests {
         assert!(err(&[("resolution", "0")]).contains("resolution"));
         assert!(err(&[("lattice", "hex")]).contains("hex"));
         // The same message as `experiments extract --resolution 20000`.
-        let cli = cmd_extract::extraction(&ExtractLine::parse_from(["extract", "--resolution=20000"]).args)
-            .unwrap_err();
+        let cli = cmd_extract::extraction(
+            &ExtractLine::parse_from(["extract", "--resolution=20000"]).args,
+        )
+        .unwrap_err();
         assert_eq!(err(&[("resolution", "20000")]), format!("{cli:#}"));
         assert!(err(&[("out", "/tmp/x.ply")]).contains("cannot be set"));
         assert!(err(&[("mesh", "/etc/passwd")]).contains("cannot be set"));
@@ -408,7 +412,10 @@ mod tests {
         assert_eq!(names, PAGE_OPTIONS);
         assert_eq!(s["defaults"]["resolution"], "50");
         assert_eq!(s["defaults"]["object"], "sphere");
-        assert_eq!(s["objects"].as_array().unwrap().len(), ObjectKind::names().len());
+        assert_eq!(
+            s["objects"].as_array().unwrap().len(),
+            ObjectKind::names().len()
+        );
         let bunny = s["objects"]
             .as_array()
             .unwrap()

@@ -112,12 +112,20 @@ fn position_order_and_power_from_survey_columns() {
         assert_eq!(q.majority_share, 20.0 / 35.0, "{}", q.question);
         let needed = rmt_analysis::effects::participants_needed(20.0 / 35.0, 0.125, 0.05);
         assert_eq!(q.needed, needed);
-        assert!(needed.unwrap() > 300, "a small effect needs many participants");
+        assert!(
+            needed.unwrap() > 300,
+            "a small effect needs many participants"
+        );
         assert!(q.needed_holm.unwrap() > needed.unwrap());
         assert!((q.exact_power - 0.8).abs() < 0.05, "{}", q.exact_power);
     }
     let names: Vec<String> = all_tables(&a).into_iter().map(|t| t.name).collect();
-    for name in ["position_effect", "order_effect", "power", "power_questions"] {
+    for name in [
+        "position_effect",
+        "order_effect",
+        "power",
+        "power_questions",
+    ] {
         assert!(names.iter().any(|n| n == name), "{name} in {names:?}");
     }
 }
@@ -176,9 +184,24 @@ fn bad_survey_values_name_row_and_column() {
     let responses = survey_file(dir.path());
     let text = std::fs::read_to_string(&responses).unwrap();
     let cases = [
-        ("P00,Q1,L,1,0,9.0", "P00,Q1,L,1,maybe,9.0", "'swapped'", "0 or 1"),
-        ("P00,Q1,L,1,0,9.0", "P00,Q1,L,0,0,9.0", "'order'", "a position"),
-        ("P00,Q1,L,1,0,9.0", "P00,Q1,L,1,0,-2", "'seconds'", "non-negative"),
+        (
+            "P00,Q1,L,1,0,9.0",
+            "P00,Q1,L,1,maybe,9.0",
+            "'swapped'",
+            "0 or 1",
+        ),
+        (
+            "P00,Q1,L,1,0,9.0",
+            "P00,Q1,L,0,0,9.0",
+            "'order'",
+            "a position",
+        ),
+        (
+            "P00,Q1,L,1,0,9.0",
+            "P00,Q1,L,1,0,-2",
+            "'seconds'",
+            "non-negative",
+        ),
     ];
     for (from, to, column, expected) in cases {
         assert!(text.contains(from));
