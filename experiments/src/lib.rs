@@ -41,7 +41,7 @@ pub mod merge;
 pub mod objects;
 pub mod provenance;
 pub mod runner;
-pub mod studio;
 pub mod seeds;
 pub mod shard;
 pub mod slurm;
+pub mod studio;

@@ -114,11 +114,13 @@ impl StudioBackend {
                 || id == "object"
                 || all_object_parameters().contains(&id.as_str());
             if !allowed {
-                return Err(if command.get_arguments().any(|a| a.get_id() == id.as_str()) {
-                    format!("`{key}` cannot be set from the studio")
-                } else {
-                    format!("unknown parameter `{key}`")
-                });
+                return Err(
+                    if command.get_arguments().any(|a| a.get_id() == id.as_str()) {
+                        format!("`{key}` cannot be set from the studio")
+                    } else {
+                        format!("unknown parameter `{key}`")
+                    },
+                );
             }
             line.push(format!("--{}={value}", id.replace('_', "-")));
         }
@@ -187,8 +189,8 @@ fn all_object_parameters() -> Vec<&'static str> {
     let mut out: Vec<&'static str> = Vec::new();
     for name in ObjectKind::names() {
         if let Ok(kind) = name.parse::<ObjectKind>() {
-            for p in kind.accepted() {
-                if !out.contains(p) && !FILE_PARAMETERS.contains(p) {
+            for &p in kind.accepted() {
+                if !out.contains(&p) && !FILE_PARAMETERS.contains(&p) {
                     out.push(p);
                 }
             }
@@ -240,7 +242,7 @@ impl Backend for StudioBackend {
                     json!({
                         "name": k.name(),
                         "parameters": k.accepted().iter()
-                            .filter(|p| !FILE_PARAMETERS.contains(p))
+                            .filter(|p| !FILE_PARAMETERS.contains(*p))
                             .map(|p| describe(&command, p))
                             .collect::<Vec<_>>(),
                     })
@@ -386,8 +388,10 @@ mod tests {
         assert!(err(&[("resolution", "0")]).contains("resolution"));
         assert!(err(&[("lattice", "hex")]).contains("hex"));
         // The same message as `experiments extract --resolution 20000`.
-        let cli = cmd_extract::extraction(&ExtractLine::parse_from(["extract", "--resolution=20000"]).args)
-            .unwrap_err();
+        let cli = cmd_extract::extraction(
+            &ExtractLine::parse_from(["extract", "--resolution=20000"]).args,
+        )
+        .unwrap_err();
         assert_eq!(err(&[("resolution", "20000")]), format!("{cli:#}"));
         assert!(err(&[("out", "/tmp/x.ply")]).contains("cannot be set"));
         assert!(err(&[("mesh", "/etc/passwd")]).contains("cannot be set"));
@@ -408,7 +412,10 @@ mod tests {
         assert_eq!(names, PAGE_OPTIONS);
         assert_eq!(s["defaults"]["resolution"], "50");
         assert_eq!(s["defaults"]["object"], "sphere");
-        assert_eq!(s["objects"].as_array().unwrap().len(), ObjectKind::names().len());
+        assert_eq!(
+            s["objects"].as_array().unwrap().len(),
+            ObjectKind::names().len()
+        );
         let bunny = s["objects"]
             .as_array()
             .unwrap()

@@ -67,7 +67,10 @@ fn page_assets_and_schema_are_served() {
         assert!(r.text().contains(needle), "{file} lacks {needle}");
         assert!(r.header("content-type").unwrap().starts_with("text/"));
     }
-    assert_eq!(get(a, "/studio/assets/secret.rs", None).unwrap().status, 404);
+    assert_eq!(
+        get(a, "/studio/assets/secret.rs", None).unwrap().status,
+        404
+    );
     assert_eq!(get(a, "/", None).unwrap().status, 307);
     assert_eq!(get(a, "/studio", None).unwrap().status, 308);
     let schema = get(a, "/studio/api/schema", None).unwrap().json();
@@ -114,8 +117,18 @@ fn a_mesh_request_returns_the_triangles_of_experiments_extract() {
                 "gradient",
             ],
         ),
+        // Marching cubes alone: clustering none, as on the command line.
+        (
+            "object=sphere&resolution=16&method=mc",
+            vec!["--object", "sphere", "--resolution", "16", "--method", "mc"],
+        ),
     ] {
-        let reply = get(server.addr, &format!("/studio/api/mesh?{query}&ratios=1"), None).unwrap();
+        let reply = get(
+            server.addr,
+            &format!("/studio/api/mesh?{query}&ratios=1"),
+            None,
+        )
+        .unwrap();
         let (header, parts) = decode(&reply);
         assert_eq!(parts.len(), 1);
         let part = &parts[0];
@@ -159,7 +172,12 @@ fn exports_are_files_of_the_shown_mesh() {
     let shown = &parts[0].mesh;
     let dir = tempfile::tempdir().unwrap();
     for format in ["ply", "obj", "glb"] {
-        let r = get(server.addr, &format!("/studio/api/export?format={format}&{q}"), None).unwrap();
+        let r = get(
+            server.addr,
+            &format!("/studio/api/export?format={format}&{q}"),
+            None,
+        )
+        .unwrap();
         assert_eq!(r.status, 200, "{format}: {}", r.text());
         assert!(r
             .header("content-disposition")
@@ -171,7 +189,12 @@ fn exports_are_files_of_the_shown_mesh() {
         assert_eq!(back.triangle_count(), shown.triangle_count(), "{format}");
         assert_eq!(back.indices, shown.indices, "{format}");
     }
-    let bad = get(server.addr, &format!("/studio/api/export?format=stl&{q}"), None).unwrap();
+    let bad = get(
+        server.addr,
+        &format!("/studio/api/export?format=stl&{q}"),
+        None,
+    )
+    .unwrap();
     assert!(error_of(&bad, 400).contains("stl"));
 }
 
@@ -268,21 +291,36 @@ fn a_brush_stroke_remeshes_and_sends_only_the_chunks_it_should_and_undo_redo_res
     }
     assert_ne!(chunks[0].positions, initial[0].positions);
     // What the page holds now equals the server's whole sculpted terrain (its export).
-    let exported = get(a, &format!("/studio/api/sculpt/{id}/export?format=ply"), None).unwrap();
+    let exported = get(
+        a,
+        &format!("/studio/api/sculpt/{id}/export?format=ply"),
+        None,
+    )
+    .unwrap();
     assert_eq!(exported.status, 200);
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("t.ply");
     std::fs::write(&path, &exported.body).unwrap();
     let server_mesh = rmt_mesh::io::read_mesh(&path).unwrap();
-    assert_eq!(server_mesh.triangle_count(), rmt_terrain::weld(chunks.iter()).triangle_count());
-    assert_eq!(h["triangles"].as_u64().unwrap() as usize, chunks.iter().map(Mesh::triangle_count).sum::<usize>());
+    assert_eq!(
+        server_mesh.triangle_count(),
+        rmt_terrain::weld(chunks.iter()).triangle_count()
+    );
+    assert_eq!(
+        h["triangles"].as_u64().unwrap() as usize,
+        chunks.iter().map(Mesh::triangle_count).sum::<usize>()
+    );
 
     // A stroke on the seam of four chunks changes those four.
     let body = format!(
         r#"{{"centre": [-2.0, {}, -2.0], "mode": "subtract", "radius_cells": 2, "strength": 3}}"#,
         ground(&chunks, -2.0, -2.0)
     );
-    let (_, parts) = decode(&post(a, &format!("/studio/api/sculpt/{id}/brush"), Some(&body)));
+    let (_, parts) = decode(&post(
+        a,
+        &format!("/studio/api/sculpt/{id}/brush"),
+        Some(&body),
+    ));
     let mut sent: Vec<u32> = parts.iter().map(|p| p.id).collect();
     sent.sort();
     assert_eq!(sent, vec![0, 1, 4, 5]);
@@ -318,15 +356,25 @@ fn a_brush_stroke_remeshes_and_sends_only_the_chunks_it_should_and_undo_redo_res
     assert_eq!(h["redo"], 1);
 
     // A new stroke clears the redo history.
-    let (h, _) = decode(&post(a, &format!("/studio/api/sculpt/{id}/brush"), Some(&body)));
+    let (h, _) = decode(&post(
+        a,
+        &format!("/studio/api/sculpt/{id}/brush"),
+        Some(&body),
+    ));
     assert_eq!(h["redo"], 0);
 
     // Bad strokes: 400, the world untouched.
     for (body, needle) in [
         (r#"{"centre": [0, 0, 0], "mode": "smear"}"#, "smear"),
-        (r#"{"centre": [0, 0, 0], "mode": "add", "radius_cells": 1000}"#, "radius"),
+        (
+            r#"{"centre": [0, 0, 0], "mode": "add", "radius_cells": 1000}"#,
+            "radius",
+        ),
         (r#"{"centre": [0, 0], "mode": "add"}"#, "JSON"),
-        (r#"{"centre": [0, 0, 0], "mode": "add", "colour": 1}"#, "colour"),
+        (
+            r#"{"centre": [0, 0, 0], "mode": "add", "colour": 1}"#,
+            "colour",
+        ),
         ("not json", "JSON"),
     ] {
         let r = post(a, &format!("/studio/api/sculpt/{id}/brush"), Some(body));

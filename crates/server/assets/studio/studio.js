@@ -253,12 +253,16 @@ function field(container, spec, value) {
   let input;
   if (spec.choices) {
     input = document.createElement('select');
-    for (const c of spec.choices) {
+    // No default on the command line (e.g. clustering: integrated, or none for marching
+    // cubes): an empty choice leaves the option out, as on the command line.
+    const choices = spec.default === null || spec.default === undefined ? ['', ...spec.choices] : spec.choices;
+    for (const c of choices) {
       const o = document.createElement('option');
-      o.value = o.textContent = c;
+      o.value = c;
+      o.textContent = c === '' ? '(default)' : c;
       input.appendChild(o);
     }
-    input.value = value ?? spec.default ?? spec.choices[0];
+    input.value = value ?? spec.default ?? '';
   } else {
     input = document.createElement('input');
     input.type = 'text';

@@ -120,7 +120,10 @@ fn orbit_controls() -> &'static [u8] {
 pub fn router(studio: Arc<Studio>) -> Router {
     Router::new()
         .route("/studio", get(|| async { Redirect::permanent("/studio/") }))
-        .route("/studio/", get(|| async { asset("text/html; charset=utf-8", INDEX_HTML) }))
+        .route(
+            "/studio/",
+            get(|| async { asset("text/html; charset=utf-8", INDEX_HTML) }),
+        )
         .route("/studio/assets/{file}", get(studio_asset))
         .route("/studio/api/schema", get(schema))
         .route("/studio/api/mesh", get(mesh))
@@ -243,16 +246,31 @@ async fn mesh(State(studio): State<Arc<Studio>>, RawQuery(q): RawQuery) -> Respo
         let ratios = match take(&mut params, "ratios").as_deref() {
             None | Some("0") => false,
             Some("1") => true,
-            Some(other) => return Err(ApiError::bad_request(format!("ratios must be 0 or 1, got `{other}`"))),
+            Some(other) => {
+                return Err(ApiError::bad_request(format!(
+                    "ratios must be 0 or 1, got `{other}`"
+                )))
+            }
         };
         blocking(move || {
             let start = std::time::Instant::now();
             let Extracted { mesh, mut summary } = extract(&studio, &params)?;
-            let ratios = if ratios { wire::radius_ratios(&mesh) } else { Vec::new() };
+            let ratios = if ratios {
+                wire::radius_ratios(&mesh)
+            } else {
+                Vec::new()
+            };
             if let Value::Object(m) = &mut summary {
-                m.insert("server_ms".into(), json!(start.elapsed().as_secs_f64() * 1e3));
+                m.insert(
+                    "server_ms".into(),
+                    json!(start.elapsed().as_secs_f64() * 1e3),
+                );
             }
-            let parts = [Part { id: 0, mesh, ratios }];
+            let parts = [Part {
+                id: 0,
+                mesh,
+                ratios,
+            }];
             Ok(wire::encode(&summary, &parts))
         })
         .await
@@ -276,7 +294,10 @@ pub fn export_file(mesh: &Mesh, format: &str) -> Result<(Vec<u8>, &'static str),
             rmt_mesh::io::write_obj(&mut out, mesh).map_err(io)?;
             Ok((out, "text/plain; charset=utf-8"))
         }
-        "glb" => Err(ApiError::bad_request("TODO-GLB until main is merged")),
+        "glb" => Ok((
+            rmt_mesh::glb::to_glb(mesh).map_err(ApiError::internal)?,
+            "model/gltf-binary",
+        )),
         other => Err(ApiError::bad_request(format!(
             "unknown export format `{other}` (expected ply, obj or glb)"
         ))),
@@ -311,7 +332,10 @@ async fn export(State(studio): State<Arc<Studio>>, RawQuery(q): RawQuery) -> Res
         blocking(move || {
             let Extracted { mesh, summary } = extract(&studio, &params)?;
             let (bytes, ct) = export_file(&mesh, &format)?;
-            let object = summary.get("object").and_then(Value::as_str).unwrap_or("mesh");
+            let object = summary
+                .get("object")
+                .and_then(Value::as_str)
+                .unwrap_or("mesh");
             Ok(file_reply(bytes, ct, &format!("{object}.{format}")))
         })
         .await
@@ -358,7 +382,10 @@ async fn sculpt_new(State(studio): State<Arc<Studio>>, RawQuery(q): RawQuery) ->
             let id = random_token().map_err(ApiError::internal)?;
             let mut header = sculpt_header(&id, &session, None);
             if let Value::Object(m) = &mut header {
-                m.insert("server_ms".into(), json!(start.elapsed().as_secs_f64() * 1e3));
+                m.insert(
+                    "server_ms".into(),
+                    json!(start.elapsed().as_secs_f64() * 1e3),
+                );
             }
             let bytes = wire::encode(&header, &session.all_parts());
             studio
@@ -387,9 +414,9 @@ async fn sculpt_edit(
 ) -> Response {
     blocking(move || {
         let mut sessions = studio.sessions.lock().unwrap_or_else(|e| e.into_inner());
-        let session = sessions
-            .get_mut(&id)
-            .ok_or_else(|| ApiError::not_found("no such sculpt session (it may have expired); start a new one"))?;
+        let session = sessions.get_mut(&id).ok_or_else(|| {
+            ApiError::not_found("no such sculpt session (it may have expired); start a new one")
+        })?;
         let outcome = match (&brush, edit) {
             (Some(b), _) => session.stroke(b).map_err(ApiError::bad_request)?,
             (None, Edit::Undo) => session
@@ -400,7 +427,10 @@ async fn sculpt_edit(
                 .map_err(|m| ApiError::new(StatusCode::CONFLICT, m))?,
         };
         let header = sculpt_header(&id, session, Some(&outcome));
-        Ok(binary_reply(StatusCode::OK, wire::encode(&header, &outcome.parts)))
+        Ok(binary_reply(
+            StatusCode::OK,
+            wire::encode(&header, &outcome.parts),
+        ))
     })
     .await
     .unwrap_or_else(IntoResponse::into_response)
@@ -434,7 +464,9 @@ async fn sculpt_export(
         let mut params = parse_query(q.as_deref())?;
         let format = export_format(&mut params)?;
         if let Some((k, _)) = params.first() {
-            return Err(ApiError::bad_request(format!("unknown parameter `{k}` (expected format)")));
+            return Err(ApiError::bad_request(format!(
+                "unknown parameter `{k}` (expected format)"
+            )));
         }
         blocking(move || {
             let mesh = {
@@ -458,7 +490,10 @@ mod tests {
 
     #[test]
     fn query_strings_decode_and_bad_escapes_are_errors() {
-        let p = parse_query(Some("object=gyroid&iso=-0.1&bounds=-1%2C-1%2C-1%2C1%2C1%2C1&a+b=c")).unwrap();
+        let p = parse_query(Some(
+            "object=gyroid&iso=-0.1&bounds=-1%2C-1%2C-1%2C1%2C1%2C1&a+b=c",
+        ))
+        .unwrap();
         assert_eq!(p[0], ("object".into(), "gyroid".into()));
         assert_eq!(p[1].1, "-0.1");
         assert_eq!(p[2].1, "-1,-1,-1,1,1,1");

@@ -45,7 +45,10 @@ impl BrushRequest {
     /// strokes ([`StrokeParams::for_cells`]); an error message for bad values.
     pub fn brush(&self, h: f32) -> Result<(Brush, f32), String> {
         if !self.centre.iter().all(|c| c.is_finite()) {
-            return Err(format!("brush centre must be finite, got {:?}", self.centre));
+            return Err(format!(
+                "brush centre must be finite, got {:?}",
+                self.centre
+            ));
         }
         if !(self.radius_cells.is_finite() && (0.5..=32.0).contains(&self.radius_cells)) {
             return Err(format!(

@@ -118,9 +118,12 @@ pub fn decode(bytes: &[u8]) -> Result<(serde_json::Value, Vec<Part>), WireError>
     let bad = |m: String| WireError::Malformed(m);
     let mut at = 0usize;
     let word = |at: &mut usize| -> Result<u32, WireError> {
-        let b = bytes
-            .get(*at..*at + 4)
-            .ok_or_else(|| bad(format!("ends at byte {} inside a 4-byte field", bytes.len())))?;
+        let b = bytes.get(*at..*at + 4).ok_or_else(|| {
+            bad(format!(
+                "ends at byte {} inside a 4-byte field",
+                bytes.len()
+            ))
+        })?;
         *at += 4;
         Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     };
@@ -222,7 +225,12 @@ mod tests {
 
     fn tetra() -> Mesh {
         let mut m = Mesh::from_triangles(
-            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
             vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
         );
         m.compute_area_weighted_normals();
@@ -276,11 +284,14 @@ mod tests {
 
     #[test]
     fn truncated_or_foreign_bytes_are_errors_not_panics() {
-        let bytes = encode(&serde_json::json!({}), &[Part {
-            id: 0,
-            mesh: tetra(),
-            ratios: vec![],
-        }]);
+        let bytes = encode(
+            &serde_json::json!({}),
+            &[Part {
+                id: 0,
+                mesh: tetra(),
+                ratios: vec![],
+            }],
+        );
         for cut in [0, 3, 8, 13, bytes.len() - 1] {
             assert!(decode(&bytes[..cut]).is_err(), "cut at {cut}");
         }
@@ -288,6 +299,9 @@ mod tests {
         let mut bad_index = bytes.clone();
         let n = bad_index.len();
         bad_index[n - 4..].copy_from_slice(&100u32.to_le_bytes());
-        assert!(decode(&bad_index).unwrap_err().to_string().contains("index"));
+        assert!(decode(&bad_index)
+            .unwrap_err()
+            .to_string()
+            .contains("index"));
     }
 }
