@@ -254,7 +254,7 @@ impl Study {
             "survey swaps",
         )
         .shuffle(&mut pattern);
-        let second_of_pair = seq % 2 == 0;
+        let second_of_pair = seq.is_multiple_of(2);
         let mut swapped = vec![false; n];
         for (&q, &s) in real.iter().zip(&pattern) {
             swapped[q] = s != second_of_pair;

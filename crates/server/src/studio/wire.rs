@@ -211,7 +211,9 @@ pub fn radius_ratios(mesh: &Mesh) -> Vec<f32> {
             let area = 0.5 * e0.cross(-e2).length();
             let s = 0.5 * (a + b + c);
             let lmax = a.max(b).max(c);
-            if !(area > rmt_mesh::quality::ZERO_AREA_REL_TOL * lmax * lmax) {
+            if area.partial_cmp(&(rmt_mesh::quality::ZERO_AREA_REL_TOL * lmax * lmax))
+                != Some(std::cmp::Ordering::Greater)
+            {
                 return 0.0;
             }
             (a * b * c * s / (8.0 * area * area)) as f32
