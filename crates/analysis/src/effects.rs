@@ -219,7 +219,7 @@ pub fn normal_quantile(p: f64) -> f64 {
 /// Participants needed for a two-sided sign test at `alpha` with power [`TARGET_POWER`], when
 /// the majority side takes `p` of decided answers and `t` of answers are ties.
 pub fn participants_needed(p: f64, t: f64, alpha: f64) -> Option<u64> {
-    if !(p > 0.5 && p <= 1.0) || !(0.0..1.0).contains(&t) {
+    if !(p > 0.5 && p <= 1.0 && (0.0..1.0).contains(&t)) {
         return None;
     }
     let za = normal_quantile(1.0 - alpha / 2.0);
