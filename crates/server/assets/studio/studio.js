@@ -164,10 +164,12 @@ function shading() { return document.querySelector('input[name=shading]:checked'
 function colourByRatio() { return $('colour-ratio').checked; }
 
 const COLOUR = [new THREE.Color(0x9fb3d1), new THREE.Color(0xd1a98f)];
+function blindCompare() { return studio.mode === 'compare' && $('blind').checked; }
 function surfaceMaterial(side, useVertexColours) {
   const mode = shading();
   return new THREE.MeshStandardMaterial({
-    color: useVertexColours ? 0xffffff : COLOUR[side] || COLOUR[0],
+    // Blind compare paints both sides alike: a colour per configuration would name the sides.
+    color: useVertexColours ? 0xffffff : (blindCompare() ? COLOUR[0] : COLOUR[side] || COLOUR[0]),
     vertexColors: useVertexColours,
     flatShading: mode !== 'smooth',
     roughness: 0.75,
@@ -577,35 +579,6 @@ function setMode(mode) {
 }
 function lastSculptHeader() { return sculptHeaderCache || { chunk_count: 0, chunk_counts: [0, 0, 0], triangles: studio.sculptTriangles, undo: 0, redo: 0 }; }
 
-document.querySelectorAll('#modes button').forEach((b) => b.classList.toggle('on', b.dataset.mode === mode));
-  $('configs').hidden = mode === 'sculpt';
-  $('sculpt-panel').hidden = mode !== 'sculpt';
-  $('config-b').hidden = mode !== 'compare';
-  $('overlay-b').hidden = mode !== 'compare';
-  $('divider').hidden = mode !== 'compare';
-  $('colour-ratio').disabled = mode === 'sculpt';
-  controls.mouseButtons = mode === 'sculpt'
-    ? { LEFT: null, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.ROTATE }
-    : { LEFT: THREE.MOUSE.ROTATE, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.PAN };
-  $('overlay-a').textContent = '';
-  $('overlay-b').textContent = '';
-  if (mode === 'sculpt') {
-    if (!session) newTerrain();
-    else { frame(new THREE.Box3().setFromObject(sculptRoot)); sculptReadout({ ...lastSculptHeader() }, null); }
-  } else {
-    if (shown[0]) frame(shown[0].children[0].geometry.boundingBox);
-    redrawOverlays();
-    if (mode === 'compare' && !shown[1]) updateSide(1, false);
-  }
-  updateExportLinks();
-  requestRender();
-}
-let sculptHeaderCache = null;
-function lastSculptHeader() { return sculptHeaderCache || { chunk_count: 0, chunk_counts: [0, 0, 0], triangles: studio.sculptTriangles, undo: 0, redo: 0 }; }
-const origReadout = sculptReadout;
-// Remember the last header so returning to sculpt mode redraws the readout.
-sculptReadout = (h, ms) => { sculptHeaderCache = h; origReadout(h, ms); }; // eslint-disable-line no-func-assign
-
 document.querySelectorAll('#modes button').forEach((b) => b.addEventListener('click', () => setMode(b.dataset.mode)));
 
 function rebuildMeshes() {
@@ -642,7 +615,7 @@ $('blind').addEventListener('change', () => {
   $('reveal').hidden = !on;
   $('overlay-a').textContent = ''; $('overlay-b').textContent = '';
   redrawOverlays();
-  requestRender();
+  rebuildMeshes();
 });
 $('reveal').addEventListener('click', () => {
   $('status').textContent = studio.swapped ? 'left is B, right is A' : 'left is A, right is B';

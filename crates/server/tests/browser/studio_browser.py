@@ -99,6 +99,23 @@ def share_not_background(png, box):
     return differ / max(total, 1)
 
 
+def mean_colour(png, box):
+    """Mean RGB of the pixels inside box that differ clearly from the background (the mesh)."""
+    width, height, bpp, rows = png_pixels(png)
+    x0, y0, x1, y1 = [int(v) for v in box]
+    x1, y1 = min(x1, width), min(y1, height)
+    total, acc = 0, [0, 0, 0]
+    for y in range(y0, y1, 2):
+        row = rows[y]
+        for x in range(x0, x1, 2):
+            px = row[bpp * x], row[bpp * x + 1], row[bpp * x + 2]
+            if sum(abs(px[i] - BACKGROUND[i]) for i in range(3)) > 30:
+                total += 1
+                for i in range(3):
+                    acc[i] += px[i]
+    return [a / max(total, 1) for a in acc]
+
+
 def check_glb(data, triangles):
     """glTF 2.0 binary structure: returns (vertices, triangles)."""
     magic, version, length = struct.unpack("<III", data[:12])
@@ -275,13 +292,26 @@ def main():
         wait.until(lambda d: state("busy") == 0)
 
         # Compare mode, blind: two meshes, labels hidden.
+        # Outside blind mode the two configurations have their own colours; in blind mode both
+        # sides must look alike but for the meshes (a colour per configuration would name them).
         driver.find_element(By.CSS_SELECTOR, "#modes button[data-mode=compare]").click()
         wait.until(lambda d: state("triangles[1]") and state("busy") == 0)
+        time.sleep(0.5)
+        box = canvas_box()
+        mid = (box[0] + box[2]) / 2
+        png = shot("studio-compare.png")
+        seen = [mean_colour(png, (box[0], box[1], mid, box[3])), mean_colour(png, (mid, box[1], box[2], box[3]))]
+        labelled_gap = sum(abs(a - b) for a, b in zip(*seen))
         driver.find_element(By.ID, "blind").click()
         time.sleep(0.5)
         png = shot("studio-compare-blind.png")
-        box = canvas_box()
-        mid = (box[0] + box[2]) / 2
+        seen = [mean_colour(png, (box[0], box[1], mid, box[3])), mean_colour(png, (mid, box[1], box[2], box[3]))]
+        blind_gap = sum(abs(a - b) for a, b in zip(*seen))
+        result["compare_colour_gap"] = {"labelled": round(labelled_gap, 1), "blind": round(blind_gap, 1)}
+        if labelled_gap < 30:
+            fail(f"compare mode: the two configurations are not told apart by colour ({labelled_gap:.1f})")
+        if blind_gap > 12:
+            fail(f"blind mode: the sides differ in colour ({blind_gap:.1f}), which names them")
         left = share_not_background(png, (box[0], box[1], mid, box[3]))
         right = share_not_background(png, (mid, box[1], box[2], box[3]))
         result["compare_shares"] = [round(left, 3), round(right, 3)]
