@@ -241,6 +241,20 @@ def main():
             fail(f"canvas looks blank: only {share:.1%} of its pixels differ from the background")
         triangles_integrated = state("triangles[0]")
 
+        # A bad parameter shows the command line's message in the page, and the mesh stays.
+        shown_before = state("meshes")
+        set_field("config-a", "resolution", "100000")
+        wait.until(lambda d: state("error") and state("busy") == 0)
+        message = driver.find_element(By.ID, "error").text
+        result["error_message"] = message
+        if "resolution" not in message and "too large" not in message:
+            fail(f"the error shown does not name the parameter: {message!r}")
+        if state("meshes") != shown_before:
+            fail("a refused request replaced the mesh")
+        changed_mesh(lambda: set_field("config-a", "resolution", "64"))
+        if state("error"):
+            fail(f"the error stayed after a good request: {state('error')}")
+
         # Clustering changes the triangle counter.
         changed_mesh(lambda: set_field("config-a", "clustering", "none"))
         triangles_none = state("triangles[0]")
