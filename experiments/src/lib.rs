@@ -45,3 +45,4 @@ pub mod seeds;
 pub mod shard;
 pub mod slurm;
 pub mod studio;
+pub mod topology;

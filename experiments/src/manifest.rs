@@ -41,9 +41,10 @@
 //! resolution = [16, 32, 64]
 //! collapse_threshold = [0.3, 0.5]
 //!
-//! seeds = { from = 1, count = 200 }   # seed study: every configuration of a noise object
-//!                           # (asteroid, terrain, caves) once per seed, ids `<id>_s<seed>`;
-//!                           # `seeds.csv` then gives each configuration's distribution over seeds
+//! seeds = { from = 1, count = 200 }   # seed study: every configuration of a seeded object
+//!                           # (asteroid, terrain, caves, random) once per seed, ids
+//!                           # `<id>_s<seed>`; `seeds.csv` then gives each configuration's
+//!                           # distribution over seeds, `topology.csv` its topology failures
 //!
 //! workload = "edit"         # instead of repeated extractions: a chunked terrain session
 //! [edit]                    # (see `crate::edit`; every key optional)
@@ -833,7 +834,8 @@ impl Manifest {
             {
                 return Err(invalid(
                     "seeds",
-                    "no configuration uses a seeded object (asteroid, terrain, caves)".into(),
+                    "no configuration uses a seeded object (asteroid, terrain, caves, random)"
+                        .into(),
                 ));
             }
         }

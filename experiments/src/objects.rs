@@ -13,6 +13,7 @@
 //! | `bunny` | `bs` | `mesh` (`data/bunny.obj`), `margin` (0.05 of the box per side), `band` (2 grid spacings) |
 //! | `terrain` | `ts` | Svoboda's height field: `seed` (11), `octaves` (5), `frequency` (1.0), `amplitude` (0.45), `base` (0) |
 //! | `caves` | `cs` | 3D noise ground with tunnels: `seed` (5), `octaves` (4), `frequency` (1.2), `amplitude` (0.5), `base` (0), `cave_frequency` (1.5), `cave_radius` (0.18), `cave_ceiling` (0.2) |
+//! | `random` | `rf` | a random field of the property tests' families in the largest cube inside the box (blobs, waves, thin shells, thin tubes; a quarter quantised): `seed` (7); for topology sweeps |
 //!
 //! The code is the first part of a configuration id (`ss_bu`, `as_bi`, `bs_sp`), reproducing the
 //! dissertation's names for sphere, asteroid and bunny (`o` for the ring-shaped torus). Seeds not
@@ -28,8 +29,8 @@ use std::str::FromStr;
 
 use glam::Vec3;
 use rmt_fields::{
-    Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, MeshSdf, ScalarField, Sphere,
-    SvobodaParams, SvobodaTerrain, Torus,
+    Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, MeshSdf, RandomField, ScalarField,
+    Sphere, SvobodaParams, SvobodaTerrain, Torus,
 };
 use serde::{Deserialize, Serialize};
 
@@ -99,11 +100,14 @@ pub enum ObjectKind {
     Terrain,
     /// 3D fractal-noise ground with overhangs and tunnels.
     Caves,
+    /// A random test field of the property tests' families (blobs, waves, thin shells, thin
+    /// tubes, sometimes quantised), drawn from `seed`: the object of topology sweeps.
+    Random,
 }
 
 impl ObjectKind {
     /// Every kind, in documentation order.
-    pub const ALL: [ObjectKind; 7] = [
+    pub const ALL: [ObjectKind; 8] = [
         ObjectKind::Sphere,
         ObjectKind::Asteroid,
         ObjectKind::Gyroid,
@@ -111,6 +115,7 @@ impl ObjectKind {
         ObjectKind::Bunny,
         ObjectKind::Terrain,
         ObjectKind::Caves,
+        ObjectKind::Random,
     ];
 
     /// The name used on the command line and in manifests.
@@ -123,6 +128,7 @@ impl ObjectKind {
             ObjectKind::Bunny => "bunny",
             ObjectKind::Terrain => "terrain",
             ObjectKind::Caves => "caves",
+            ObjectKind::Random => "random",
         }
     }
 
@@ -141,6 +147,7 @@ impl ObjectKind {
             ObjectKind::Bunny => "bs",
             ObjectKind::Terrain => "ts",
             ObjectKind::Caves => "cs",
+            ObjectKind::Random => "rf",
         }
     }
 
@@ -163,6 +170,7 @@ impl ObjectKind {
                 "cave_radius",
                 "cave_ceiling",
             ],
+            ObjectKind::Random => &["seed"],
         }
     }
 }
@@ -562,6 +570,10 @@ impl ObjectSpec {
                 };
                 Box::new(CaveTerrain::new(params))
             }
+            ObjectKind::Random => Box::new(
+                RandomField::from_seed(u64::from(p.seed.unwrap_or(DEFAULT_SEED)))
+                    .in_box(centre, half),
+            ),
             ObjectKind::Bunny => {
                 let margin = p.margin.unwrap_or(0.05);
                 let given = p

@@ -530,6 +530,21 @@ fn execute(
 
     let mut ran = 0;
     let mut status = Status::Finished;
+    // Checkpoints: finished units' rows are appended to raw.csv (synced) and progress.json
+    // rewritten at most every CHECKPOINT, and always at the end or on an error. A crash in
+    // between loses only the unrecorded units, which `--resume` runs again (it cuts raw.csv back
+    // to the recorded bytes). One checkpoint per unit made sweeps of many tiny configurations
+    // (topology sweeps, seed studies) cost a sync and a growing progress.json per unit.
+    const CHECKPOINT: std::time::Duration = std::time::Duration::from_millis(500);
+    let mut pending: Vec<u8> = Vec::new();
+    let mut last_checkpoint = std::time::Instant::now();
+    let checkpoint = |pending: &mut Vec<u8>, progress: &mut Progress| -> Result<()> {
+        if !pending.is_empty() {
+            progress.raw_bytes = append_synced(&folder.join(RAW_CSV), pending)?;
+            pending.clear();
+        }
+        write_json(&folder.join(PROGRESS_JSON), &*progress)
+    };
     for (k, &(unit, c)) in todo.iter().enumerate() {
         if opts.stop_after.is_some_and(|limit| k >= limit) {
             status = Status::Stopped;
@@ -539,15 +554,18 @@ fn execute(
         let field = fields
             .get(&c.field_key())
             .with_context(|| format!("no field built for object {}", c.field_key()))?;
-        let result =
-            run_repetitions(c, field, plan, unit.first, unit.last, &bar).with_context(|| {
-                format!(
-                    "configuration {} failed; the finished configurations are kept: fix the cause \
-                 and continue with `experiments run --resume {}`",
+        let result = match run_repetitions(c, field, plan, unit.first, unit.last, &bar) {
+            Ok(r) => r,
+            Err(e) => {
+                checkpoint(&mut pending, &mut progress)?;
+                return Err(e.context(format!(
+                    "configuration {} failed; the finished configurations are kept: fix the \
+                     cause and continue with `experiments run --resume {}`",
                     c.id,
                     folder.display()
-                )
-            })?;
+                )));
+            }
+        };
         let rows = raw_rows_from(
             &record.run_id,
             c,
@@ -556,17 +574,20 @@ fn execute(
             &result.stats,
             &result.measurement,
         )?;
-        let raw_bytes = append_synced(&folder.join(RAW_CSV), &csv_bytes(&rows)?)?;
+        pending.extend_from_slice(&csv_bytes(&rows)?);
         if plan.save_meshes {
             let path = folder.join(MESHES).join(format!("{}.ply", c.id));
             rmt_mesh::io::save_ply(&path, &result.mesh, true)
                 .with_context(|| format!("saving {}", path.display()))?;
         }
         progress.completed.push(unit.key(plan.repetitions));
-        progress.raw_bytes = raw_bytes;
-        write_json(&folder.join(PROGRESS_JSON), &progress)?;
         ran += 1;
+        if last_checkpoint.elapsed() >= CHECKPOINT {
+            checkpoint(&mut pending, &mut progress)?;
+            last_checkpoint = std::time::Instant::now();
+        }
     }
+    checkpoint(&mut pending, &mut progress)?;
     bar.finish_and_clear();
 
     if status == Status::Finished {
@@ -604,6 +625,18 @@ pub(crate) fn write_summaries(folder: &Path, plan: &Plan) -> Result<Vec<String>>
     if let Some(table) = crate::seeds::seed_summary(&summary, plan)? {
         write_atomic(&folder.join(crate::seeds::SEEDS_CSV), &table.to_csv()?)?;
         files.push(crate::seeds::SEEDS_CSV);
+    }
+    if let Some((tally, failed)) = crate::topology::topology_tables(&summary, plan)? {
+        write_atomic(
+            &folder.join(crate::topology::TOPOLOGY_CSV),
+            &tally.to_csv()?,
+        )?;
+        write_atomic(
+            &folder.join(crate::topology::FAILURES_CSV),
+            &failed.to_csv()?,
+        )?;
+        files.push(crate::topology::TOPOLOGY_CSV);
+        files.push(crate::topology::FAILURES_CSV);
     }
     if plan.save_meshes {
         files.push(MESHES);

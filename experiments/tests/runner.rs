@@ -475,3 +475,83 @@ fn edit_workload_refuses_meshopt_and_an_edit_table_without_the_workload() {
         .to_string();
     assert!(err.contains("workload"), "{err}");
 }
+
+/// The topology sweep: a seed study of the `random` object (the property tests' field
+/// families) tallies the checks per configuration in `topology.csv`, and a sharded run merges
+/// into the same tally.
+#[test]
+fn topology_sweep_tallies_every_field_and_merges_from_shards() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("topology.toml");
+    fs::write(
+        &manifest,
+        r#"name = "topology-test"
+repetitions = 1
+warmup = 0
+threads = 1
+save_meshes = false
+seeds = { from = 1, count = 12 }
+
+[[objects]]
+name = "random"
+resolution = 9
+
+[matrix]
+objects = ["random"]
+methods = ["mt"]
+lattices = ["bcdl", "simple"]
+clustering = ["none", "integrated", "postprocessed"]
+"#,
+    )
+    .unwrap();
+    let whole = dir.path().join("whole");
+    let report = runner::start(&manifest, &Overrides::default(), Some(&whole), &quiet()).unwrap();
+    assert_eq!(report.configurations_run, 6 * 12);
+    let tally = Table::read(&whole.join("topology.csv")).unwrap();
+    assert_eq!(tally.rows.len(), 6);
+    for r in 0..tally.rows.len() {
+        assert_eq!(tally.get(r, "fields"), Some("12"));
+        // The property tests hold on these fields: no check fails.
+        assert_eq!(
+            tally.get(r, "failed_fields"),
+            Some("0"),
+            "{:?}",
+            tally.rows[r]
+        );
+        let clustered = tally.get(r, "clustering") != Some("none");
+        assert_eq!(
+            tally.get(r, "reference").is_some_and(|s| !s.is_empty()),
+            clustered
+        );
+    }
+    let failures = Table::read(&whole.join("topology_failures.csv")).unwrap();
+    assert!(failures.rows.is_empty());
+    // Every field is a different mesh: the seeds are not all one field.
+    let summary = Table::read(&whole.join("summary.csv")).unwrap();
+    let triangles: std::collections::BTreeSet<&str> = (0..summary.rows.len())
+        .filter(|&r| summary.get(r, "clustering") == Some("none"))
+        .filter_map(|r| summary.get(r, "triangles"))
+        .collect();
+    assert!(triangles.len() >= 8, "{triangles:?}");
+
+    let mut shards = Vec::new();
+    for i in 1..=3 {
+        let out = dir.path().join(format!("s{i}"));
+        let shard = experiments::shard::ShardSpec { index: i, count: 3 };
+        runner::start_shard(
+            &manifest,
+            &Overrides::default(),
+            Some(&out),
+            &quiet(),
+            Some(shard),
+        )
+        .unwrap();
+        shards.push(out);
+    }
+    let merged = dir.path().join("merged");
+    experiments::merge::merge(&merged, &shards).unwrap();
+    assert_eq!(
+        fs::read(merged.join("topology.csv")).unwrap(),
+        fs::read(whole.join("topology.csv")).unwrap()
+    );
+}

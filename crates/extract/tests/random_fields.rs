@@ -21,56 +21,9 @@ fn cases(default: u32) -> u32 {
         .unwrap_or(default)
 }
 
-/// A random field: one of several families, described by numbers only so proptest can shrink it.
-#[derive(Clone, Debug)]
-enum Family {
-    /// Sum of Gaussian blobs, thresholded.
-    Blobs(Vec<(Vec3, f32, f32)>),
-    /// Sum of plane waves (up to about one period per 2 cells) plus an offset.
-    Waves(Vec<(Vec3, f32, f32)>, f32),
-    /// A thin spherical shell.
-    Shell(Vec3, f32, f32),
-    /// A thin tube along a circle.
-    Tube(Vec3, f32, f32),
-}
-
-#[derive(Clone, Debug)]
-struct RandomField {
-    family: Family,
-    /// Round values to multiples of this (0 = off): many samples then sit exactly on the
-    /// threshold, so the surface passes through sample points.
-    quantum: f32,
-}
-
-impl RandomField {
-    fn eval(&self, p: Vec3) -> f32 {
-        let f = match &self.family {
-            Family::Blobs(b) => {
-                0.5 - b
-                    .iter()
-                    .map(|(c, s, a)| a * (-(p - *c).length_squared() / (s * s)).exp())
-                    .sum::<f32>()
-            }
-            Family::Waves(w, off) => {
-                w.iter()
-                    .map(|(k, ph, a)| a * (k.dot(p) + ph).sin())
-                    .sum::<f32>()
-                    + off
-            }
-            Family::Shell(c, r, t) => ((p - *c).length() - r).abs() - t,
-            Family::Tube(c, r, t) => {
-                let q = p - *c;
-                let ring = (q.x * q.x + q.z * q.z).sqrt() - r;
-                (ring * ring + q.y * q.y).sqrt() - t
-            }
-        };
-        if self.quantum > 0.0 {
-            (f / self.quantum).round() * self.quantum
-        } else {
-            f
-        }
-    }
-}
+// The field families live in rmt-fields (`RandomField`, also the `random` object of the
+// topology sweeps, which draws them from a seed); here proptest draws them, so it can shrink.
+use rmt_fields::{RandomFamily as Family, RandomField, ScalarField};
 
 fn vec3(r: f32) -> impl Strategy<Value = Vec3> {
     (-r..r, -r..r, -r..r).prop_map(|(x, y, z)| Vec3::new(x, y, z))
@@ -90,8 +43,14 @@ fn field(n: usize) -> impl Strategy<Value = RandomField> {
         (vec3(0.3), 0.2f32..0.7, (0.3 * h)..(1.5 * h)).prop_map(|(c, r, t)| Family::Shell(c, r, t)),
         (vec3(0.2), 0.3f32..0.6, (0.3 * h)..(1.5 * h)).prop_map(|(c, r, t)| Family::Tube(c, r, t)),
     ];
-    (family, prop_oneof![3 => Just(0.0f32), 1 => 0.02f32..0.2])
-        .prop_map(|(family, quantum)| RandomField { family, quantum })
+    (family, prop_oneof![3 => Just(0.0f32), 1 => 0.02f32..0.2]).prop_map(|(family, quantum)| {
+        RandomField {
+            family,
+            quantum,
+            centre: Vec3::ZERO,
+            half: 1.0,
+        }
+    })
 }
 
 fn lattice() -> impl Strategy<Value = Lattice> {
@@ -103,14 +62,14 @@ proptest! {
 
     #[test]
     fn unmerged_mt_is_closed_inside_the_box_and_manifold(n in 6usize..14, lattice in lattice(), f in field(10)) {
-        let field = FnField(|p| f.eval(p));
+        let field = FnField(|p| f.sample(p));
         let (_, _, r) = run(&field, Grid::cube(n, 1.0), lattice, Clustering::None);
         assert_clean(&format!("{lattice:?} n={n} {f:?}"), &r);
     }
 
     #[test]
     fn integrated_clustering_keeps_topology(n in 6usize..14, lattice in lattice(), f in field(10)) {
-        let field = FnField(|p| f.eval(p));
+        let field = FnField(|p| f.sample(p));
         let grid = Grid::cube(n, 1.0);
         let (_, base, r0) = run(&field, grid, lattice, Clustering::None);
         prop_assume!(base.triangles > 0);
@@ -133,7 +92,7 @@ proptest! {
 
     #[test]
     fn edge_collapse_keeps_topology(n in 6usize..14, lattice in lattice(), f in field(10), threshold in 0.2f32..0.8) {
-        let field = FnField(|p| f.eval(p));
+        let field = FnField(|p| f.sample(p));
         let grid = Grid::cube(n, 1.0);
         let (_, base, r0) = run(&field, grid, lattice, Clustering::None);
         prop_assume!(base.triangles > 0);

@@ -23,12 +23,14 @@ mod error;
 pub mod fbm;
 mod interval;
 mod mesh_sdf;
+mod random;
 mod terrain;
 
 pub use analytic::{FnField, Gyroid, Sphere, Torus};
 pub use asteroid::{Asteroid, AsteroidParams};
 pub use error::{FieldError, MeshProblem, MeshSource};
 pub use mesh_sdf::MeshSdf;
+pub use random::{RandomFamily, RandomField};
 pub use terrain::{CaveParams, CaveTerrain, SvobodaParams, SvobodaTerrain};
 
 use glam::Vec3;
