@@ -8,7 +8,6 @@
 //! column.
 
 use std::collections::{BTreeMap, HashSet};
-use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use polars::prelude::*;
@@ -63,14 +62,30 @@ pub fn load(inputs: &Inputs, options: &LoadOptions) -> Result<Dataset> {
     })
 }
 
-/// Reads a CSV file with polars, every column as a (nullable) string; empty cells are null.
-/// The header is checked first for duplicate titles, which polars would silently rename.
+/// Reads a CSV file into a frame, every column as a (nullable) string; empty cells are null.
+/// Parsed with the `csv` crate (polars' own CSV reader would bring its streaming engine and its
+/// cloud I/O stack into the build); a duplicate title, a row with another number of cells than
+/// the header, or bytes that are not UTF-8 are errors naming the file and the line.
 pub fn read_csv(path: &Path) -> Result<DataFrame> {
     let mut bytes = std::fs::read(path).map_err(io_error(path))?;
     if bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
         bytes.drain(..3);
     }
-    let header = read_header(path, &bytes)?;
+    let csv_error = |message: String| AnalysisError::Csv {
+        path: path.to_path_buf(),
+        message,
+    };
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(false)
+        .from_reader(bytes.as_slice());
+    let header: Vec<String> = match reader.headers() {
+        Ok(h) if !h.is_empty() && !(h.len() == 1 && h[0].is_empty()) => {
+            h.iter().map(str::to_string).collect()
+        }
+        Ok(_) => return Err(csv_error("the file is empty (no header)".into())),
+        Err(e) => return Err(csv_error(e.to_string())),
+    };
     let mut seen = HashSet::new();
     for title in &header {
         if !seen.insert(title.trim()) {
@@ -80,33 +95,20 @@ pub fn read_csv(path: &Path) -> Result<DataFrame> {
             });
         }
     }
-    CsvReadOptions::default()
-        .with_has_header(true)
-        .with_infer_schema_length(Some(0))
-        .into_reader_with_file_handle(Cursor::new(bytes))
-        .finish()
-        .map_err(|e| AnalysisError::Csv {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })
-}
-
-fn read_header(path: &Path, bytes: &[u8]) -> Result<Vec<String>> {
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .from_reader(bytes);
-    match reader.records().next() {
-        Some(Ok(record)) => Ok(record.iter().map(str::to_string).collect()),
-        Some(Err(e)) => Err(AnalysisError::Csv {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        }),
-        None => Err(AnalysisError::Csv {
-            path: path.to_path_buf(),
-            message: "the file is empty (no header)".into(),
-        }),
+    let mut cells: Vec<Vec<Option<String>>> = vec![Vec::new(); header.len()];
+    for record in reader.records() {
+        let record = record.map_err(|e| csv_error(e.to_string()))?;
+        for (column, cell) in cells.iter_mut().zip(record.iter()) {
+            column.push((!cell.is_empty()).then(|| cell.to_string()));
+        }
     }
+    let height = cells.first().map_or(0, Vec::len);
+    let columns = header
+        .iter()
+        .zip(cells)
+        .map(|(title, values)| Column::new(title.as_str().into(), values))
+        .collect();
+    DataFrame::new(height, columns).map_err(|e| csv_error(e.to_string()))
 }
 
 /// Titles of the frame's columns, as written.
