@@ -384,6 +384,13 @@ fn perlin_lanes_small(
             gk[i] = f64::from_bits(u.to_bits() ^ su) + f64::from_bits(v.to_bits() ^ sv);
         }
     }
+    blend(&d, &g, out);
+}
+
+/// The fade-weighted trilinear blend of the 8 corner gradients `g` at distances `d`, scaled and
+/// clamped as `perlin_3d` does.
+#[inline(always)]
+fn blend(d: &[[f64; LANES]; 3], g: &[[f64; LANES]; 8], out: &mut [f64; LANES]) {
     for i in 0..LANES {
         let (cx, cy, cz) = (quintic(d[0][i]), quintic(d[1][i]), quintic(d[2][i]));
         let r = lerp(
@@ -630,6 +637,14 @@ mod tests {
                     .iter()
                     .map(|p| p.map(|c| f64::from(c as f32))),
             );
+            // Runs of 8 neighbouring points, as extraction passes them (one batch each, the
+            // batches aligned): every lane in one cell for the low octaves, runs across cell
+            // boundaries for the others.
+            assert_eq!(pts.len() % LANES, 0);
+            for (k, base) in points(1000, 17, -2.0, 2.0).iter().enumerate() {
+                let step = [1e-4, 1e-3, 0.02, 0.2][k % 4];
+                pts.extend((0..LANES).map(|i| [base[0] + i as f64 * step, base[1], base[2]]));
+            }
             for chunk in pts.chunks(LANES) {
                 let mut lanes = [[0.0; 3]; LANES];
                 lanes[..chunk.len()].copy_from_slice(chunk);
