@@ -80,9 +80,7 @@ pub fn read_csv(path: &Path) -> Result<DataFrame> {
         .flexible(false)
         .from_reader(bytes.as_slice());
     let header: Vec<String> = match reader.headers() {
-        Ok(h) if !h.is_empty() && !(h.len() == 1 && h[0].is_empty()) => {
-            h.iter().map(str::to_string).collect()
-        }
+        Ok(h) if h.iter().any(|title| !title.is_empty()) => h.iter().map(str::to_string).collect(),
         Ok(_) => return Err(csv_error("the file is empty (no header)".into())),
         Err(e) => return Err(csv_error(e.to_string())),
     };
