@@ -376,15 +376,22 @@ fn perlin_lanes_small(
         for i in 0..LANES {
             // (Table entries are below 256; the masks only tell the compiler.)
             let h = perm[(b[k >> 1][i] as usize & 0xff) ^ wrap(c[2][i] + (k & 1) as i32)] & 15;
-            let (qx, qy, qz) = (d[0][i] - ox, d[1][i] - oy, d[2][i] - oz);
-            let u = if (U_IS_Y >> h) & 1 != 0 { qy } else { qx };
-            let v = if (V_IS_Z >> h) & 1 != 0 { qz } else { qy };
-            let su = u64::from((U_NEG >> h) & 1) << 63;
-            let sv = u64::from((V_NEG >> h) & 1) << 63;
-            gk[i] = f64::from_bits(u.to_bits() ^ su) + f64::from_bits(v.to_bits() ^ sv);
+            gk[i] = gradient(h, d[0][i] - ox, d[1][i] - oy, d[2][i] - oz);
         }
     }
     blend(&d, &g, out);
+}
+
+/// The gradient term of `perlin_3d` for hash `h` (`h & 15`) at offset `(qx, qy, qz)`:
+/// `(+-u) + (+-v)`, the terms and signs picked by the bit masks of `GRADIENTS` (branch-free, so
+/// lane loops vectorise); a sign is applied by flipping the sign bit, which is exactly `-u`.
+#[inline(always)]
+fn gradient(h: u32, qx: f64, qy: f64, qz: f64) -> f64 {
+    let u = if (U_IS_Y >> h) & 1 != 0 { qy } else { qx };
+    let v = if (V_IS_Z >> h) & 1 != 0 { qz } else { qy };
+    let su = u64::from((U_NEG >> h) & 1) << 63;
+    let sv = u64::from((V_NEG >> h) & 1) << 63;
+    f64::from_bits(u.to_bits() ^ su) + f64::from_bits(v.to_bits() ^ sv)
 }
 
 /// The fade-weighted trilinear blend of the 8 corner gradients `g` at distances `d`, scaled and
@@ -434,20 +441,12 @@ fn perlin_lanes_wide(
             }
         }
     }
-    // Gradients at the 8 corners: `(+-u) + (+-v)` of the offset point, the terms and signs
-    // picked by the bit masks of `GRADIENTS` (branch-free, so the loop vectorises); a sign is
-    // applied by flipping the sign bit, which is exactly `-u`.
+    // Gradients at the 8 corners (see `gradient`).
     let mut g = [[0.0f64; LANES]; 8];
     for (k, gk) in g.iter_mut().enumerate() {
         let (ox, oy, oz) = ((k >> 2) as f64, ((k >> 1) & 1) as f64, (k & 1) as f64);
         for i in 0..LANES {
-            let (qx, qy, qz) = (dx[i] - ox, dy[i] - oy, dz[i] - oz);
-            let h = u32::from(hashes[k][i]);
-            let u = if (U_IS_Y >> h) & 1 != 0 { qy } else { qx };
-            let v = if (V_IS_Z >> h) & 1 != 0 { qz } else { qy };
-            let su = u64::from((U_NEG >> h) & 1) << 63;
-            let sv = u64::from((V_NEG >> h) & 1) << 63;
-            gk[i] = f64::from_bits(u.to_bits() ^ su) + f64::from_bits(v.to_bits() ^ sv);
+            gk[i] = gradient(u32::from(hashes[k][i]), dx[i] - ox, dy[i] - oy, dz[i] - oz);
         }
     }
     for i in 0..LANES {
