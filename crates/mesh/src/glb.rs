@@ -244,64 +244,80 @@ pub fn write_glb<W: io::Write>(mut out: W, mesh: &Mesh) -> io::Result<()> {
 /// Reads a binary glTF file's triangle primitives into one mesh: positions, normals when every
 /// primitive has them, indices (non-indexed primitives get `0..n`). Node transforms are not
 /// applied (what [`to_glb`] writes has none).
+///
+/// The container and the JSON are parsed by the `gltf` crate, but the accessors are read here,
+/// with every index, offset, stride and length checked. The crate's validation and readers
+/// trust some of what a damaged file says (gltf 1.4 indexes `accessors` with a primitive's
+/// POSITION index unchecked, and reaches `unreachable!()` for an index accessor of a float
+/// type), so they would panic on bad input instead of returning an error.
 pub fn from_glb(bytes: &[u8]) -> Result<Mesh, GlbError> {
-    let gltf = gltf::Gltf::from_slice(bytes)?;
-    let blob = gltf.blob.as_deref();
+    let glb = gltf::Glb::from_slice(bytes)?;
+    let root: json::Root = json::deserialize::from_slice(&glb.json)
+        .map_err(|e| GlbError::Format(gltf::Error::Deserialize(e)))?;
+    let blob = glb.bin.as_deref();
     let mut mesh = Mesh::default();
     let mut all_normals = true;
     let mut normals = Vec::new();
-    for m in gltf.meshes() {
-        for primitive in m.primitives() {
-            if primitive.mode() != gltf::mesh::Mode::Triangles {
-                return Err(GlbError::Unsupported(format!(
-                    "mesh {} has a primitive of mode {:?}; only triangles are read",
-                    m.index(),
-                    primitive.mode()
-                )));
+    for (m, gltf_mesh) in root.meshes.iter().enumerate() {
+        for primitive in &gltf_mesh.primitives {
+            match primitive.mode {
+                Valid(json::mesh::Mode::Triangles) => {}
+                Valid(mode) => {
+                    return Err(GlbError::Unsupported(format!(
+                        "mesh {m} has a primitive of mode {mode:?}; only triangles are read"
+                    )))
+                }
+                _ => {
+                    return Err(GlbError::Unsupported(format!(
+                        "mesh {m} has a primitive of an unknown mode"
+                    )))
+                }
             }
-            // The gltf crate's readers assume accessors of at least one element (as the format
-            // requires); refuse the others here instead of letting them reach it.
-            let empty = primitive
-                .attributes()
-                .map(|(_, a)| a)
-                .chain(primitive.indices())
-                .find(|a| a.count() == 0);
-            if let Some(a) = empty {
+            let attribute = |semantic| primitive.attributes.get(&Valid(semantic));
+            let Some(&position_accessor) = attribute(json::mesh::Semantic::Positions) else {
                 return Err(GlbError::Unsupported(format!(
-                    "accessor {} has no elements (glTF requires count >= 1)",
-                    a.index()
-                )));
-            }
-            let reader = primitive.reader(|buffer| match buffer.source() {
-                gltf::buffer::Source::Bin => blob,
-                gltf::buffer::Source::Uri(_) => None,
-            });
-            let Some(positions) = reader.read_positions() else {
-                return Err(GlbError::Unsupported(format!(
-                    "mesh {} has a primitive without readable positions (external buffers are \
-                     not read)",
-                    m.index()
+                    "mesh {m} has a primitive without positions"
                 )));
             };
             let base = mesh.positions.len();
-            mesh.positions.extend(positions);
+            read_accessor(&root, blob, position_accessor, Kind::Vec3F32, &mut |c| {
+                mesh.positions.push([c[0] as f32, c[1] as f32, c[2] as f32])
+            })?;
             let added = mesh.positions.len() - base;
-            match reader.read_normals() {
-                Some(n) if all_normals => normals.extend(n),
+            match attribute(json::mesh::Semantic::Normals) {
+                Some(&n) if all_normals => {
+                    let before = normals.len();
+                    read_accessor(&root, blob, n, Kind::Vec3F32, &mut |c| {
+                        normals.push([c[0] as f32, c[1] as f32, c[2] as f32])
+                    })?;
+                    if normals.len() - before != added {
+                        return Err(GlbError::Unsupported(format!(
+                            "mesh {m}: {} normals for {added} positions",
+                            normals.len() - before
+                        )));
+                    }
+                }
                 _ => all_normals = false,
             }
-            let first = u32::try_from(base)
-                .map_err(|_| GlbError::Unsupported("more than 2^32 vertices".into()))?;
-            match reader.read_indices() {
-                Some(indices) => {
-                    for i in indices.into_u32() {
-                        if i as usize >= added {
-                            return Err(GlbError::Unsupported(format!(
-                                "mesh {}: index {i} out of range for {added} vertices",
-                                m.index()
-                            )));
+            if u32::try_from(mesh.positions.len()).is_err() {
+                return Err(GlbError::Unsupported("more than 2^32 vertices".into()));
+            }
+            let first = base as u32;
+            match primitive.indices {
+                Some(index_accessor) => {
+                    let mut bad = None;
+                    read_accessor(&root, blob, index_accessor, Kind::Index, &mut |c| {
+                        let i = c[0] as usize;
+                        if i >= added {
+                            bad.get_or_insert(i);
+                        } else {
+                            mesh.indices.push(first + i as u32);
                         }
-                        mesh.indices.push(first + i);
+                    })?;
+                    if let Some(i) = bad {
+                        return Err(GlbError::Unsupported(format!(
+                            "mesh {m}: index {i} out of range for {added} vertices"
+                        )));
                     }
                 }
                 None => mesh.indices.extend((0..added as u32).map(|i| first + i)),
@@ -318,6 +334,118 @@ pub fn from_glb(bytes: &[u8]) -> Result<Mesh, GlbError> {
         mesh.normals = normals;
     }
     Ok(mesh)
+}
+
+/// What [`read_accessor`] accepts.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// Three `f32` per element (positions, normals).
+    Vec3F32,
+    /// One unsigned integer of 8, 16 or 32 bits per element (triangle indices).
+    Index,
+}
+
+/// Calls `each` with every element of accessor `index`, read from the GLB's binary chunk, after
+/// checking the accessor's type, its buffer view and every byte range it covers. Components
+/// arrive widened to `f64` (exact for `f32` and for `u32`).
+fn read_accessor(
+    root: &json::Root,
+    blob: Option<&[u8]>,
+    index: json::Index<json::Accessor>,
+    kind: Kind,
+    each: &mut dyn FnMut([f64; 3]),
+) -> Result<(), GlbError> {
+    use json::accessor::{ComponentType as C, Type};
+    let bad = |what: String| GlbError::Unsupported(format!("accessor {}: {what}", index.value()));
+    let accessor = root
+        .accessors
+        .get(index.value())
+        .ok_or_else(|| bad(format!("missing (the file has {})", root.accessors.len())))?;
+    if accessor.sparse.is_some() {
+        return Err(bad("sparse accessors are not read".into()));
+    }
+    let component = match accessor.component_type {
+        Valid(json::accessor::GenericComponentType(c)) => c,
+        _ => return Err(bad("unknown component type".into())),
+    };
+    let (width, components) = match (kind, component, accessor.type_) {
+        (Kind::Vec3F32, C::F32, Valid(Type::Vec3)) => (4, 3),
+        (Kind::Index, C::U8, Valid(Type::Scalar)) => (1, 1),
+        (Kind::Index, C::U16, Valid(Type::Scalar)) => (2, 1),
+        (Kind::Index, C::U32, Valid(Type::Scalar)) => (4, 1),
+        (Kind::Vec3F32, ..) => return Err(bad("expected three f32 per element".into())),
+        (Kind::Index, ..) => return Err(bad("expected unsigned integer scalars".into())),
+    };
+    let element = width * components;
+    let count = usize::try_from(accessor.count.0).map_err(|_| bad("count too large".into()))?;
+    if count == 0 {
+        return Err(bad("no elements (glTF requires count >= 1)".into()));
+    }
+    let view_index = accessor
+        .buffer_view
+        .ok_or_else(|| bad("no buffer view (all-zero accessors are not read)".into()))?;
+    let view = root
+        .buffer_views
+        .get(view_index.value())
+        .ok_or_else(|| bad(format!("buffer view {} is missing", view_index.value())))?;
+    let buffer = root
+        .buffers
+        .get(view.buffer.value())
+        .ok_or_else(|| bad(format!("buffer {} is missing", view.buffer.value())))?;
+    if buffer.uri.is_some() || view.buffer.value() != 0 {
+        return Err(bad("external buffers are not read".into()));
+    }
+    let blob = blob.ok_or_else(|| bad("the file has no binary chunk".into()))?;
+    let to_usize = |v: u64| usize::try_from(v).ok();
+    let overflow = || bad("its byte range overflows".into());
+    let stride = match view.byte_stride {
+        Some(s) => s.0,
+        None => element,
+    };
+    if stride < element {
+        return Err(bad(format!(
+            "stride {stride} is less than its element size {element}"
+        )));
+    }
+    let view_start = to_usize(view.byte_offset.map_or(0, |o| o.0)).ok_or_else(overflow)?;
+    let view_length = to_usize(view.byte_length.0).ok_or_else(overflow)?;
+    let view_end = view_start.checked_add(view_length).ok_or_else(overflow)?;
+    if view_end > blob.len() {
+        return Err(bad(format!(
+            "its buffer view ends at byte {view_end}, past the binary chunk's {} bytes",
+            blob.len()
+        )));
+    }
+    let offset = to_usize(accessor.byte_offset.map_or(0, |o| o.0)).ok_or_else(overflow)?;
+    let needed = stride
+        .checked_mul(count - 1)
+        .and_then(|b| b.checked_add(element))
+        .and_then(|b| b.checked_add(offset))
+        .ok_or_else(overflow)?;
+    if needed > view_length {
+        return Err(bad(format!(
+            "{count} elements need {needed} bytes of a {view_length}-byte buffer view"
+        )));
+    }
+    let data = &blob[view_start + offset..view_start + needed];
+    for e in 0..count {
+        let at = &data[e * stride..e * stride + element];
+        let mut c = [0.0f64; 3];
+        for (k, value) in c.iter_mut().take(components).enumerate() {
+            let b = &at[k * width..(k + 1) * width];
+            *value = match *b {
+                [b0] => b0 as f64,
+                [b0, b1] => u16::from_le_bytes([b0, b1]) as f64,
+                [b0, b1, b2, b3] if component == C::F32 => {
+                    f32::from_le_bytes([b0, b1, b2, b3]) as f64
+                }
+                [b0, b1, b2, b3] => u32::from_le_bytes([b0, b1, b2, b3]) as f64,
+                _ => 0.0, // no other width is accepted above
+            };
+        }
+        each(c);
+    }
+    Ok(())
 }
 
 /// The component-wise minimum and maximum of `points` (zeros for no points).
@@ -402,6 +530,22 @@ mod tests {
             }
             bytes.truncate(bytes.len() - cut % 16);
             let _ = from_glb(&bytes);
+        }
+
+        #[test]
+        fn out_of_range_accessor_indices_are_refused(index in 0usize..1000) {
+            // A renumbered POSITION accessor used to panic inside gltf-json's validation.
+            let bytes = to_glb(&tetrahedron()).unwrap();
+            let glb = gltf::Glb::from_slice(&bytes).unwrap();
+            let mut root: gltf::json::Root = gltf::json::deserialize::from_slice(&glb.json).unwrap();
+            let n = root.accessors.len();
+            let bad = n + index;
+            for (_, a) in root.meshes[0].primitives[0].attributes.iter_mut() {
+                *a = gltf::json::Index::new(bad as u32);
+            }
+            let frame = frame(&root, glb.bin.map(|b| b.into_owned())).unwrap();
+            let err = from_glb(&frame).unwrap_err().to_string();
+            prop_assert!(err.contains(&format!("accessor {bad}")), "{}", err);
         }
 
         #[test]
