@@ -11,6 +11,7 @@
 //! the median sampling and total times, their ratio and the share of points evaluated. `growth`
 //! times the whole extraction (sparse sampling, integrated clustering, body-centred) of the
 //! sphere and the asteroid from 64^3 to `max_n`^3 (default 512) and fits `t = a N^b`.
+use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode, Sampling};
 use rmt_fields::{
     Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, ScalarField, Sphere, SvobodaParams,
@@ -85,8 +86,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     // Before this work: the asteroid sampled at every point through the noise crate, one point
     // at a time (a closure field has no range and no batch evaluation).
-    let asteroid = Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default());
-    let before = rmt_fields::FnField(|p| asteroid.sample(p));
+    let params = AsteroidParams::default();
+    let fbm = Fbm::<Perlin>::new(params.seed)
+        .set_octaves(params.octaves)
+        .set_frequency(params.frequency);
+    // `Asteroid::sample` as it was: the crate's `f64` noise at the `f32` point.
+    let before = rmt_fields::FnField(|p: glam::Vec3| {
+        let n = fbm.get([p.x, p.y, p.z].map(f64::from)) as f32;
+        p.length() - params.radius + params.amplitude * n
+    });
     {
         let mut s = ExtractSettings::new(Grid::cube(n, 1.0), Lattice::BodyCentred, clustering);
         s.threads = threads;

@@ -7,6 +7,7 @@
 //!
 //! `cargo run --release -p rmt-fields --example fbm_speed -- [points] [reps] [octaves]`
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
+use rmt_fields::fast_fbm::{FastFbm, TOLERANCE};
 use rmt_fields::fbm::{BatchFbm, LANES};
 use std::time::Instant;
 
@@ -27,6 +28,7 @@ fn main() -> Result<(), String> {
         .set_octaves(octaves)
         .set_frequency(1.5);
     let batch = BatchFbm::new(7, octaves, 1.5);
+    let fast = FastFbm::new(7, octaves, 1.5);
     // Points of a 2x2x2 box, as f32 coordinates like the fields pass them.
     let mut s = 0x9e37_79b9_7f4a_7c15u64;
     let mut next = || {
@@ -46,8 +48,8 @@ fn main() -> Result<(), String> {
             .collect()
     });
     for (label, [xs, ys, zs]) in [("random points", &random), ("grid points", &grid)] {
-        let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
-        let (mut ta, mut tb) = (Vec::new(), Vec::new());
+        let (mut a, mut b, mut c) = (vec![0.0; n], vec![0.0; n], vec![0.0f32; n]);
+        let (mut ta, mut tb, mut tc) = (Vec::new(), Vec::new(), Vec::new());
         for _ in 0..reps {
             let t = Instant::now();
             for i in 0..n {
@@ -62,6 +64,9 @@ fn main() -> Result<(), String> {
                 b[i..i + LANES].copy_from_slice(&out);
             }
             tb.push(t.elapsed().as_secs_f64() * 1e9 / n as f64);
+            let t = Instant::now();
+            fast.get_points(xs, ys, zs, &mut c);
+            tc.push(t.elapsed().as_secs_f64() * 1e9 / n as f64);
         }
         let m = n - n % LANES;
         let same = a[..m]
@@ -78,8 +83,23 @@ fn main() -> Result<(), String> {
             median(ta.clone()) / median(tb.clone()),
             min(&ta) / min(&tb)
         );
+        let worst = a[..m]
+            .iter()
+            .zip(&c[..m])
+            .map(|(x, y)| (x - f64::from(*y)).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "  f32 FastFbm {:.1} ({:.1}) ns/point: {:.2}x the noise crate, {:.2}x the batch; largest difference {worst:.2e} (tolerance {TOLERANCE:e})",
+            median(tc.clone()),
+            min(&tc),
+            median(ta.clone()) / median(tc.clone()),
+            median(tb.clone()) / median(tc.clone()),
+        );
         if !same {
             return Err("the batch noise differs from the noise crate".into());
+        }
+        if worst >= TOLERANCE {
+            return Err("the f32 noise is further from the noise crate than its tolerance".into());
         }
     }
     // The asteroid itself: one point at a time (noise crate) against `sample_batch`.

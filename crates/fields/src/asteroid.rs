@@ -1,10 +1,10 @@
 //! A noise asteroid: a sphere whose radius is displaced by fractal Perlin noise.
 
-use crate::fbm::{BatchFbm, LANES};
+use crate::fast_fbm::{FastFbm, TOLERANCE};
+use crate::fbm::BatchFbm;
 use crate::interval::{box64, distance_to_box, widen};
 use crate::ScalarField;
 use glam::Vec3;
-use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 
 /// Parameters of an [`Asteroid`].
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -36,23 +36,25 @@ impl Default for AsteroidParams {
 
 /// `|p - centre| - radius + amplitude * fbm(p)`: a lumpy rock. Not a signed distance, so it does
 /// not report a surface distance.
+///
+/// `fbm` is the `noise` crate's `Fbm<Perlin>` as [`FastFbm`] evaluates it: in `f32` and along
+/// rows of points, within [`TOLERANCE`] (`2e-5`) of the crate's values, the same object. A
+/// single sample and a batch give the same bits.
 pub struct Asteroid {
     params: AsteroidParams,
     centre: Vec3,
-    fbm: Fbm<Perlin>,
+    fast: FastFbm,
+    /// The exact `f64` twin, for its interval bound ([`BatchFbm::range`]).
     batch: BatchFbm,
 }
 
 impl Asteroid {
     /// An asteroid centred at `centre`.
     pub fn new(centre: Vec3, params: AsteroidParams) -> Self {
-        let fbm = Fbm::<Perlin>::new(params.seed)
-            .set_octaves(params.octaves.clamp(1, 32))
-            .set_frequency(params.frequency);
         Self {
             params,
             centre,
-            fbm,
+            fast: FastFbm::new(params.seed, params.octaves.clamp(1, 32), params.frequency),
             batch: BatchFbm::new(params.seed, params.octaves.clamp(1, 32), params.frequency),
         }
     }
@@ -67,35 +69,39 @@ impl ScalarField for Asteroid {
     #[inline]
     fn sample(&self, p: Vec3) -> f32 {
         let q = p - self.centre;
-        let n = self.fbm.get([q.x as f64, q.y as f64, q.z as f64]) as f32;
+        let n = self.fast.get([q.x, q.y, q.z].map(f64::from));
         q.length() - self.params.radius + self.params.amplitude * n
     }
 
-    /// The same values as [`ScalarField::sample`] (bit for bit: [`BatchFbm`] reproduces the
-    /// noise crate exactly), [`LANES`] points at a time.
+    /// The same values as [`ScalarField::sample`], bit for bit; runs of points with equal `y`
+    /// and `z` (the rows of a lattice) share the noise's work (see [`FastFbm`]).
     fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
+        const CHUNK: usize = 256;
         let (r, a) = (self.params.radius, self.params.amplitude);
-        let mut noise = [0.0f64; LANES];
-        for (ps, os) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let mut q = [Vec3::ZERO; LANES];
-            for (qi, &p) in q.iter_mut().zip(ps) {
-                *qi = p - self.centre;
+        let mut xyz = [[0.0f64; CHUNK]; 3];
+        let mut noise = [0.0f32; CHUNK];
+        for (ps, os) in points.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            let n = ps.len();
+            for (i, &p) in ps.iter().enumerate() {
+                let q = p - self.centre;
+                xyz[0][i] = f64::from(q.x);
+                xyz[1][i] = f64::from(q.y);
+                xyz[2][i] = f64::from(q.z);
             }
-            self.batch.get_lanes(
-                &q.map(|v| f64::from(v.x)),
-                &q.map(|v| f64::from(v.y)),
-                &q.map(|v| f64::from(v.z)),
-                &mut noise,
-            );
-            for ((o, qi), &n) in os.iter_mut().zip(&q).zip(&noise) {
-                *o = qi.length() - r + a * n as f32;
+            let [x, y, z] = &xyz;
+            self.fast
+                .get_points(&x[..n], &y[..n], &z[..n], &mut noise[..n]);
+            for (i, (o, &p)) in os.iter_mut().zip(ps).enumerate() {
+                let q = p - self.centre;
+                *o = q.length() - r + a * noise[i];
             }
         }
     }
 
     /// Radial interval plus the noise bound. With `q = p - centre`, `|q|` ranges over
     /// `[near, far]` (distances from the centre to the box) and the noise `n` over the interval
-    /// of [`BatchFbm::range`] on the box of `q` (within `[-1, 1]`, see [`fbm_bound`]), so
+    /// of [`BatchFbm::range`] on the box of `q` (within `[-1, 1]`, see [`fbm_bound`]), widened by
+    /// [`TOLERANCE`] for the `f32` evaluation, so
     /// `f = |q| - r + A n` lies in `[near - r + min(A n), far - r + max(A n)]` (the two terms
     /// depend on the same point, so the sum of their ranges is conservative). The noise is
     /// evaluated at the `f32` point `fl(p - centre)`, within `2^-24 |q|` of the exact one per
@@ -120,7 +126,7 @@ impl ScalarField for Asteroid {
             std::array::from_fn(|k| hi[k] - c[k] + slack),
         );
         let bound = f64::from(fbm_bound());
-        let (n0, n1) = (n0.max(-bound), n1.min(bound));
+        let (n0, n1) = (n0.max(-bound) - TOLERANCE, n1.min(bound) + TOLERANCE);
         let (an0, an1) = ((a * n0).min(a * n1), (a * n0).max(a * n1));
         widen(near - r + an0, far - r + an1, far + r.abs() + a.abs())
     }

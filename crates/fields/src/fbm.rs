@@ -21,7 +21,7 @@ use noise::{Fbm, MultiFractal, Perlin};
 pub const LANES: usize = 8;
 
 /// `2 / sqrt(3)`, the scale of `noise::core::perlin::perlin_3d` (the same literal).
-const SCALE_3D: f64 = 1.154_700_538_379_251_5;
+pub(crate) const SCALE_3D: f64 = 1.154_700_538_379_251_5;
 
 /// Per gradient index `h & 15`: whether the first term is `y` (else `x`), its sign, whether the
 /// second term is `z` (else `y`), its sign (see `perlin_3d`'s match).
@@ -46,13 +46,13 @@ const GRADIENTS: [(bool, f64, bool, f64); 16] = [
 
 /// [`GRADIENTS`] as bit masks over `h & 15`: first term `y`, first term negated, second term
 /// `z`, second term negated (checked against the table by a unit test).
-const U_IS_Y: u32 = 0xCF00;
-const U_NEG: u32 = 0xEAAA;
-const V_IS_Z: u32 = 0xCFF0;
-const V_NEG: u32 = 0x8CCC;
+pub(crate) const U_IS_Y: u32 = 0xCF00;
+pub(crate) const U_NEG: u32 = 0xEAAA;
+pub(crate) const V_IS_Z: u32 = 0xCFF0;
+pub(crate) const V_NEG: u32 = 0x8CCC;
 
 /// The permutation table of `noise::Perlin::new(seed)`.
-fn permutation(seed: u32) -> [u8; 256] {
+pub(crate) fn permutation(seed: u32) -> [u8; 256] {
     let table = PermutationTable::new(seed);
     // A one-element hash is the table entry itself: `values[i & 0xff]`.
     std::array::from_fn(|i| table.hash(&[i as isize]) as u8)
@@ -281,7 +281,7 @@ fn perlin2_lanes(perm: &[u8; 256], x: &[f64; LANES], y: &[f64; LANES], out: &mut
 }
 
 /// Whether this CPU runs AVX2 code.
-fn has_avx2() -> bool {
+pub(crate) fn has_avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::is_x86_feature_detected!("avx2")
@@ -316,7 +316,7 @@ fn lerp(a: f64, b: f64, alpha: f64) -> f64 {
 /// coordinate is small enough for `i32` corners (`|v| < 2^30`, where truncating to `i32` and to
 /// `isize` agree), else the `isize` version.
 #[inline(always)]
-fn perlin_lanes(
+pub(crate) fn perlin_lanes(
     perm: &[u8; 256],
     perm32: &[u32; 256],
     x: &[f64; LANES],

@@ -20,6 +20,7 @@
 mod analytic;
 mod asteroid;
 mod error;
+pub mod fast_fbm;
 pub mod fbm;
 mod interval;
 mod mesh_sdf;

@@ -1,0 +1,504 @@
+//! `Fbm<Perlin>` of the `noise` crate (version 0.9) with its arithmetic in `f32` and its work
+//! shared along rows of points: the same object as [`crate::fbm::BatchFbm`] to within
+//! [`TOLERANCE`], several times faster on the rows of points that extraction samples.
+//!
+//! What stays exact, so that the noise is the same function: the octave coordinates
+//! (`p * frequency * lacunarity^k`, in `f64`, in the crate's order), the Perlin cell of each
+//! coordinate (the crate's corner rule), the offset `d` from the cell's corner (`f64`), the
+//! permutation tables and the hash `P[P[P[x] ^ y] ^ z]`, hence the gradient picked at every
+//! corner. What is `f32`: the offset once it is known (`d` in `[0, 1]`, rounded once), the
+//! gradient terms, the quintic fade, the blend and the weighted octave sum.
+//!
+//! # Rows
+//!
+//! A lattice samples rows: points with the same `y` and `z` and increasing `x`. In one octave,
+//! for a fixed `(y, z)` and a fixed cell `c` along `x`, every corner gradient is
+//! `g = a * qx + r` with `a` in `{-1, 0, 1}` and `r` not depending on `x` (the crate's gradients
+//! `+-u +- v` never use `x` twice), and the fade-weighted blend over `y` and `z` is linear. So the
+//! two `x` faces of the cell reduce to `L0(qx) = A0 qx + B0` and `L1(qx) = A1 qx + B1`, with
+//! `A_o = blend_yz(a)` and `B_o = blend_yz(r)` computed once per cell, and the noise is
+//! `S * lerp(L0(d), L1(d - 1), fade(d))`: the crate's formula with the blend distributed over
+//! `a * qx + r` (equal in real arithmetic). A row pays the hashing and the `y`-`z` blend once per
+//! cell it crosses, and about fifteen `f32` operations per point, over [`LANES`] points at a time.
+//!
+//! **Every point is evaluated this way**, whatever its neighbours in a batch: a point's value
+//! depends on the point alone (its own `y`, `z`, cell and offset), so a single sample, a batch
+//! and a row give the same bits, and so do the portable build and the AVX2 build of the same code
+//! (the same IEEE operations in the same order; Rust never fuses multiply-adds).
+//!
+//! # Why [`TOLERANCE`] holds
+//!
+//! Per octave, with the gradients fixed by the exact cell, the crate's value is
+//! `S * blend(fade(d), g(d))` for `d` in `[0, 1]^3`; ours evaluates the same function at
+//! `d' = fl32(d)` in `f32`. An error budget (unit roundoff `u = 2^-24`):
+//! - `|d' - d| <= u / 2` per axis. Each gradient has partial derivatives of magnitude at most
+//!   1 and value at most 2; the fade's derivative is at most `30/16`, so the blend moves by at
+//!   most `1 + 1.875 * 4 = 8.5` per unit of `d` along an axis: at most `3 * 8.5 * u / 2 < 7.6e-7`.
+//! - `d' - 1`: exact or off by `u / 2`; a gradient term `r` (at most 2): off by `u`.
+//! - The fade of `x` in `[0, 1]`: six roundings of values at most 10, a relative error below
+//!   `7u`, so each weight is off by less than `4.2e-7`; a weight multiplies a difference of at
+//!   most 4, on three levels: `< 5.1e-6`.
+//! - The blends (`A`, `B`: values at most 1 and 2), `A qx + B` (at most 3) and the final
+//!   interpolation round about 20 times along the deepest chain on values at most 4:
+//!   `< 20 * 4 * u < 4.8e-6`.
+//! - Times `S = 2 / sqrt(3)` (one more rounding): `(0.76 + 0.2 + 5.1 + 4.8) * 1.155 + 0.1`, under
+//!   `1.27e-5` per octave in the worst case; the clamp to `[-1, 1]` only brings values closer.
+//!
+//! The octaves are summed with weights `w_k = att_k * scale` (rounded to `f32`) that sum to 1, so
+//! the weighted errors keep that bound, and the roundings of the sum and of the weights add
+//! under `2 K u`, at most `1e-6` for 8 octaves: [`TOLERANCE`] is `2e-5`, above the budget. The
+//! worst cases of the terms do not meet at one point, and the unit tests measure the largest
+//! difference over 350,000 random and grid points at 1 to 8 octaves (a few `1e-6`) and check
+//! it against [`TOLERANCE`]; callers that bound values (the asteroid's range) widen by it. Octave coordinates beyond `2^30` take the exact `f64` kernel of
+//! `BatchFbm`, and only its result is rounded to `f32`.
+
+use crate::fbm::{
+    has_avx2, perlin_lanes, permutation, LANES, SCALE_3D, U_IS_Y, U_NEG, V_IS_Z, V_NEG,
+};
+use noise::{Fbm, MultiFractal, Perlin};
+
+/// The largest difference from `noise::Fbm::<Perlin>`, for 1 to 8 octaves (see the
+/// [module documentation](self)).
+pub const TOLERANCE: f64 = 2e-5;
+
+/// Octave coordinates of at most this magnitude take the `f32` kernel (their corners fit an
+/// `i32`); the others the exact `f64` one.
+const SMALL: f64 = (1u32 << 30) as f64;
+
+/// `f32` `2 / sqrt(3)`.
+const SCALE: f32 = SCALE_3D as f32;
+
+/// `Fbm::<Perlin>` (3D) in `f32`, evaluated along rows (see the [module documentation](self)).
+#[derive(Clone, Debug)]
+pub struct FastFbm {
+    /// Per octave: the permutation table, as bytes and as `u32` (the exact kernel takes both).
+    perms8: Vec<[u8; 256]>,
+    perms32: Vec<[u32; 256]>,
+    frequency: f64,
+    lacunarity: f64,
+    /// Per octave: `persistence^(k+1) * scale`, the crate's attenuation and final scale.
+    weights: Vec<f32>,
+    avx2: bool,
+}
+
+impl FastFbm {
+    /// The `f32` twin of
+    /// `Fbm::<Perlin>::new(seed).set_octaves(octaves).set_frequency(frequency)` (`octaves`
+    /// clamped to 1..=32 as the crate does; [`TOLERANCE`] is established for up to 8).
+    pub fn new(seed: u32, octaves: usize, frequency: f64) -> Self {
+        let reference = Fbm::<Perlin>::new(seed)
+            .set_octaves(octaves)
+            .set_frequency(frequency);
+        let octaves = reference.octaves;
+        let persistence = reference.persistence;
+        // As `Fbm::calc_scale_factor`, then the attenuation of each octave.
+        let denom = (1..=octaves).fold(0.0, |acc: f64, x| acc + persistence.powi(x as i32));
+        let scale = 1.0 / denom;
+        let mut attenuation = persistence;
+        let weights = (0..octaves)
+            .map(|_| {
+                let w = (attenuation * scale) as f32;
+                attenuation *= persistence;
+                w
+            })
+            .collect();
+        let perms8: Vec<[u8; 256]> = (0..octaves)
+            .map(|k| permutation(seed.wrapping_add(k as u32)))
+            .collect();
+        Self {
+            perms32: perms8.iter().map(|p| p.map(u32::from)).collect(),
+            perms8,
+            frequency: reference.frequency,
+            lacunarity: reference.lacunarity,
+            weights,
+            avx2: has_avx2(),
+        }
+    }
+
+    /// The noise at one point.
+    pub fn get(&self, p: [f64; 3]) -> f32 {
+        let mut out = [0.0];
+        self.get_row(&[p[0]], p[1], p[2], &mut out);
+        out[0]
+    }
+
+    /// The noise at the points `(xs[i], y, z)`, into `out[i]` (`out` as long as `xs`).
+    #[inline]
+    pub fn get_row(&self, xs: &[f64], y: f64, z: f64, out: &mut [f32]) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only when the CPU has AVX2 (checked at construction).
+            unsafe { self.get_row_avx2(xs, y, z, out) };
+            return;
+        }
+        self.get_row_portable(xs, y, z, out);
+    }
+
+    /// The noise at the points `(x[i], y[i], z[i])`: each run of points with equal `y` and `z`
+    /// is one row (the values do not depend on how the points are grouped).
+    pub fn get_points(&self, x: &[f64], y: &[f64], z: &[f64], out: &mut [f32]) {
+        let n = x.len().min(y.len()).min(z.len()).min(out.len());
+        let mut start = 0;
+        while start < n {
+            let (y0, z0) = (y[start], z[start]);
+            let mut end = start + 1;
+            while end < n && y[end].to_bits() == y0.to_bits() && z[end].to_bits() == z0.to_bits() {
+                end += 1;
+            }
+            self.get_row(&x[start..end], y0, z0, &mut out[start..end]);
+            start = end;
+        }
+    }
+
+    /// [`FastFbm::get_row`] built for the baseline instruction set (what CPUs without AVX2 run;
+    /// tested against the AVX2 build on this CPU).
+    pub fn get_row_portable(&self, xs: &[f64], y: f64, z: f64, out: &mut [f32]) {
+        self.row(xs, y, z, out);
+    }
+
+    /// [`FastFbm::get_row`] built for AVX2: the same code, so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn get_row_avx2(&self, xs: &[f64], y: f64, z: f64, out: &mut [f32]) {
+        self.row(xs, y, z, out);
+    }
+
+    #[inline(always)]
+    fn row(&self, xs: &[f64], y: f64, z: f64, out: &mut [f32]) {
+        // Per octave, the last cell met along the row and its faces: consecutive chunks of a
+        // row share a cell at their boundary.
+        let mut cache = [(i32::MIN, [0.0f32; 4]); 32];
+        for (xc, oc) in xs.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            // A short chunk repeats its last point in the spare lanes (each lane's value
+            // depends on its own point alone).
+            let last = xc[xc.len() - 1];
+            let x: [f64; LANES] = std::array::from_fn(|i| xc.get(i).copied().unwrap_or(last));
+            let mut v = [0.0f32; LANES];
+            self.lanes(&x, y, z, &mut v, &mut cache);
+            oc.copy_from_slice(&v[..oc.len()]);
+        }
+    }
+
+    /// All octaves at `N` points of one row.
+    #[inline(always)]
+    fn lanes<const N: usize>(
+        &self,
+        x: &[f64; N],
+        y: f64,
+        z: f64,
+        out: &mut [f32; N],
+        cache: &mut [(i32, [f32; 4])],
+    ) {
+        let mut px = x.map(|v| v * self.frequency);
+        let (mut py, mut pz) = (y * self.frequency, z * self.frequency);
+        let mut result = [0.0f32; N];
+        let mut signal = [0.0f32; N];
+        for (k, &w) in self.weights.iter().enumerate() {
+            let small = px
+                .iter()
+                .fold(py.abs() < SMALL && pz.abs() < SMALL, |ok, v| {
+                    ok & (v.abs() < SMALL)
+                });
+            if small {
+                octave_row(&self.perms8[k], &px, py, pz, &mut signal, &mut cache[k]);
+            } else {
+                // Far out (or not finite): the exact kernel, point by point, so a point's value
+                // never depends on its neighbours.
+                for i in 0..N {
+                    let mut exact = [0.0f64; LANES];
+                    perlin_lanes(
+                        &self.perms8[k],
+                        &self.perms32[k],
+                        &[px[i]; LANES],
+                        &[py; LANES],
+                        &[pz; LANES],
+                        &mut exact,
+                    );
+                    signal[i] = exact[0] as f32;
+                }
+            }
+            for i in 0..N {
+                result[i] += signal[i] * w;
+            }
+            for v in px.iter_mut() {
+                *v *= self.lacunarity;
+            }
+            py *= self.lacunarity;
+            pz *= self.lacunarity;
+        }
+        *out = result;
+    }
+}
+
+/// The crate's corner rule (`v as isize`, minus one for `v <= 0`) and the offset from it, for
+/// `|v| < 2^30`.
+#[inline(always)]
+fn corner(v: f64) -> (i32, f32) {
+    let t = v.trunc();
+    let c = if v <= 0.0 { t - 1.0 } else { t };
+    // SAFETY: callers pass `|v| < 2^30`, so `c` is an integer that fits an `i32`.
+    (unsafe { c.to_int_unchecked::<i32>() }, (v - c) as f32)
+}
+
+/// One octave of Perlin noise at `N` points `(x[i], y, z)`, coordinates below `2^30`; `cache`
+/// holds the last cell met in this row and octave, and its faces.
+#[inline(always)]
+fn octave_row<const N: usize>(
+    perm: &[u8; 256],
+    x: &[f64; N],
+    y: f64,
+    z: f64,
+    out: &mut [f32; N],
+    cache: &mut (i32, [f32; 4]),
+) {
+    // The row's y and z: cells, offsets, fades.
+    let (cy, dy) = corner(y);
+    let (cz, dz) = corner(z);
+    let yi = [(cy & 0xff) as usize, ((cy + 1) & 0xff) as usize];
+    let zi = [(cz & 0xff) as usize, ((cz + 1) & 0xff) as usize];
+    let (qy, qz) = ([dy, dy - 1.0], [dz, dz - 1.0]);
+    let (fy, fz) = (quintic(dy), quintic(dz));
+    // The points' x: cells and offsets.
+    let mut cx = [0i32; N];
+    let mut dx = [0.0f32; N];
+    for i in 0..N {
+        (cx[i], dx[i]) = corner(x[i]);
+    }
+    // Per cell met, the two x faces as `A qx + B`; copied to the lanes in that cell.
+    // Rows run along x, so the cells of the lanes are usually a short range: visit it (skipping
+    // cells no lane is in); otherwise visit the lanes' distinct cells one by one.
+    let mut coef = [[0.0f32; N]; 4];
+    let (lo, hi) = cx
+        .iter()
+        .fold((i32::MAX, i32::MIN), |(a, b), &c| (a.min(c), b.max(c)));
+    let mut visit = |c: i32, coef: &mut [[f32; N]; 4]| -> bool {
+        let mut any = false;
+        for &ci in &cx {
+            any |= ci == c;
+        }
+        if !any {
+            return false;
+        }
+        if cache.0 != c {
+            *cache = (c, cell_faces(perm, c, yi, zi, qy, qz, fy, fz));
+        }
+        let face = cache.1;
+        for (k, ck) in coef.iter_mut().enumerate() {
+            for i in 0..N {
+                ck[i] = if cx[i] == c { face[k] } else { ck[i] };
+            }
+        }
+        true
+    };
+    if hi - lo < N as i32 {
+        for c in lo..=hi {
+            visit(c, &mut coef);
+        }
+    } else {
+        let mut done = [false; N];
+        for i in 0..N {
+            if !done[i] {
+                visit(cx[i], &mut coef);
+                for j in i..N {
+                    done[j] |= cx[j] == cx[i];
+                }
+            }
+        }
+    }
+    let [a0, b0, a1, b1] = coef;
+    for i in 0..N {
+        let l0 = a0[i] * dx[i] + b0[i];
+        let l1 = a1[i] * (dx[i] - 1.0) + b1[i];
+        let r = lerp(l0, l1, quintic(dx[i])) * SCALE;
+        out[i] = r.clamp(-1.0, 1.0);
+    }
+}
+
+/// `[A0, B0, A1, B1]` of cell `c` along x in the row of y cells `yi`, z cells `zi` (see the
+/// module documentation): each corner's gradient split into its x coefficient and the rest,
+/// both blended over y and z with the fades `fy`, `fz`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn cell_faces(
+    perm: &[u8; 256],
+    c: i32,
+    yi: [usize; 2],
+    zi: [usize; 2],
+    qy: [f32; 2],
+    qz: [f32; 2],
+    fy: f32,
+    fz: f32,
+) -> [f32; 4] {
+    let mut face = [0.0f32; 4];
+    for ox in 0..2 {
+        let a = perm[((c + ox as i32) & 0xff) as usize] as usize;
+        let mut ax = [[0.0f32; 2]; 2];
+        let mut rest = [[0.0f32; 2]; 2];
+        for oy in 0..2 {
+            let b = perm[a ^ yi[oy]] as usize;
+            for oz in 0..2 {
+                let h = u32::from(perm[b ^ zi[oz]] & 15);
+                (ax[oy][oz], rest[oy][oz]) = split_gradient(h, qy[oy], qz[oz]);
+            }
+        }
+        face[2 * ox] = lerp(
+            lerp(ax[0][0], ax[0][1], fz),
+            lerp(ax[1][0], ax[1][1], fz),
+            fy,
+        );
+        face[2 * ox + 1] = lerp(
+            lerp(rest[0][0], rest[0][1], fz),
+            lerp(rest[1][0], rest[1][1], fz),
+            fy,
+        );
+    }
+    face
+}
+
+/// The crate's gradient `(+-u) + (+-v)` for hash `h` as `a * qx + r`: `a` is `+-1` when `u` is
+/// `x` (else 0), `r` the rest (`v` is never `x`).
+#[inline(always)]
+fn split_gradient(h: u32, qy: f32, qz: f32) -> (f32, f32) {
+    // Branch-free (the hashes are random): picks by mask, signs by flipping the sign bit.
+    let bit = |mask: u32| (mask >> h) & 1;
+    let sign = |mask: u32| bit(mask) << 31;
+    let v = if bit(V_IS_Z) != 0 { qz } else { qy };
+    let v = f32::from_bits(v.to_bits() ^ sign(V_NEG));
+    let u_is_y = bit(U_IS_Y) != 0;
+    let a = f32::from_bits((if u_is_y { 0 } else { 1.0f32.to_bits() }) ^ sign(U_NEG));
+    let uy = f32::from_bits(qy.to_bits() ^ sign(U_NEG));
+    // `+-0 + v` is `v` except for the sign of a zero `v`, which the crate keeps as `+-u + v`
+    // would not: use `v` itself when `u` is `x`.
+    let r = if u_is_y { uy + v } else { v };
+    (if u_is_y { 0.0 } else { a }, r)
+}
+
+/// The quintic fade, in the crate's operation order.
+#[inline(always)]
+fn quintic(v: f32) -> f32 {
+    let x = v.clamp(0.0, 1.0);
+    x * x * x * (x * (x * 6.0 - 15.0) + 10.0)
+}
+
+/// The crate's `linear(a, b, alpha)`.
+#[inline(always)]
+fn lerp(a: f32, b: f32, alpha: f32) -> f32 {
+    b * alpha + a * (1.0 - alpha)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use noise::NoiseFn;
+
+    fn points(n: usize, seed: u64, lo: f64, hi: f64) -> Vec<[f64; 3]> {
+        let mut s = seed | 1;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            lo + (hi - lo) * ((s >> 11) as f64 / (1u64 << 53) as f64)
+        };
+        (0..n).map(|_| [next(), next(), next()]).collect()
+    }
+
+    /// Points of an `n^3` grid over `[lo, hi]^3` in row order, as `f32` coordinates.
+    fn grid(n: usize, lo: f64, hi: f64) -> Vec<[f64; 3]> {
+        let h = (hi - lo) / (n - 1) as f64;
+        let c = |k: usize| f64::from((lo + k as f64 * h) as f32);
+        (0..n * n * n)
+            .map(|i| [c(i % n), c((i / n) % n), c(i / (n * n))])
+            .collect()
+    }
+
+    /// Largest `|fast - noise crate|` over `pts` evaluated as batches (rows where `y` and `z`
+    /// repeat); checks on the way that the portable build and single points give the same bits.
+    fn compare(seed: u32, octaves: usize, frequency: f64, pts: &[[f64; 3]]) -> f64 {
+        let reference = Fbm::<Perlin>::new(seed)
+            .set_octaves(octaves)
+            .set_frequency(frequency);
+        let fast = FastFbm::new(seed, octaves, frequency);
+        let axis = |a: usize| -> Vec<f64> { pts.iter().map(|p| p[a]).collect() };
+        let (x, y, z) = (axis(0), axis(1), axis(2));
+        let mut out = vec![0.0f32; pts.len()];
+        fast.get_points(&x, &y, &z, &mut out);
+        let mut worst = 0.0f64;
+        for (i, p) in pts.iter().enumerate() {
+            if i % 7 == 0 {
+                assert_eq!(
+                    out[i].to_bits(),
+                    fast.get(*p).to_bits(),
+                    "single point {p:?}"
+                );
+                let mut portable = [0.0f32];
+                fast.get_row_portable(&[p[0]], p[1], p[2], &mut portable);
+                assert_eq!(
+                    out[i].to_bits(),
+                    portable[0].to_bits(),
+                    "portable build at {p:?}"
+                );
+            }
+            worst = worst.max((f64::from(out[i]) - reference.get(*p)).abs());
+        }
+        worst
+    }
+
+    #[test]
+    fn fast_fbm_is_within_the_tolerance_of_the_noise_crate() {
+        for (seed, octaves, frequency) in [(7, 4, 1.5), (5, 4, 1.2), (0, 1, 1.0), (99, 8, 2.7)] {
+            let mut pts = points(50_000, u64::from(seed) + 3, -3.0, 3.0);
+            pts.extend(grid(41, -1.0, 1.0));
+            for i in -8..8 {
+                for j in -8..8 {
+                    let (a, b) = (i as f64 / 2.0, j as f64 / 3.0);
+                    pts.push([a, b, a]);
+                    pts.push([0.0, a, -0.0]);
+                    pts.push([a / frequency, b / frequency, 0.0]);
+                }
+            }
+            let worst = compare(seed, octaves, frequency, &pts);
+            println!("seed {seed}, {octaves} octaves: largest difference {worst:e}");
+            assert!(
+                worst < TOLERANCE,
+                "seed {seed}, {octaves} octaves: off by {worst:e}"
+            );
+        }
+    }
+
+    #[test]
+    fn rows_of_any_length_give_each_point_its_own_value() {
+        let fast = FastFbm::new(7, 4, 1.5);
+        let xs: Vec<f64> = (0..37).map(|i| -1.0 + 0.057 * i as f64).collect();
+        for len in [1, 3, 8, 9, 37] {
+            let mut out = vec![0.0f32; len];
+            fast.get_row(&xs[..len], 0.25, -0.4, &mut out);
+            for (x, v) in xs.iter().zip(&out) {
+                assert_eq!(
+                    v.to_bits(),
+                    fast.get([*x, 0.25, -0.4]).to_bits(),
+                    "x {x}, {len}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn far_points_take_the_exact_kernel() {
+        // Octave coordinates beyond 2^30: the f64 kernel, rounded once.
+        let worst = compare(3, 4, 1.0, &points(2_000, 9, 1e9, 3e9));
+        assert!(worst < 1e-7, "off by {worst:e}");
+    }
+
+    #[test]
+    fn a_wrong_gradient_is_caught() {
+        // The comparison is sensitive: a one-octave noise with another seed is far off.
+        let pts = points(1_000, 4, -2.0, 2.0);
+        let reference = Fbm::<Perlin>::new(1).set_octaves(1);
+        let other = FastFbm::new(2, 1, 1.0);
+        let worst = pts
+            .iter()
+            .map(|&p| (f64::from(other.get(p)) - reference.get(p)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst > 100.0 * TOLERANCE);
+    }
+}
