@@ -165,6 +165,26 @@ impl FastFbm {
 
     #[inline(always)]
     fn row(&self, xs: &[f64], y: f64, z: f64, out: &mut [f32]) {
+        // What the row's octaves share: y and z, scaled as the crate scales them, and their
+        // cells, offsets and fades.
+        let mut octaves = [RowOctave::EMPTY; 32];
+        let (mut py, mut pz) = (y * self.frequency, z * self.frequency);
+        for o in octaves.iter_mut().take(self.weights.len()) {
+            let small = py.abs() < SMALL && pz.abs() < SMALL;
+            *o = RowOctave {
+                py,
+                pz,
+                small,
+                part: if small {
+                    RowPart::new(py, pz)
+                } else {
+                    RowPart::EMPTY
+                },
+            };
+            py *= self.lacunarity;
+            pz *= self.lacunarity;
+        }
+        let octaves = &octaves[..self.weights.len()];
         // Per octave, the last cell met along the row and its faces: consecutive chunks of a
         // row share a cell at their boundary.
         let mut cache = [(i32::MIN, [0.0f32; 4]); 32];
@@ -174,7 +194,7 @@ impl FastFbm {
             let last = xc[xc.len() - 1];
             let x: [f64; LANES] = std::array::from_fn(|i| xc.get(i).copied().unwrap_or(last));
             let mut v = [0.0f32; LANES];
-            self.lanes(&x, y, z, &mut v, &mut cache);
+            self.lanes(&x, octaves, &mut v, &mut cache);
             oc.copy_from_slice(&v[..oc.len()]);
         }
     }
@@ -184,23 +204,17 @@ impl FastFbm {
     fn lanes<const N: usize>(
         &self,
         x: &[f64; N],
-        y: f64,
-        z: f64,
+        octaves: &[RowOctave],
         out: &mut [f32; N],
         cache: &mut [(i32, [f32; 4])],
     ) {
         let mut px = x.map(|v| v * self.frequency);
-        let (mut py, mut pz) = (y * self.frequency, z * self.frequency);
         let mut result = [0.0f32; N];
         let mut signal = [0.0f32; N];
-        for (k, &w) in self.weights.iter().enumerate() {
-            let small = px
-                .iter()
-                .fold(py.abs() < SMALL && pz.abs() < SMALL, |ok, v| {
-                    ok & (v.abs() < SMALL)
-                });
+        for (k, (&w, o)) in self.weights.iter().zip(octaves).enumerate() {
+            let small = px.iter().fold(o.small, |ok, v| ok & (v.abs() < SMALL));
             if small {
-                octave_row(&self.perms8[k], &px, py, pz, &mut signal, &mut cache[k]);
+                octave_row(&self.perms8[k], &px, &o.part, &mut signal, &mut cache[k]);
             } else {
                 // Far out (or not finite): the exact kernel, point by point, so a point's value
                 // never depends on its neighbours.
@@ -210,8 +224,8 @@ impl FastFbm {
                         &self.perms8[k],
                         &self.perms32[k],
                         &[px[i]; LANES],
-                        &[py; LANES],
-                        &[pz; LANES],
+                        &[o.py; LANES],
+                        &[o.pz; LANES],
                         &mut exact,
                     );
                     signal[i] = exact[0] as f32;
@@ -223,11 +237,28 @@ impl FastFbm {
             for v in px.iter_mut() {
                 *v *= self.lacunarity;
             }
-            py *= self.lacunarity;
-            pz *= self.lacunarity;
         }
         *out = result;
     }
+}
+
+/// One octave of a row: its scaled `y` and `z`, whether they take the `f32` kernel, and what
+/// that kernel shares along the row.
+#[derive(Clone, Copy)]
+struct RowOctave {
+    py: f64,
+    pz: f64,
+    small: bool,
+    part: RowPart,
+}
+
+impl RowOctave {
+    const EMPTY: Self = Self {
+        py: 0.0,
+        pz: 0.0,
+        small: false,
+        part: RowPart::EMPTY,
+    };
 }
 
 /// The crate's corner rule (`v as isize`, minus one for `v <= 0`) and the offset from it, for
@@ -246,18 +277,10 @@ fn corner(v: f64) -> (i32, f32) {
 fn octave_row<const N: usize>(
     perm: &[u8; 256],
     x: &[f64; N],
-    y: f64,
-    z: f64,
+    row: &RowPart,
     out: &mut [f32; N],
     cache: &mut (i32, [f32; 4]),
 ) {
-    // The row's y and z: cells, offsets, fades.
-    let (cy, dy) = corner(y);
-    let (cz, dz) = corner(z);
-    let yi = [(cy & 0xff) as usize, ((cy + 1) & 0xff) as usize];
-    let zi = [(cz & 0xff) as usize, ((cz + 1) & 0xff) as usize];
-    let (qy, qz) = ([dy, dy - 1.0], [dz, dz - 1.0]);
-    let (fy, fz) = (quintic(dy), quintic(dz));
     // The points' x: cells and offsets.
     let mut cx = [0i32; N];
     let mut dx = [0.0f32; N];
@@ -271,34 +294,21 @@ fn octave_row<const N: usize>(
     let (lo, hi) = cx
         .iter()
         .fold((i32::MAX, i32::MIN), |(a, b), &c| (a.min(c), b.max(c)));
-    let mut visit = |c: i32, coef: &mut [[f32; N]; 4]| -> bool {
-        let mut any = false;
-        for &ci in &cx {
-            any |= ci == c;
+    if lo == hi {
+        // Every lane in one cell (the usual case at low octaves).
+        if cache.0 != lo {
+            *cache = (lo, cell_faces(perm, lo, row));
         }
-        if !any {
-            return false;
-        }
-        if cache.0 != c {
-            *cache = (c, cell_faces(perm, c, yi, zi, qy, qz, fy, fz));
-        }
-        let face = cache.1;
-        for (k, ck) in coef.iter_mut().enumerate() {
-            for i in 0..N {
-                ck[i] = if cx[i] == c { face[k] } else { ck[i] };
-            }
-        }
-        true
-    };
-    if hi - lo < N as i32 {
+        coef = cache.1.map(|f| [f; N]);
+    } else if hi - lo < N as i32 {
         for c in lo..=hi {
-            visit(c, &mut coef);
+            visit(perm, row, &cx, c, &mut coef, cache);
         }
     } else {
         let mut done = [false; N];
         for i in 0..N {
             if !done[i] {
-                visit(cx[i], &mut coef);
+                visit(perm, row, &cx, cx[i], &mut coef, cache);
                 for j in i..N {
                     done[j] |= cx[j] == cx[i];
                 }
@@ -314,63 +324,158 @@ fn octave_row<const N: usize>(
     }
 }
 
-/// `[A0, B0, A1, B1]` of cell `c` along x in the row of y cells `yi`, z cells `zi` (see the
-/// module documentation): each corner's gradient split into its x coefficient and the rest,
-/// both blended over y and z with the fades `fy`, `fz`.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn cell_faces(
-    perm: &[u8; 256],
-    c: i32,
+/// What one octave of a row shares: the y and z cells (wrapped), offsets and fades.
+#[derive(Clone, Copy)]
+struct RowPart {
     yi: [usize; 2],
     zi: [usize; 2],
     qy: [f32; 2],
     qz: [f32; 2],
     fy: f32,
     fz: f32,
-) -> [f32; 4] {
-    let mut face = [0.0f32; 4];
+}
+
+impl RowPart {
+    const EMPTY: Self = Self {
+        yi: [0; 2],
+        zi: [0; 2],
+        qy: [0.0; 2],
+        qz: [0.0; 2],
+        fy: 0.0,
+        fz: 0.0,
+    };
+
+    /// The part of the row at octave coordinates `y`, `z` (below `2^30`).
+    #[inline(always)]
+    fn new(y: f64, z: f64) -> Self {
+        let (cy, dy) = corner(y);
+        let (cz, dz) = corner(z);
+        Self {
+            yi: [(cy & 0xff) as usize, ((cy + 1) & 0xff) as usize],
+            zi: [(cz & 0xff) as usize, ((cz + 1) & 0xff) as usize],
+            qy: [dy, dy - 1.0],
+            qz: [dz, dz - 1.0],
+            fy: quintic(dy),
+            fz: quintic(dz),
+        }
+    }
+}
+
+/// Copies the faces of cell `c` (from `cache`, or computed into it) to the lanes in that cell.
+#[inline(always)]
+fn visit<const N: usize>(
+    perm: &[u8; 256],
+    row: &RowPart,
+    cx: &[i32; N],
+    c: i32,
+    coef: &mut [[f32; N]; 4],
+    cache: &mut (i32, [f32; 4]),
+) {
+    let mut any = false;
+    for &ci in cx {
+        any |= ci == c;
+    }
+    if !any {
+        return;
+    }
+    if cache.0 != c {
+        *cache = (c, cell_faces(perm, c, row));
+    }
+    let face = cache.1;
+    for (k, ck) in coef.iter_mut().enumerate() {
+        for i in 0..N {
+            ck[i] = if cx[i] == c { face[k] } else { ck[i] };
+        }
+    }
+}
+
+/// `[A0, B0, A1, B1]` of cell `c` along x in the row described by `row` (see the module
+/// documentation): each corner's gradient split into its x coefficient and the rest,
+/// both blended over y and z with the fades `fy`, `fz`.
+#[inline(always)]
+fn cell_faces(perm: &[u8; 256], c: i32, row: &RowPart) -> [f32; 4] {
+    let RowPart {
+        yi,
+        zi,
+        qy,
+        qz,
+        fy,
+        fz,
+    } = *row;
+    // The 8 corner hashes, corner k = 4 ox + 2 oy + oz.
+    let mut h = [0u32; 8];
     for ox in 0..2 {
         let a = perm[((c + ox as i32) & 0xff) as usize] as usize;
-        let mut ax = [[0.0f32; 2]; 2];
-        let mut rest = [[0.0f32; 2]; 2];
         for oy in 0..2 {
             let b = perm[a ^ yi[oy]] as usize;
             for oz in 0..2 {
-                let h = u32::from(perm[b ^ zi[oz]] & 15);
-                (ax[oy][oz], rest[oy][oz]) = split_gradient(h, qy[oy], qz[oz]);
+                h[4 * ox + 2 * oy + oz] = u32::from(perm[b ^ zi[oz]] & 15);
             }
         }
-        face[2 * ox] = lerp(
-            lerp(ax[0][0], ax[0][1], fz),
-            lerp(ax[1][0], ax[1][1], fz),
-            fy,
-        );
-        face[2 * ox + 1] = lerp(
-            lerp(rest[0][0], rest[0][1], fz),
-            lerp(rest[1][0], rest[1][1], fz),
-            fy,
-        );
     }
-    face
+    // The split gradients of all corners (table look-ups, no branches).
+    let mut ax = [0.0f32; 8];
+    let mut rest = [0.0f32; 8];
+    for k in 0..8 {
+        let g = &SPLIT[h[k] as usize];
+        ax[k] = g[0];
+        rest[k] = g[1] * qy[(k >> 1) & 1] + (g[2] * qy[(k >> 1) & 1] + g[3] * qz[k & 1]);
+    }
+    // Blend over z (corner pairs), then over y, for both faces.
+    let lo: [f32; 8] = std::array::from_fn(|i| if i < 4 { ax[2 * i] } else { rest[2 * (i - 4)] });
+    let hi: [f32; 8] = std::array::from_fn(|i| {
+        if i < 4 {
+            ax[2 * i + 1]
+        } else {
+            rest[2 * (i - 4) + 1]
+        }
+    });
+    let mut zb = [0.0f32; 8];
+    for i in 0..8 {
+        zb[i] = lerp(lo[i], hi[i], fz);
+    }
+    // zb: [ax(ox0,oy0), ax(0,1), ax(1,0), ax(1,1), rest(0,0), rest(0,1), rest(1,0), rest(1,1)].
+    [
+        lerp(zb[0], zb[1], fy),
+        lerp(zb[4], zb[5], fy),
+        lerp(zb[2], zb[3], fy),
+        lerp(zb[6], zb[7], fy),
+    ]
 }
 
-/// The crate's gradient `(+-u) + (+-v)` for hash `h` as `a * qx + r`: `a` is `+-1` when `u` is
-/// `x` (else 0), `r` the rest (`v` is never `x`).
-#[inline(always)]
-fn split_gradient(h: u32, qy: f32, qz: f32) -> (f32, f32) {
-    // Branch-free (the hashes are random): picks by mask, signs by flipping the sign bit.
-    let bit = |mask: u32| (mask >> h) & 1;
-    let sign = |mask: u32| bit(mask) << 31;
-    let v = if bit(V_IS_Z) != 0 { qz } else { qy };
-    let v = f32::from_bits(v.to_bits() ^ sign(V_NEG));
-    let u_is_y = bit(U_IS_Y) != 0;
-    let a = f32::from_bits((if u_is_y { 0 } else { 1.0f32.to_bits() }) ^ sign(U_NEG));
-    let uy = f32::from_bits(qy.to_bits() ^ sign(U_NEG));
-    // `+-0 + v` is `v` except for the sign of a zero `v`, which the crate keeps as `+-u + v`
-    // would not: use `v` itself when `u` is `x`.
-    let r = if u_is_y { uy + v } else { v };
-    (if u_is_y { 0.0 } else { a }, r)
+/// The crate's gradient `(+-u) + (+-v)` for hash `h` as `a * qx + r`, per `h`:
+/// `[a, cu, vy, vz]` with `r = cu * qy + (vy * qy + vz * qz)`: `a` is `+-1` when `u` is `x`
+/// (else 0), `cu` is `+-1` when `u` is `y` (else 0), and `v` is `y` or `z` with its sign. The
+/// products are exact (`+-q` or a zero) and adding a zero changes no non-zero value, so `r` is
+/// the crate's `+-u +- v` when `u` is `y`, and `+-v` when `u` is `x` (up to the sign of a zero).
+/// Derived from the bit masks of `fbm::GRADIENTS` (which a unit test there checks against the
+/// crate's table); a test here checks it against `split_gradient`.
+const SPLIT: [[f32; 4]; 16] = {
+    let mut t = [[0.0f32; 4]; 16];
+    let mut h = 0;
+    while h < 16 {
+        let (u_y, v_z) = ((U_IS_Y >> h) & 1 == 1, (V_IS_Z >> h) & 1 == 1);
+        let su = if (U_NEG >> h) & 1 == 1 { -1.0f32 } else { 1.0 };
+        let sv = if (V_NEG >> h) & 1 == 1 { -1.0f32 } else { 1.0 };
+        t[h] = [
+            if u_y { 0.0 } else { su },
+            if u_y { su } else { 0.0 },
+            if v_z { 0.0 } else { sv },
+            if v_z { sv } else { 0.0 },
+        ];
+        h += 1;
+    }
+    t
+};
+
+/// The split of the crate's gradient for hash `h`, term by term (the reference for [`SPLIT`]).
+#[cfg(test)]
+fn split_gradient(h: u32, qx: f32, qy: f32, qz: f32) -> f32 {
+    let u = if (U_IS_Y >> h) & 1 != 0 { qy } else { qx };
+    let v = if (V_IS_Z >> h) & 1 != 0 { qz } else { qy };
+    let u = if (U_NEG >> h) & 1 != 0 { -u } else { u };
+    let v = if (V_NEG >> h) & 1 != 0 { -v } else { v };
+    u + v
 }
 
 /// The quintic fade, in the crate's operation order.
@@ -478,6 +583,22 @@ mod tests {
                     fast.get([*x, 0.25, -0.4]).to_bits(),
                     "x {x}, {len}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn the_split_table_gives_the_crate_gradients() {
+        let qs = [0.25f32, -0.75, 0.5, 1.0, -1.0, 0.125];
+        for h in 0..16u32 {
+            let g = SPLIT[h as usize];
+            for &qx in &qs {
+                for &qy in &qs {
+                    for &qz in &qs {
+                        let ours = g[0] * qx + (g[1] * qy + (g[2] * qy + g[3] * qz));
+                        assert_eq!(ours, split_gradient(h, qx, qy, qz), "h {h}");
+                    }
+                }
             }
         }
     }
