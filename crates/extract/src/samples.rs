@@ -43,6 +43,13 @@
 //! the value matters. Positions are computed by the same functions as dense sampling, so the
 //! evaluated values are the same too. A non-finite value inside a skipped block is not seen
 //! (the field's range promised finite values there).
+//!
+//! The points left to evaluate are not evaluated block by block: each band of blocks (the
+//! blocks sharing a range of y slots in a slab) hands its row segments to one pass that groups
+//! them by storage row (a counting sort) and joins neighbours, so a row crossing several
+//! evaluated blocks reaches [`ScalarField::sample_batch`] as one run of points with equal `y`
+//! and `z`. Fields that share work along rows (the asteroid's noise) are faster on long runs,
+//! and since a field's value at a point does not depend on its batch, no value changes.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -394,17 +401,17 @@ impl Samples {
                 self.sample_block(field, iso, [x0, x1], [y0, y1], [0, planes], true, &mut slab);
             }
             // The band of rows y0..y1 is done: evaluate what its blocks left.
-            self.evaluate_runs(field, y0, &mut slab);
+            self.evaluate_runs(field, &mut slab);
         }
         result
     }
 
-    /// Evaluates the row segments that the slab's blocks left to evaluate, as runs along
-    /// storage rows: segments sorted by row and start, neighbours merged, so that a row
+    /// Evaluates the row segments that a band of blocks left to evaluate, as runs along
+    /// storage rows: segments grouped by row (in order within a row), neighbours joined, so that a row
     /// crossing several evaluated blocks is one run of points with the same `y` and `z`, which
     /// row-aware fields (the asteroid's noise) evaluate faster. A point's value does not depend
     /// on how points are grouped, so this changes no value.
-    fn evaluate_runs(&self, field: &dyn ScalarField, y0: usize, slab: &mut Slab<'_>) {
+    fn evaluate_runs(&self, field: &dyn ScalarField, slab: &mut Slab<'_>) {
         /// Points per call of `sample_batch` (bounds the scratch memory).
         const FLUSH: usize = 1 << 14;
         let [dx, dy, _] = self.dims;
@@ -414,38 +421,37 @@ impl Samples {
         // Group the segments by row with a counting sort over the band's rows (`BLOCK` rows
         // per plane): stable, and within a row the segments arrive in increasing order (blocks
         // and leaves go along x), so each row's segments end up in order.
-        let band = |row: usize| (row / plane) * BLOCK + (row % plane) / dx - y0;
         let rows = slab.out.len() / plane * BLOCK;
         scratch.counts.clear();
         scratch.counts.resize(rows + 1, 0);
-        for &(row, _, _) in &scratch.segments {
-            scratch.counts[band(row) + 1] += 1;
+        for &(key, _, _, _) in &scratch.segments {
+            scratch.counts[key + 1] += 1;
         }
         for k in 1..=rows {
             scratch.counts[k] += scratch.counts[k - 1];
         }
         scratch.sorted.clear();
-        scratch.sorted.resize(scratch.segments.len(), (0, 0, 0));
+        scratch.sorted.resize(scratch.segments.len(), (0, 0, 0, 0));
         for &seg in &scratch.segments {
-            let k = band(seg.0);
-            scratch.sorted[scratch.counts[k]] = seg;
-            scratch.counts[k] += 1;
+            scratch.sorted[scratch.counts[seg.0]] = seg;
+            scratch.counts[seg.0] += 1;
         }
         std::mem::swap(&mut scratch.segments, &mut scratch.sorted);
         scratch.points.clear();
         scratch.slots.clear();
         let mut i = 0;
         while i < scratch.segments.len() {
-            let (row, mut a, mut b) = scratch.segments[i];
+            let (key, y, mut a, mut b) = scratch.segments[i];
             i += 1;
             while i < scratch.segments.len()
-                && scratch.segments[i].0 == row
-                && scratch.segments[i].1 == b
+                && scratch.segments[i].0 == key
+                && scratch.segments[i].2 == b
             {
-                b = scratch.segments[i].2;
+                b = scratch.segments[i].3;
                 i += 1;
             }
-            let (z, y) = (row / plane, (row % plane) / dx);
+            let z = key / BLOCK;
+            let row = z * plane + y * dx;
             while a < b {
                 let end = b.min(a + FLUSH);
                 for x in a..end {
@@ -568,11 +574,12 @@ impl Samples {
             return;
         }
         // Evaluated at the end of the slab, in runs along rows (see `evaluate_runs`).
-        for (_, _, row, a, b) in rows {
+        for (y, z, row, a, b) in rows {
             out[row + x0..row + a].fill(f32::NAN);
             out[row + b..row + x1].fill(f32::NAN);
             if a < b {
-                slab.scratch.segments.push((row, a, b));
+                // Blocks start at multiples of `BLOCK` along y: the row's place in its band.
+                slab.scratch.segments.push((z * BLOCK + y % BLOCK, y, a, b));
             }
         }
     }
@@ -638,10 +645,11 @@ use rmt_fields::ScalarField;
 /// Per-thread working memory of sparse sampling (reused across blocks).
 #[derive(Default)]
 struct Scratch {
-    /// Row segments left to evaluate: (storage offset of the row in the slab, first slot, end).
-    segments: Vec<(usize, usize, usize)>,
+    /// Row segments left to evaluate in the current band of rows: (the row's index in the band,
+    /// `z * BLOCK + y % BLOCK` with `z` local to the slab; `y`; first slot; end).
+    segments: Vec<(usize, usize, usize, usize)>,
     /// The segments grouped by row, and the counting sort's counters.
-    sorted: Vec<(usize, usize, usize)>,
+    sorted: Vec<(usize, usize, usize, usize)>,
     counts: Vec<usize>,
     points: Vec<Vec3>,
     slots: Vec<usize>,

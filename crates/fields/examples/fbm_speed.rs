@@ -1,9 +1,11 @@
 //! Nanoseconds per point of `Fbm<Perlin>` (the asteroid's noise: seed 7, 4 octaves, frequency
-//! 1.5): the `noise` crate one point at a time against [`rmt_fields::fbm::BatchFbm`], on one
-//! thread, median of `reps` passes over `points` points; the results are checked bit for bit.
-//! Two point sets: uniform random points in `[-1, 1]^3`, and the points of a 128^3 grid over
-//! that box in row order (what extraction samples; the noise crate's branches predict well on
-//! them, and neighbouring points share Perlin cells).
+//! 1.5), on one thread, median of `reps` passes over `points` points: the `noise` crate one
+//! point at a time, [`rmt_fields::fbm::BatchFbm`] (8 points at a time, checked bit for bit) and
+//! [`rmt_fields::fast_fbm::FastFbm`] (`f32`, along rows; its largest difference from the crate
+//! is printed and checked against its tolerance). Two point sets: uniform random points in
+//! `[-1, 1]^3` (every point its own row), and the points of a 128^3 grid over that box in row
+//! order (what extraction samples: rows of 129 points with equal `y` and `z`; the noise crate's
+//! branches predict well on them, and neighbouring points share Perlin cells).
 //!
 //! `cargo run --release -p rmt-fields --example fbm_speed -- [points] [reps] [octaves]`
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};

@@ -571,6 +571,18 @@ mod tests {
     }
 
     #[test]
+    fn one_octave_is_the_crates_perlin() {
+        // The cave terrain's tunnels use one-octave noise as `Perlin` (weight 1 exactly).
+        let fast = FastFbm::new(12, 1, 3.0);
+        let perlin = Perlin::new(12);
+        let worst = points(20_000, 5, -2.0, 2.0)
+            .iter()
+            .map(|p| (f64::from(fast.get(*p)) - perlin.get(p.map(|c| c * 3.0))).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < TOLERANCE, "off by {worst:e}");
+    }
+
+    #[test]
     fn rows_of_any_length_give_each_point_its_own_value() {
         let fast = FastFbm::new(7, 4, 1.5);
         let xs: Vec<f64> = (0..37).map(|i| -1.0 + 0.057 * i as f64).collect();

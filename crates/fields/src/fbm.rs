@@ -211,36 +211,6 @@ impl BatchFbm {
     }
 }
 
-/// `noise::Perlin` (3D) for batches of points; same values, bit for bit.
-#[derive(Clone, Debug)]
-pub struct BatchPerlin {
-    perm: [u8; 256],
-    perm32: [u32; 256],
-}
-
-impl BatchPerlin {
-    /// The batch twin of `Perlin::new(seed)`.
-    pub fn new(seed: u32) -> Self {
-        let perm = permutation(seed);
-        Self {
-            perm32: perm.map(u32::from),
-            perm,
-        }
-    }
-
-    /// The noise at `LANES` points.
-    #[inline]
-    pub fn get_lanes(
-        &self,
-        x: &[f64; LANES],
-        y: &[f64; LANES],
-        z: &[f64; LANES],
-        out: &mut [f64; LANES],
-    ) {
-        perlin_lanes(&self.perm, &self.perm32, x, y, z, out);
-    }
-}
-
 /// `2 / sqrt(2)`, the scale of `noise::core::perlin::perlin_2d` (the same expression).
 const SCALE_2D: f64 = 2.0 / std::f64::consts::SQRT_2;
 
@@ -671,9 +641,7 @@ mod tests {
                 ours.get([0.3, -0.2, 0.9]).to_bits(),
                 reference.get([0.3, -0.2, 0.9]).to_bits()
             );
-            // 2D, as the height field uses it, and the single Perlin noise.
-            let perlin = Perlin::new(seed);
-            let single = BatchPerlin::new(seed);
+            // 2D, as the height field uses it.
             for chunk in pts.chunks_exact(LANES) {
                 let lane = |a: usize| -> [f64; LANES] { std::array::from_fn(|k| chunk[k][a]) };
                 let mut out = [0.0; LANES];
@@ -685,11 +653,6 @@ mod tests {
                         r.to_bits(),
                         "2D seed {seed} at {p:?}: {o} vs {r}"
                     );
-                }
-                single.get_lanes(&lane(0), &lane(1), &lane(2), &mut out);
-                for (p, o) in chunk.iter().zip(out) {
-                    let r = perlin.get(*p);
-                    assert_eq!(o.to_bits(), r.to_bits(), "Perlin seed {seed} at {p:?}");
                 }
             }
         }

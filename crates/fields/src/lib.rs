@@ -41,8 +41,10 @@ pub trait ScalarField: Send + Sync {
     /// The field's value at `p` (world coordinates).
     fn sample(&self, p: Vec3) -> f32;
 
-    /// Samples many points at once: `out[i] = sample(points[i])`. Override when a field can
-    /// vectorise or share work between points.
+    /// Samples many points at once: `out[i] = sample(points[i])`, bit for bit, whatever the
+    /// other points of the batch. Override when a field can vectorise or share work between
+    /// points: the extractors pass lattice rows (points with equal `y` and `z`, `x` increasing)
+    /// as consecutive runs.
     fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
         for (o, &p) in out.iter_mut().zip(points) {
             *o = self.sample(p);

@@ -11,7 +11,8 @@
 //! sampled box through its sides, where the extracted mesh is open by design.
 
 use crate::asteroid::fbm_bound;
-use crate::fbm::{BatchFbm, BatchPerlin, LANES};
+use crate::fast_fbm::{FastFbm, TOLERANCE};
+use crate::fbm::{BatchFbm, LANES};
 use crate::interval::{box64, widen};
 use crate::ScalarField;
 use glam::Vec3;
@@ -157,30 +158,26 @@ impl Default for CaveParams {
 /// `f = max(y - base + amplitude * fbm(p), radius - sqrt(n1(p)^2 + n2(p)^2))` below the cave
 /// ceiling (`n1`, `n2` independent Perlin noises; the second term is negative inside a tunnel,
 /// so the max removes the tunnel from the ground).
+///
+/// The three noises are the `noise` crate's (`Fbm<Perlin>` and two `Perlin`, a one-octave
+/// `Fbm<Perlin>` being exactly `Perlin`), evaluated by [`FastFbm`] in `f32` along rows, within
+/// [`TOLERANCE`] of the crate's values. A single sample and a batch give the same bits.
 pub struct CaveTerrain {
     params: CaveParams,
-    fbm: Fbm<Perlin>,
-    cave_a: Perlin,
-    cave_b: Perlin,
-    batch: (BatchFbm, BatchPerlin, BatchPerlin),
+    fbm: FastFbm,
+    cave_a: FastFbm,
+    cave_b: FastFbm,
 }
 
 impl CaveTerrain {
     /// A terrain with `params`.
     pub fn new(params: CaveParams) -> Self {
-        let fbm = Fbm::<Perlin>::new(params.seed)
-            .set_octaves(params.octaves.clamp(1, 32))
-            .set_frequency(params.frequency);
+        let k = params.cave_frequency;
         Self {
             params,
-            fbm,
-            cave_a: Perlin::new(params.seed.wrapping_add(1)),
-            cave_b: Perlin::new(params.seed.wrapping_add(2)),
-            batch: (
-                BatchFbm::new(params.seed, params.octaves.clamp(1, 32), params.frequency),
-                BatchPerlin::new(params.seed.wrapping_add(1)),
-                BatchPerlin::new(params.seed.wrapping_add(2)),
-            ),
+            fbm: FastFbm::new(params.seed, params.octaves.clamp(1, 32), params.frequency),
+            cave_a: FastFbm::new(params.seed.wrapping_add(1), 1, k),
+            cave_b: FastFbm::new(params.seed.wrapping_add(2), 1, k),
         }
     }
 
@@ -192,68 +189,76 @@ impl CaveTerrain {
     /// The ground without caves (negative inside).
     #[inline]
     pub fn ground(&self, p: Vec3) -> f32 {
-        let q = [f64::from(p.x), f64::from(p.y), f64::from(p.z)];
-        p.y - self.params.base + self.params.amplitude * self.fbm.get(q) as f32
+        let n = self.fbm.get([p.x, p.y, p.z].map(f64::from));
+        p.y - self.params.base + self.params.amplitude * n
     }
 
     /// The tunnels' field: negative inside a tunnel (ignores the ceiling).
     #[inline]
     pub fn tunnels(&self, p: Vec3) -> f32 {
-        let k = self.params.cave_frequency;
-        let q = [f64::from(p.x) * k, f64::from(p.y) * k, f64::from(p.z) * k];
-        let (a, b) = (self.cave_a.get(q) as f32, self.cave_b.get(q) as f32);
+        let q = [p.x, p.y, p.z].map(f64::from);
+        let (a, b) = (self.cave_a.get(q), self.cave_b.get(q));
         (a * a + b * b).sqrt() - self.params.cave_radius
+    }
+
+    /// The field from the noises at a point: the formula of [`ScalarField::sample`].
+    #[inline]
+    fn combine(&self, p: Vec3, n: f32, a: f32, b: f32) -> f32 {
+        let c = &self.params;
+        let ground = p.y - c.base + c.amplitude * n;
+        if c.cave_radius <= 0.0 {
+            return ground;
+        }
+        let tunnels = (a * a + b * b).sqrt() - c.cave_radius;
+        // Blend the carving out above the ceiling, continuously, so no step appears there.
+        let fade = (p.y - c.cave_ceiling).max(0.0);
+        ground.max(-(tunnels + fade))
     }
 }
 
 impl ScalarField for CaveTerrain {
     #[inline]
     fn sample(&self, p: Vec3) -> f32 {
-        let ground = self.ground(p);
+        let q = [p.x, p.y, p.z].map(f64::from);
+        let n = self.fbm.get(q);
         if self.params.cave_radius <= 0.0 {
-            return ground;
+            return self.combine(p, n, 0.0, 0.0);
         }
-        // Blend the carving out above the ceiling, continuously, so no step appears there.
-        let fade = (p.y - self.params.cave_ceiling).max(0.0);
-        ground.max(-(self.tunnels(p) + fade))
+        self.combine(p, n, self.cave_a.get(q), self.cave_b.get(q))
     }
 
-    /// The same values as `sample`, bit for bit ([`BatchFbm`], [`BatchPerlin`]), `LANES`
-    /// points at a time.
+    /// The same values as `sample`, bit for bit; runs of points with equal `y` and `z` (the
+    /// rows of a lattice) share the noises' work (see [`FastFbm`]).
     fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
-        let p = &self.params;
-        let k = p.cave_frequency;
-        let (mut n, mut na, mut nb) = ([0.0f64; LANES], [0.0f64; LANES], [0.0f64; LANES]);
-        for (ps, os) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let lane = |f: fn(&Vec3) -> f32| -> [f64; LANES] {
-                std::array::from_fn(|i| ps.get(i).map_or(0.0, |q| f64::from(f(q))))
-            };
-            let (x, y, z) = (lane(|q| q.x), lane(|q| q.y), lane(|q| q.z));
-            self.batch.0.get_lanes(&x, &y, &z, &mut n);
-            let caves = p.cave_radius > 0.0;
-            if caves {
-                let (kx, ky, kz) = (x.map(|v| v * k), y.map(|v| v * k), z.map(|v| v * k));
-                self.batch.1.get_lanes(&kx, &ky, &kz, &mut na);
-                self.batch.2.get_lanes(&kx, &ky, &kz, &mut nb);
+        const CHUNK: usize = 256;
+        let caves = self.params.cave_radius > 0.0;
+        let mut xyz = [[0.0f64; CHUNK]; 3];
+        let (mut n, mut na, mut nb) = ([0.0f32; CHUNK], [0.0f32; CHUNK], [0.0f32; CHUNK]);
+        for (ps, os) in points.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            let len = ps.len();
+            for (i, p) in ps.iter().enumerate() {
+                xyz[0][i] = f64::from(p.x);
+                xyz[1][i] = f64::from(p.y);
+                xyz[2][i] = f64::from(p.z);
             }
-            for (i, (o, q)) in os.iter_mut().zip(ps).enumerate() {
-                let ground = q.y - p.base + p.amplitude * n[i] as f32;
-                *o = if caves {
-                    let (a, b) = (na[i] as f32, nb[i] as f32);
-                    let tunnels = (a * a + b * b).sqrt() - p.cave_radius;
-                    let fade = (q.y - p.cave_ceiling).max(0.0);
-                    ground.max(-(tunnels + fade))
-                } else {
-                    ground
-                };
+            let [x, y, z] = &xyz;
+            let (x, y, z) = (&x[..len], &y[..len], &z[..len]);
+            self.fbm.get_points(x, y, z, &mut n[..len]);
+            if caves {
+                self.cave_a.get_points(x, y, z, &mut na[..len]);
+                self.cave_b.get_points(x, y, z, &mut nb[..len]);
+            }
+            for (i, (o, &p)) in os.iter_mut().zip(ps).enumerate() {
+                *o = self.combine(p, n[i], na[i], nb[i]);
             }
         }
     }
 
-    /// Interval arithmetic on the formula. The noises lie in `[-1, 1]` (Perlin clamps its
-    /// result; `asteroid::fbm_bound` for the fractal), so:
-    /// - `ground = y - base + A fbm` lies in `[y_lo - base - |A|, y_hi - base + |A|]`;
-    /// - `tunnels = sqrt(a^2 + b^2) - radius` in `[-radius, sqrt 2 - radius]`;
+    /// Interval arithmetic on the formula. The crate's noises lie in `[-1, 1]` (Perlin clamps
+    /// its result; `asteroid::fbm_bound` for the fractal), and [`FastFbm`]'s within
+    /// [`TOLERANCE`] of them, so in `[-m, m]` with `m = 1 + TOLERANCE`:
+    /// - `ground = y - base + A fbm` lies in `[y_lo - base - m|A|, y_hi - base + m|A|]`;
+    /// - `tunnels = sqrt(a^2 + b^2) - radius` in `[-radius, m sqrt 2 - radius]`;
     /// - `fade = max(y - ceiling, 0)` in `[max(y_lo - ceiling, 0), max(y_hi - ceiling, 0)]`;
     /// - `max(ground, -(tunnels + fade))` in `[max(lo_g, lo_c), max(hi_g, hi_c)]` (max is
     ///   increasing in both arguments), or `ground` alone without caves.
@@ -268,7 +273,8 @@ impl ScalarField for CaveTerrain {
             f64::from(p.cave_radius),
             f64::from(p.cave_ceiling),
         );
-        let a = f64::from(p.amplitude).abs() * f64::from(fbm_bound());
+        let m = f64::from(fbm_bound()) + TOLERANCE;
+        let a = f64::from(p.amplitude).abs() * m;
         let (g0, g1) = (lo[1] - base - a, hi[1] - base + a);
         let magnitude =
             lo[1].abs().max(hi[1].abs()) + base.abs() + a + 2.0 + radius.abs() + ceiling.abs();
@@ -276,7 +282,10 @@ impl ScalarField for CaveTerrain {
             return widen(g0, g1, magnitude);
         }
         let (fade0, fade1) = ((lo[1] - ceiling).max(0.0), (hi[1] - ceiling).max(0.0));
-        let (c0, c1) = (-(std::f64::consts::SQRT_2 - radius + fade1), radius - fade0);
+        let (c0, c1) = (
+            -(m * std::f64::consts::SQRT_2 - radius + fade1),
+            radius - fade0,
+        );
         widen(g0.max(c0), g1.max(c1), magnitude)
     }
 }
