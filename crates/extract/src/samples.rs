@@ -22,18 +22,19 @@
 //! **Sparse sampling** ([`Sampling::Sparse`], what [`crate::Extractor`] does by default): the
 //! storage is cut into blocks of [`BLOCK`] cells per axis (`BLOCK` slots along x and y, `BLOCK`
 //! storage planes along z, or `2 BLOCK` planes on the body-centred lattice, where each cell has
-//! a centre plane and a corner plane). For each block the field is asked for its
-//! [`ScalarField::range`] over the box of the block's points *and of all their lattice
-//! neighbours* (one cell of margin: every neighbour of a point, on either lattice, and every
-//! corner of a marching cube through it, is at most one cell away per axis; ghosts are taken at
-//! their clamped positions). When that range excludes the isovalue `T`, the block is not
-//! evaluated: its points get a placeholder on the known side, the range's end nearest `T`
-//! (`hi < T` inside, `lo >= T` outside; never closer to `T` than a true value of the block).
-//! A block whose range does not exclude `T` is split once into 8 sub-blocks of `BLOCK / 2`
+//! a centre plane and a corner plane). For each block the field is asked, through
+//! [`ScalarField::side`] (by default from its [`ScalarField::range`]), whether it stays on one
+//! side of `T` over the box of the block's points *and of all their lattice neighbours* (one
+//! cell of margin: every neighbour of a point, on either lattice, and every corner of a
+//! marching cube through it, is at most one cell away per axis; ghosts are taken at their
+//! clamped positions). When it does, the block is not evaluated: its points get the placeholder
+//! that `side` returns, on the known side (an end of the field's bound: `hi < T` inside,
+//! `lo >= T` outside).
+//! A block whose side is not known is split once into 8 sub-blocks of `BLOCK / 2`
 //! cells per axis, each tested (with its own one-cell margin) and skipped or evaluated alone.
 //!
 //! Why the meshes are unchanged (byte for byte): (1) every stored value has the same side of
-//! `T` as the true value (a skipped point's true value is in its block's range), so the inside
+//! `T` as the true value (a skipped point's true value is within its block's bound), so the inside
 //! bits, crossed edges, case indices and clustering masks are the same; (2) a crossed edge never
 //! touches a skipped point: its other end lies in the skipped block's margin box, so its true
 //! value is on the same side, and the edge would not be crossed; likewise every corner of a
@@ -523,17 +524,7 @@ impl Samples {
         let (lo, hi) = self.block_box(x, y, [z0 + z[0], z0 + z[1]]);
         // The side of the whole block, when its range excludes the isovalue: a placeholder no
         // closer to iso than any true value there.
-        let known = field.range(lo, hi).and_then(|(a, b)| {
-            let inside = if b.is_finite() { b } else { f32::MIN };
-            let outside = if a.is_finite() { a } else { f32::MAX };
-            if inside < iso {
-                Some(inside)
-            } else if outside >= iso {
-                Some(outside)
-            } else {
-                None
-            }
-        });
+        let known = field.side(lo, hi, iso);
         let (x0, x1) = (x[0], x[1]);
         // Each row of the block: its real points `a..b`, unused slots (NaN, as dense sampling
         // leaves them) on either side.

@@ -3,7 +3,7 @@
 use crate::fast_fbm::{FastFbm, TOLERANCE};
 use crate::fbm::BatchFbm;
 use crate::interval::{box64, distance_to_box, widen};
-use crate::ScalarField;
+use crate::{side_of, ScalarField};
 use glam::Vec3;
 
 /// Parameters of an [`Asteroid`].
@@ -110,6 +110,31 @@ impl ScalarField for Asteroid {
     /// `far + |r| + |A|` (the rounding of `n` to `f32` included), covered by the widening (see
     /// `interval`'s module doc).
     fn range(&self, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+        self.range_until(lo, hi, |_| false)
+    }
+
+    /// [`ScalarField::range`]'s bound built octave by octave ([`BatchFbm::range_until`]),
+    /// stopping as soon as it decides the side: blocks far from the surface are decided by the
+    /// radial interval alone, others after an octave or two.
+    fn side(&self, lo: Vec3, hi: Vec3, iso: f32) -> Option<f32> {
+        let mut side = None;
+        let (a, b) = self.range_until(lo, hi, |(a, b)| {
+            side = side_of(a, b, iso);
+            side.is_some()
+        })?;
+        side.or_else(|| side_of(a, b, iso))
+    }
+}
+
+impl Asteroid {
+    /// The bound of [`ScalarField::range`] (see there), asking `enough` after each step of the
+    /// noise's bound whether the interval so far (already a valid bound) suffices.
+    fn range_until(
+        &self,
+        lo: Vec3,
+        hi: Vec3,
+        mut enough: impl FnMut((f32, f32)) -> bool,
+    ) -> Option<(f32, f32)> {
         let (lo, hi) = box64(lo, hi)?;
         let c = self.centre.to_array().map(f64::from);
         let (near, far) = distance_to_box(lo, hi, c);
@@ -121,14 +146,18 @@ impl ScalarField for Asteroid {
             .map(|k| (lo[k] - c[k]).abs().max((hi[k] - c[k]).abs()))
             .fold(0.0, f64::max);
         let slack = qmax * (2.0 * f64::from(f32::EPSILON)) + 1e-30;
-        let (n0, n1) = self.batch.range(
+        let bound = f64::from(fbm_bound());
+        let f_range = |(n0, n1): (f64, f64)| {
+            let (n0, n1) = (n0.max(-bound) - TOLERANCE, n1.min(bound) + TOLERANCE);
+            let (an0, an1) = ((a * n0).min(a * n1), (a * n0).max(a * n1));
+            widen(near - r + an0, far - r + an1, far + r.abs() + a.abs())
+        };
+        let noise = self.batch.range_until(
             std::array::from_fn(|k| lo[k] - c[k] - slack),
             std::array::from_fn(|k| hi[k] - c[k] + slack),
+            |n0, n1| f_range((n0, n1)).is_some_and(&mut enough),
         );
-        let bound = f64::from(fbm_bound());
-        let (n0, n1) = (n0.max(-bound) - TOLERANCE, n1.min(bound) + TOLERANCE);
-        let (an0, an1) = ((a * n0).min(a * n1), (a * n0).max(a * n1));
-        widen(near - r + an0, far - r + an1, far + r.abs() + a.abs())
+        f_range(noise)
     }
 }
 

@@ -456,14 +456,56 @@ impl BatchFbm {
     /// `asteroid::fbm_bound`; widened by `2^-52`). Boxes that cover more than 8 cells in an
     /// octave take that octave's whole range `[-1, 1]`.
     pub fn range(&self, lo: [f64; 3], hi: [f64; 3]) -> (f64, f64) {
+        self.range_until(lo, hi, |_, _| false)
+    }
+
+    /// [`BatchFbm::range`] built octave by octave, lowest frequency first, asking `enough`
+    /// after each step whether the interval so far suffices (then it is returned at once).
+    /// Before the first octave and after each one, the octaves not yet bounded are each within
+    /// `[-1, 1]` (`perlin_3d` clamps), so the running sum widened by their attenuations (summed
+    /// with a relative slack of `1e-12`) and scaled, widened and clipped as in `range`, is an
+    /// interval of the same kind: every interval passed to `enough` contains every value `get`
+    /// returns in the box, and so does the one returned.
+    pub fn range_until(
+        &self,
+        lo: [f64; 3],
+        hi: [f64; 3],
+        mut enough: impl FnMut(f64, f64) -> bool,
+    ) -> (f64, f64) {
         let full = (-1.0 - 1e-15, 1.0 + 1e-15);
         if !(lo.iter().chain(&hi).all(|v| v.is_finite())) {
             return full;
         }
-        let mut scale = self.frequency;
+        // The attenuations of the octaves from k on, for every k.
+        let mut rest = [0.0f64; 33];
         let mut attenuation = self.persistence;
+        let atts: Vec<f64> = self
+            .perms
+            .iter()
+            .map(|_| {
+                let a = attenuation;
+                attenuation *= self.persistence;
+                a
+            })
+            .collect();
+        for k in (0..atts.len()).rev() {
+            rest[k] = rest[k + 1] + atts[k].abs();
+        }
+        let bound = |total_lo: f64, total_hi: f64, k: usize| {
+            let r = rest[k] * (1.0 + 1e-12);
+            let (a, b) = (
+                (total_lo - r) * self.scale - 1e-9,
+                (total_hi + r) * self.scale + 1e-9,
+            );
+            (a.max(full.0), b.min(full.1))
+        };
         let (mut total_lo, mut total_hi) = (0.0, 0.0);
-        for perm in &self.perms {
+        let (a, b) = bound(0.0, 0.0, 0);
+        if enough(a, b) {
+            return (a, b);
+        }
+        let mut scale = self.frequency;
+        for (k, (perm, &attenuation)) in self.perms.iter().zip(&atts).enumerate() {
             let widen = |v: f64, s: f64| v * scale + s * (1e-12 * (v * scale).abs() + 1e-12);
             let b0: [f64; 3] = std::array::from_fn(|a| {
                 widen(lo[a].min(hi[a]), -1.0).min(widen(lo[a].max(hi[a]), -1.0))
@@ -474,11 +516,13 @@ impl BatchFbm {
             let (olo, ohi) = octave_range(perm, b0, b1);
             total_lo += olo * attenuation;
             total_hi += ohi * attenuation;
-            attenuation *= self.persistence;
             scale *= self.lacunarity;
+            let (a, b) = bound(total_lo, total_hi, k + 1);
+            if k + 1 == atts.len() || enough(a, b) {
+                return (a, b);
+            }
         }
-        let (a, b) = (total_lo * self.scale - 1e-9, total_hi * self.scale + 1e-9);
-        (a.max(full.0), b.min(full.1))
+        full
     }
 }
 

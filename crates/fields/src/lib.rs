@@ -75,6 +75,40 @@ pub trait ScalarField: Send + Sync {
     fn range(&self, _lo: Vec3, _hi: Vec3) -> Option<(f32, f32)> {
         None
     }
+
+    /// Whether the field stays on one side of `iso` over the box `[lo, hi]`, as far as a proven
+    /// bound tells: `Some(v)` with `v < iso` when every value the field returns there is below
+    /// `iso`, `v >= iso` when every one is at least `iso` (`v` is a placeholder for the box's
+    /// values, an end of such a bound); `None` when no bound tells. The default decides from
+    /// [`ScalarField::range`] with [`side_of`]; a field whose range is costly may stop as soon
+    /// as a cheaper bound decides (the asteroid adds its noise octave by octave).
+    fn side(&self, lo: Vec3, hi: Vec3, iso: f32) -> Option<f32> {
+        self.range(lo, hi).and_then(|(a, b)| side_of(a, b, iso))
+    }
+}
+
+/// The side of `iso` that a range `[a, b]` of values lies on, as [`ScalarField::side`] reports
+/// it: `Some(b)` when `b < iso` (all inside), `Some(a)` when `a >= iso` (all outside), else `None`.
+/// Infinite ends become the extreme finite values, so the placeholder is finite.
+///
+/// ```
+/// use rmt_fields::side_of;
+/// assert_eq!(side_of(-3.0, -1.0, 0.0), Some(-1.0));
+/// assert_eq!(side_of(0.5, f32::INFINITY, 0.0), Some(0.5));
+/// assert_eq!(side_of(-1.0, 1.0, 0.0), None);
+/// assert_eq!(side_of(f32::NEG_INFINITY, f32::NEG_INFINITY, 0.0), Some(f32::MIN));
+/// assert_eq!(side_of(-1.0, f32::INFINITY, 0.0), None);
+/// assert_eq!(side_of(f32::NAN, f32::NAN, 0.0), None);
+/// ```
+pub fn side_of(a: f32, b: f32, iso: f32) -> Option<f32> {
+    // (Comparisons with NaN are false: a NaN end decides nothing.)
+    if b < iso {
+        Some(if b.is_finite() { b } else { f32::MIN })
+    } else if a >= iso {
+        Some(if a.is_finite() { a } else { f32::MAX })
+    } else {
+        None
+    }
 }
 
 impl<F: ScalarField + ?Sized> ScalarField for &F {
@@ -90,6 +124,9 @@ impl<F: ScalarField + ?Sized> ScalarField for &F {
     fn range(&self, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
         (**self).range(lo, hi)
     }
+    fn side(&self, lo: Vec3, hi: Vec3, iso: f32) -> Option<f32> {
+        (**self).side(lo, hi, iso)
+    }
 }
 
 impl<F: ScalarField + ?Sized> ScalarField for Box<F> {
@@ -104,5 +141,8 @@ impl<F: ScalarField + ?Sized> ScalarField for Box<F> {
     }
     fn range(&self, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
         (**self).range(lo, hi)
+    }
+    fn side(&self, lo: Vec3, hi: Vec3, iso: f32) -> Option<f32> {
+        (**self).side(lo, hi, iso)
     }
 }

@@ -1,12 +1,13 @@
 //! `ScalarField::range` is conservative: on random boxes, every value the field returns at
 //! points of the box (a dense grid including the corners and faces, plus random points, through
-//! both `sample` and `sample_batch`) lies within the range.
+//! both `sample` and `sample_batch`) lies within the range. `ScalarField::side` is right
+//! whenever it answers, and answers whenever the range decides.
 
 use glam::Vec3;
 use proptest::prelude::*;
 use rmt_fields::{
-    Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, MeshSdf, ScalarField, Sphere,
-    SvobodaParams, SvobodaTerrain, Torus,
+    side_of, Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, MeshSdf, ScalarField,
+    Sphere, SvobodaParams, SvobodaTerrain, Torus,
 };
 use rmt_mesh::Mesh;
 
@@ -54,6 +55,33 @@ fn check(field: &dyn ScalarField, lo: Vec3, hi: Vec3, seed: u64) -> Result<bool,
         prop_assert!(
             a <= vb && vb <= b,
             "sample_batch at {p} = {vb} outside [{a}, {b}] of the box {lo} .. {hi}"
+        );
+    }
+    // `side`, at isovalues below, inside and above the range, and at sampled values.
+    let isos = [
+        a - 0.1,
+        a,
+        0.5 * (a + b),
+        b,
+        b + 0.1,
+        batch[0],
+        batch[batch.len() / 2],
+        0.0,
+    ];
+    for iso in isos.into_iter().filter(|v| v.is_finite()) {
+        let side = field.side(lo, hi, iso);
+        if let Some(v) = side {
+            let inside = v < iso;
+            for (&p, &vb) in pts.iter().zip(&batch) {
+                prop_assert!(
+                    (vb < iso) == inside,
+                    "side({lo} .. {hi}, {iso}) = {v}, but the value at {p} is {vb}"
+                );
+            }
+        }
+        prop_assert!(
+            side.is_some() || side_of(a, b, iso).is_none(),
+            "the range [{a}, {b}] decides iso {iso} on {lo} .. {hi} but side does not"
         );
     }
     Ok(true)
