@@ -495,18 +495,8 @@ fn lerp(a: f32, b: f32, alpha: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fbm::tests::points;
     use noise::NoiseFn;
-
-    fn points(n: usize, seed: u64, lo: f64, hi: f64) -> Vec<[f64; 3]> {
-        let mut s = seed | 1;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            lo + (hi - lo) * ((s >> 11) as f64 / (1u64 << 53) as f64)
-        };
-        (0..n).map(|_| [next(), next(), next()]).collect()
-    }
 
     /// Points of an `n^3` grid over `[lo, hi]^3` in row order, as `f32` coordinates.
     fn grid(n: usize, lo: f64, hi: f64) -> Vec<[f64; 3]> {

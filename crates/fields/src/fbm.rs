@@ -594,12 +594,12 @@ fn cell_range(perm: &[u8; 256], c: [i64; 3], d0: [f64; 3], d1: [f64; 3]) -> (f64
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use noise::NoiseFn;
 
-    /// xorshift in [lo, hi).
-    fn points(n: usize, seed: u64, lo: f64, hi: f64) -> Vec<[f64; 3]> {
+    /// `n` pseudo-random points (xorshift) in `[lo, hi)^3` (also used by `fast_fbm`'s tests).
+    pub(crate) fn points(n: usize, seed: u64, lo: f64, hi: f64) -> Vec<[f64; 3]> {
         let mut s = seed | 1;
         let mut next = || {
             s ^= s << 13;
