@@ -263,7 +263,7 @@ pub fn summary(e: &Extraction, threads: usize, m: &Measurement) -> String {
         s.blocks_skipped,
         s.blocks,
     );
-    if s.t_cluster_check_s > 0.0 {
+    if s.t_tests_s > 0.0 {
         out += &format!(
             "  merging:  of the vertex pass, {} ms\n",
             rmt_extract::Stats::merge_steps_text(s.merge_steps().map(ms), 3)

@@ -6,7 +6,10 @@
 //! with [`rmt_extract::BufferPolicy::Lean`]; `dense`: [`rmt_extract::Sampling::Dense`] instead of
 //! the default sparse sampling; every listing must equal the default one). Marching cubes, the
 //! meshopt mode and the terrains come after the original listing, so an older listing is a
-//! prefix-free subset: compare with `comm`.
+//! prefix-free subset: compare with `comm`. `mesh_hashes.txt` beside this file is the listing
+//! of the last change that meant to change meshes (the order-free integrated clustering; the
+//! hashes include the counters, so every line changed there, and the triangle counts of the
+//! integrated modes).
 use rmt_extract::{
     BufferPolicy, CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Method,
     NormalMode, Sampling, Tiling,
@@ -133,8 +136,7 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                                 st.clusters_proposed,
                                 st.clusters_committed,
                                 st.clusters_rejected,
-                                st.lone_absorbed,
-                                st.slivers_collapsed,
+                                st.repair_rounds,
                                 st.collapses,
                                 st.discarded,
                             ] {

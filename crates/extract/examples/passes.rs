@@ -7,7 +7,7 @@
 //! ```
 //!
 //! For the clustering modes a second line splits the clustering part of the vertex pass into its
-//! steps (see the `t_*_s` fields of `Stats`): only the cluster checks run in parallel.
+//! steps (see the `t_*_s` fields of `Stats`): the tests and the repair rounds run in parallel.
 //!
 //! `filter` keeps the configurations whose name (`field lattice clustering`, e.g.
 //! `asteroid bcdl integrated`) is or contains it: `passes 64 50 1 "asteroid bcdl integrated"`
@@ -79,7 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let first = ex.extract(field, &s, &mut mesh)?;
                 let (mut v, mut g, mut t) = (Vec::new(), Vec::new(), Vec::new());
                 // The clustering steps inside the vertex pass, in order.
-                let mut steps: [Vec<f64>; 6] = Default::default();
+                let mut steps: [Vec<f64>; 4] = Default::default();
                 for _ in 0..reps {
                     let st = ex.extract_presampled(&s, &mut mesh)?;
                     v.push(st.t_vertex_s);

@@ -228,29 +228,6 @@ pub fn det(t: &[Offset; 4]) -> i64 {
         + u[2] * (v[0] * w[1] - v[1] * w[0])
 }
 
-/// The colour of a lattice point: no two neighbours share one, so clusters at points of one colour
-/// never touch the same tetrahedron. Body-centred: 16 colours; simple: 8.
-#[inline]
-pub fn colour(lattice: Lattice, p: Offset) -> usize {
-    match lattice {
-        Lattice::BodyCentred => {
-            ((p[0] & 1) as usize) * 8
-                + ((p[0] >> 1) & 1) as usize
-                + 2 * ((p[1] >> 1) & 1) as usize
-                + 4 * ((p[2] >> 1) & 1) as usize
-        }
-        Lattice::Simple => (p[0] & 1) as usize + 2 * (p[1] & 1) as usize + 4 * (p[2] & 1) as usize,
-    }
-}
-
-/// Number of colours of `lattice`.
-pub fn colour_count(lattice: Lattice) -> usize {
-    match lattice {
-        Lattice::BodyCentred => 16,
-        Lattice::Simple => 8,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -513,25 +490,6 @@ mod tests {
                 .collect();
             assert_eq!(edges, offsets);
             assert_eq!(count, 24, "each point lies in 24 tetrahedra");
-        }
-    }
-
-    #[test]
-    fn neighbours_never_share_a_colour() {
-        for (lattice, t) in both() {
-            for p in [[2, 4, 6], [3, 5, 7], [0, 0, 0], [1, 1, 1], [-1, 3, 5]] {
-                if lattice == Lattice::Simple || (p[0] & 1 == p[1] & 1 && p[1] & 1 == p[2] & 1) {
-                    for o in t.offsets {
-                        let q = [p[0] + o[0], p[1] + o[1], p[2] + o[2]];
-                        assert_ne!(
-                            colour(lattice, p),
-                            colour(lattice, q),
-                            "{lattice:?} {p:?} {q:?}"
-                        );
-                        assert!(colour(lattice, q) < colour_count(lattice));
-                    }
-                }
-            }
         }
     }
 }

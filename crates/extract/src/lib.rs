@@ -4,20 +4,28 @@
 //! 1. **sampling**: evaluate the field at the points of the lattice ([`samples`]), in parallel,
 //!    block by block; blocks whose [`ScalarField::range`] excludes the isovalue are skipped
 //!    (their points only need a sign; [`Sampling`]), so the cost follows the surface;
-//! 2. **vertex pass**: find crossed lattice edges, give each crossing to its nearer end point and
-//!    number it ([`mt`]); with integrated clustering, group each point's nearby crossings into
-//!    clusters ([`cluster`]);
-//! 3. **geometry pass**: one or two triangles per crossed tetrahedron from the case table
-//!    ([`mt`]); clusters are committed one lattice colour at a time, each only after an exact
-//!    local check that keeps the mesh closed and manifold ([`merge`]); post-processing
-//!    (edge collapse, meshopt) runs here too;
-//! 4. **normals**.
+//! 2. **vertex pass**: classify the points into inside bits, find crossed lattice edges, give
+//!    each crossing to its nearer end point and number it ([`mt`]);
+//! 3. **proposal** (clustering): a partition of the crossings into groups from each point's
+//!    islands of nearby crossings, plus lone crossings given to a neighbouring island
+//!    ([`cluster`], [`mt`]); order-free by construction;
+//! 4. **quotient test and repair** (integrated clustering): every group is tested in the mesh
+//!    where all groups are contracted at once (its star read from plain MT's triangles, listed
+//!    once), and failures are repaired by splitting groups in parallel rounds until every group
+//!    passes; then variants of split islands, lone crossings and sliver pairs are added the same
+//!    way ([`quotient`]);
+//! 5. **emission**: one or two triangles per crossed tetrahedron from the case table, written
+//!    with the clustered vertex ids; collapsed ones are left out ([`mt`]).
+//!    Post-processing (edge collapse, meshopt) runs after it, on the mesh ([`merge`],
+//!    [`collapse`]);
+//! 6. **normals**.
 //!
 //! The [`Extractor`] keeps every buffer between calls, as a game would.
 //!
-//! Cost, on a 2-vCPU Xeon VM at 128^3 cells on one thread: about 14 ns per sample point for
-//! marching tetrahedra on the body-centred lattice without clustering, about 42-50 ns with
-//! integrated clustering (mostly its exact checks; [`Stats::merge_steps`] splits that time).
+//! Cost, on a 2-vCPU AMD EPYC VM at 64^3 cells on one thread (pre-sampled values): about 20-24 ns
+//! per sample point for marching tetrahedra on the body-centred lattice without clustering,
+//! 3.3-3.5 times that with integrated clustering (mostly its quotient tests;
+//! [`Stats::merge_steps`] splits that time).
 //! Reproduce with `cargo run --release -p experiments -- bench` (side by side with
 //! fast-surface-nets and isomesh) or `cargo run --release -p rmt-extract --example passes`.
 //!
@@ -44,6 +52,7 @@ pub mod mc;
 pub mod measure;
 pub mod merge;
 pub mod mt;
+pub mod quotient;
 pub mod samples;
 pub mod settings;
 pub mod simplify;

@@ -82,17 +82,6 @@ impl Default for Scratch {
     }
 }
 
-/// One triangle's change under a checked merge: its new vertices and whether it dies.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TriangleEdit {
-    /// The triangle (original numbering).
-    pub t: u32,
-    /// Its vertices after the merge.
-    pub tri: [u32; 3],
-    /// It had two or more vertices in the merged set and is dropped.
-    pub dead: bool,
-}
-
 /// Most regions have at most this many vertices: their check runs on bit sets.
 const SMALL: usize = 64;
 
@@ -171,8 +160,6 @@ pub struct MergeBuffers {
     /// Working memory of [`MergeBuffers::merge`], boxed so that lending it out moves a pointer,
     /// not kilobytes of tables (and allocates nothing).
     scratch: Option<Box<Scratch>>,
-    /// The edits of the last checked merge (working memory of [`MergeBuffers::merge`]).
-    edits: Vec<TriangleEdit>,
 }
 
 impl MergeBuffers {
@@ -181,21 +168,6 @@ impl MergeBuffers {
         self.tris.clear();
         self.tris
             .extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
-        self.load_filled(vertex_count);
-    }
-
-    /// Room for `triangles` triangles, three indices each, to be written in place and then
-    /// loaded with [`MergeBuffers::load_filled`] (the geometry pass writes straight into it: no
-    /// second copy of the triangles).
-    pub fn triangles_to_fill(&mut self, triangles: usize) -> &mut [u32] {
-        self.tris.clear();
-        self.tris.resize(triangles, [0; 3]);
-        self.tris.as_flattened_mut()
-    }
-
-    /// Loads `vertex_count` vertices and the triangles written into
-    /// [`MergeBuffers::triangles_to_fill`].
-    pub fn load_filled(&mut self, vertex_count: usize) {
         self.inc_start.clear();
         self.inc_start.resize(vertex_count + 1, 0);
         for tri in &self.tris {
@@ -244,32 +216,6 @@ impl MergeBuffers {
             m = self.next_member[m as usize];
         }
         n
-    }
-
-    /// Whether `v` has absorbed other vertices (`member_count(v) > 1`), without walking its
-    /// chain.
-    pub fn has_members(&self, v: u32) -> bool {
-        self.next_member[v as usize] != NONE
-    }
-
-    /// The current vertices sharing a live triangle with current vertex `v`, sorted, without `v`.
-    pub fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
-        out.clear();
-        let mut m = v;
-        while m != NONE {
-            let (a, b) = (
-                self.inc_start[m as usize] as usize,
-                self.inc_start[m as usize + 1] as usize,
-            );
-            for &t in &self.inc[a..b] {
-                if self.live(t) {
-                    out.extend(self.tris[t as usize].iter().filter(|&&u| u != v));
-                }
-            }
-            m = self.next_member[m as usize];
-        }
-        out.sort_unstable();
-        out.dedup();
     }
 
     /// Number of triangles loaded (alive or not): `t` in `0..triangle_count()`.
@@ -329,100 +275,13 @@ impl MergeBuffers {
     ) -> Result<usize, Reject> {
         let mut scratch = self.scratch.take().unwrap_or_default();
         let result = if check {
-            let mut edits = std::mem::take(&mut self.edits);
-            edits.clear();
-            let r = self
-                .check_and_record(&mut scratch, positions, k, new_pos, &mut edits)
-                .map(|()| self.apply_recorded(positions, k, new_pos, &edits));
-            self.edits = edits;
-            r
+            self.check(&mut scratch, positions, k, new_pos)
+                .map(|()| self.apply(positions, k, new_pos, &mut scratch.region))
         } else {
             Ok(self.apply(positions, k, new_pos, &mut scratch.region))
         };
         self.scratch = Some(scratch);
         result
-    }
-
-    /// [`MergeBuffers::check`], and when it passes, appends to `edits` what the merge changes,
-    /// for [`MergeBuffers::apply_recorded`]. Reads only, like `check`: clusters that share no
-    /// triangle can be checked and recorded in parallel and applied afterwards in any order.
-    pub fn check_and_record(
-        &self,
-        scratch: &mut Scratch,
-        positions: &[[f32; 3]],
-        k: &[u32],
-        new_pos: [f32; 3],
-        edits: &mut Vec<TriangleEdit>,
-    ) -> Result<(), Reject> {
-        self.check(scratch, positions, k, new_pos)?;
-        self.record(scratch, k, edits);
-        Ok(())
-    }
-
-    /// Appends to `edits` what merging `k` changes, without any check (the unchecked mode):
-    /// to be applied with [`MergeBuffers::apply_recorded`].
-    pub fn record_unchecked(
-        &self,
-        scratch: &mut Scratch,
-        k: &[u32],
-        edits: &mut Vec<TriangleEdit>,
-    ) {
-        self.collect_region(k, &mut scratch.region);
-        scratch.small = false;
-        self.record(scratch, k, edits);
-    }
-
-    /// The edits of merging `k` for the region in `scratch` (sorted live triangles touching `k`).
-    fn record(&self, scratch: &Scratch, k: &[u32], edits: &mut Vec<TriangleEdit>) {
-        let v = k[0];
-        // `region` is the sorted set of live triangles touching `k`: exactly those `apply`
-        // changes, in the same way.
-        for (i, &t) in scratch.region.iter().enumerate() {
-            let mut tri = self.tris[t as usize];
-            let mut inside = 0;
-            if scratch.small {
-                let l = scratch.tri_local[i];
-                for (x, &lx) in tri.iter_mut().zip(&l) {
-                    if scratch.kmask & (1 << lx) != 0 {
-                        *x = v;
-                        inside += 1;
-                    }
-                }
-            } else {
-                for x in tri.iter_mut() {
-                    if k.contains(x) {
-                        *x = v;
-                        inside += 1;
-                    }
-                }
-            }
-            if inside > 0 {
-                edits.push(TriangleEdit {
-                    t,
-                    tri,
-                    dead: inside >= 2,
-                });
-            }
-        }
-    }
-
-    /// Applies a merge recorded by [`MergeBuffers::check_and_record`] on the mesh as it was
-    /// checked: same result as [`MergeBuffers::apply`]. Returns the triangles dropped.
-    pub fn apply_recorded(
-        &mut self,
-        positions: &mut [[f32; 3]],
-        k: &[u32],
-        new_pos: [f32; 3],
-        edits: &[TriangleEdit],
-    ) -> usize {
-        positions[k[0] as usize] = new_pos;
-        let mut dropped = 0;
-        for e in edits {
-            self.tris[e.t as usize] = if e.dead { DEAD } else { e.tri };
-            dropped += usize::from(e.dead);
-        }
-        self.chain_members(k);
-        dropped
     }
 
     /// Chains every member of `k[1..]` behind `k[0]` and points their `rep` at it.
@@ -775,16 +634,6 @@ impl MergeBuffers {
         Ok(())
     }
 
-    /// Frees the vertex-to-triangle adjacency and the representatives (a lean extractor calls
-    /// it before [`MergeBuffers::finish`], which needs neither): after it only
-    /// [`MergeBuffers::finish`], [`MergeBuffers::is_alive`] and [`MergeBuffers::triangle`] may be
-    /// used until the next load.
-    pub fn release_adjacency(&mut self) {
-        self.inc = Vec::new();
-        self.inc_start = Vec::new();
-        self.rep = Vec::new();
-    }
-
     /// [`rmt_mesh::Mesh::drop_unused_vertices`] with the member chains as working memory: what
     /// [`MergeBuffers::finish`] leaves of a mesh loaded and merged nothing, without building the
     /// adjacency. Like `finish`, it ends any merging in progress.
@@ -934,60 +783,41 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn recorded_merges_apply_exactly_like_direct_ones() {
-        // The same sequence of merges (vertex v with its lowest-numbered neighbour, then that
-        // cluster with another neighbour), once checked, recorded and applied from the record,
-        // once applied directly after the same check: identical meshes, counts and members.
-        let (p0, idx) = subdivided_octahedron(2);
-        let (mut recorded, mut direct) = (MergeBuffers::default(), MergeBuffers::default());
-        recorded.load(p0.len(), &idx);
-        direct.load(p0.len(), &idx);
-        let (mut pr, mut pd) = (p0.clone(), p0.clone());
-        let mut scratch = Scratch::default();
-        let (mut edits, mut region, mut near) = (Vec::new(), Vec::new(), Vec::new());
+    fn merges_chain_their_members() {
+        // Vertex v with its lowest-numbered neighbour, over a fine sphere: every current
+        // vertex's member chain holds exactly the original vertices merged into it, and the
+        // result is still a sphere.
+        let (mut p, idx) = subdivided_octahedron(2);
+        let mut m = MergeBuffers::default();
+        m.load(p.len(), &idx);
         let mut merged = 0;
-        for v in 0..p0.len() as u32 {
-            if recorded.rep(v) != v {
+        for v in 0..p.len() as u32 {
+            if m.rep(v) != v {
                 continue;
             }
-            recorded.neighbours(v, &mut near);
-            let Some(&u) = near.first() else { continue };
-            let k = [v, u];
-            let centre = ((glam::Vec3::from(pr[v as usize]) + glam::Vec3::from(pr[u as usize]))
+            let near = (0..m.triangle_count())
+                .filter(|&t| m.is_alive(t) && m.triangle(t).contains(&v))
+                .flat_map(|t| m.triangle(t))
+                .filter(|&u| u != v)
+                .min();
+            let Some(u) = near else { continue };
+            let centre = ((glam::Vec3::from(p[v as usize]) + glam::Vec3::from(p[u as usize]))
                 * 0.5)
                 .to_array();
-            edits.clear();
-            let r = recorded.check_and_record(&mut scratch, &pr, &k, centre, &mut edits);
-            assert_eq!(r, direct.check(&mut scratch, &pd, &k, centre));
-            if r.is_ok() {
-                let a = recorded.apply_recorded(&mut pr, &k, centre, &edits);
-                let b = direct.apply(&mut pd, &k, centre, &mut region);
-                assert_eq!(a, b, "dropped triangles of merge {v}-{u}");
-                merged += 1;
-            }
-            assert_eq!(pr, pd);
-            assert_eq!(recorded.tris, direct.tris);
-            assert_eq!(recorded.rep, direct.rep);
-            assert_eq!(recorded.next_member, direct.next_member);
+            merged += usize::from(m.merge(&mut p, &[v, u], centre, true).is_ok());
         }
-        assert!(merged > 10, "only {merged} merges were tried");
-        // A current vertex's member chain holds exactly the original vertices merged into it.
-        let mut owners = vec![0u32; p0.len()];
-        for v in 0..p0.len() as u32 {
-            owners[recorded.rep(v) as usize] += 1;
+        assert!(merged > 10, "only {merged} merges went through");
+        let mut owners = vec![0u32; p.len()];
+        for v in 0..p.len() as u32 {
+            owners[m.rep(v) as usize] += 1;
         }
-        for v in 0..p0.len() as u32 {
-            if recorded.rep(v) == v {
-                assert_eq!(recorded.member_count(v), owners[v as usize], "vertex {v}");
-                assert_eq!(
-                    recorded.has_members(v),
-                    owners[v as usize] > 1,
-                    "vertex {v}"
-                );
+        for v in 0..p.len() as u32 {
+            if m.rep(v) == v {
+                assert_eq!(m.member_count(v), owners[v as usize], "vertex {v}");
             }
         }
-        let (mut out_p, mut out_i) = (pr.clone(), Vec::new());
-        let v = recorded.finish(&mut out_p, &mut out_i);
+        let (mut out_p, mut out_i) = (p.clone(), Vec::new());
+        let v = m.finish(&mut out_p, &mut out_i);
         let f = out_i.len() / 3;
         assert_eq!(
             v as i64 - (3 * f / 2) as i64 + f as i64,

@@ -1,5 +1,5 @@
-//! Marching tetrahedra on both lattices: the vertex pass, the geometry pass, and the commit of
-//! clusters.
+//! Marching tetrahedra on both lattices: the vertex pass, the clustering, and the geometry pass
+//! (emission).
 //!
 //! **Vertex pass** (parallel over storage planes): for each sample point C and each of its
 //! neighbours S, the edge C-S is crossed when C and S lie on opposite sides of the threshold T
@@ -18,21 +18,30 @@
 //! the triangles stored once. Cubes (or body-centred faces) whose anchor has no crossed edge are
 //! skipped before any tetrahedron is looked at.
 //!
-//! **Commit** (clustering): clusters are merged one lattice colour at a time, each only after the
-//! exact check of [`crate::merge`] (integrated) or without it (integrated-unchecked).
+//! **Clustering** (between the two): the proposals are a partition of the crossings into groups
+//! ([`crate::cluster`]: a point's islands, each sheet's own crossings cut into parts joined by
+//! mesh edges; with integrated clustering also the lone crossings, given to a neighbouring
+//! island). Integrated clustering then lists plain MT's triangles once (the same pass as the
+//! emission, with each triangle's tetrahedron gradient and every crossing's triangles), keeps
+//! the groups that pass the exact quotient test, repairing failures by splitting groups in
+//! parallel rounds, and settles its additions the same way ([`crate::quotient`]);
+//! integrated-unchecked keeps every proposal. Every crossing then maps to an output vertex, and
+//! the emission writes the triangles with those vertices directly (mapping the listed plain
+//! triangles, or running the geometry pass), leaving out the ones that collapsed: no
+//! intermediate mesh.
 //!
 //! Border rule: points on the box faces (whose lattice edges are cut by the box) cluster too, with
-//! the missing neighbours counted as neither crossed nor uncrossed. A crossing that lies on the box
-//! face is a vertex of the mesh boundary, and the exact check refuses every cluster whose region
-//! reaches the mesh boundary through a merged vertex, so crossings on the box faces never move and
-//! the mesh stays closed wherever the surface stays inside the box. (The unchecked mode has no such
-//! guarantee; that is its point.)
+//! the missing neighbours counted as neither crossed nor uncrossed. A crossing whose edge lacks
+//! some of its tetrahedra (it lies on the box face) is a vertex of the mesh boundary: integrated
+//! clustering never groups it, so crossings on the box faces never move and the mesh stays
+//! closed wherever the surface stays inside the box. (The unchecked mode has no such guarantee;
+//! that is its point.)
 
 use rayon::prelude::*;
 use rmt_mesh::Mesh;
 
-use crate::cluster::{self, Candidate, ProposalCounts, FULL};
-use crate::lattice::{self, LatticeTables, Offset};
+use crate::cluster::{self, Candidate, ProposalCounts, Rules, FULL};
+use crate::lattice::{LatticeTables, Offset};
 use crate::merge::MergeBuffers;
 use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
 
@@ -44,15 +53,28 @@ pub struct MtBuffers {
     /// Per storage plane, its crossed points in slot order as `owned | crossed << 16` (the vertex
     /// pass's output, numbered into [`CrossedIndex::points`]).
     plane_points: Vec<Vec<u32>>,
-    /// Cluster candidates, in storage order.
+    /// Proposed groups, in storage order of their owners.
     candidates: Vec<Candidate>,
-    /// The candidates of one commit round (see [`COMMIT_ROUND`]).
-    round: Vec<Candidate>,
+    /// Positions of the crossings (plain MT's vertices), with clustering.
+    cpos: Vec<[f32; 3]>,
+    /// The groups' state: kept or not, each crossing's group, lone crossings, labels and
+    /// vertex positions.
+    groups: crate::quotient::Groups,
+    /// Every crossing's owner slot and edge (the direction from the owner), with clustering.
+    edge_of: Vec<(u32, u8)>,
+    /// Plain MT's triangles (three crossing ids each) and their source tetrahedra, and every
+    /// crossing's triangles (CSR), with checked clustering: the stars of the quotient test.
+    plain: Vec<u32>,
+    plain_grad: Vec<[f32; 3]>,
+    inc_start: Vec<u32>,
+    inc: Vec<u32>,
+    /// Output vertex of each crossing, with clustering.
+    vertex_of: Vec<u32>,
+    /// Working memory of the vertex compaction (integrated-unchecked).
+    scratch: Vec<u32>,
     /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
     /// of padding: 64 points are tested for crossings at once with a few word operations.
     inside: Vec<u64>,
-    /// Working memory of the cluster commit, one per block of candidates.
-    commits: Vec<CommitBlock>,
     /// [`crate::BufferPolicy::Lean`]: free every table when its last reader is done.
     pub(crate) lean: bool,
 }
@@ -64,13 +86,21 @@ impl MtBuffers {
             + self.plane_points.iter().map(|o| o.len() * 4).sum::<usize>()
             + self.inside.len() * 8
             + self.candidates.len() * std::mem::size_of::<Candidate>()
+            + self.cpos.len() * 12
+            + self.groups.bytes()
+            + self.edge_of.len() * 8
+            + self.plain.len() * 4
+            + self.plain_grad.len() * 12
+            + self.inc_start.len() * 4
+            + self.inc.len() * 4
+            + self.vertex_of.len() * 4
     }
 }
 
 /// A point with a crossed edge: the id of its first owned crossing and its owned crossings (bit d:
 /// the crossing on the edge to neighbour d). `id(C, d) = first + popcount(owned & ((1 << d) - 1))`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-struct CrossedPoint {
+pub(crate) struct CrossedPoint {
     first: u32,
     owned: u16,
     /// All its crossed edges (owned or not), by neighbour bit.
@@ -80,7 +110,7 @@ struct CrossedPoint {
 impl CrossedPoint {
     /// Id of the crossing this point owns on its edge to neighbour `d`.
     #[inline(always)]
-    fn id(self, d: u8) -> u32 {
+    pub(crate) fn id(self, d: u8) -> u32 {
         self.first + (self.owned & ((1u16 << d) - 1)).count_ones()
     }
 }
@@ -93,7 +123,7 @@ impl CrossedPoint {
 /// The bits are kept per storage plane ([`plane_words`] words each, the last one padding) so that
 /// planes are written in parallel; a slot's plane comes from a division by a multiplication.
 #[derive(Default)]
-struct CrossedIndex {
+pub(crate) struct CrossedIndex {
     /// One bit per storage slot, set where the point has a crossed edge (owned or not).
     bits: Vec<u64>,
     /// Per word of `bits`: how many bits are set in the words before it.
@@ -150,7 +180,7 @@ impl CrossedIndex {
 
     /// The entry of a crossed `slot` (meaningless for others).
     #[inline(always)]
-    fn get(&self, slot: usize) -> CrossedPoint {
+    pub(crate) fn get(&self, slot: usize) -> CrossedPoint {
         let z = self.plane_of(slot);
         self.points[self.rank_in(z, slot - z * self.plane)]
     }
@@ -216,45 +246,6 @@ fn for_each_bit(words: &[u64], start: usize, len: usize, mut visit: impl FnMut(u
     }
 }
 
-/// Candidates of one colour are checked in blocks of this many, in parallel.
-const COMMIT_BLOCK: usize = 64;
-
-/// At most this many candidates (a whole number of blocks) are checked before their records are
-/// applied: bounds the records' memory (a few hundred KiB) whatever the size.
-const COMMIT_ROUND: usize = 16 * COMMIT_BLOCK;
-
-/// A cluster that passed its check, waiting to be applied.
-struct Accepted {
-    /// Its crossings, in [`CommitBlock::members`].
-    members: std::ops::Range<u32>,
-    /// What the merge changes, in [`CommitBlock::edits`].
-    edits: std::ops::Range<u32>,
-    centre: [f32; 3],
-    /// Accepted without one of its proposed crossings.
-    reduced: bool,
-}
-
-/// Checks and records of one block of cluster candidates (kept between extractions).
-#[derive(Default)]
-struct CommitBlock {
-    scratch: crate::merge::Scratch,
-    /// Members of the cluster being tried.
-    k: Vec<u32>,
-    accepted: Vec<Accepted>,
-    members: Vec<u32>,
-    edits: Vec<crate::merge::TriangleEdit>,
-    rejected: usize,
-}
-
-impl CommitBlock {
-    fn clear(&mut self) {
-        self.accepted.clear();
-        self.members.clear();
-        self.edits.clear();
-        self.rejected = 0;
-    }
-}
-
 /// Bit k set where `values[k] < iso` (at most 64 values). A full word is built a byte at a time,
 /// which the compiler turns into wide comparisons (about 40% faster than bit by bit).
 #[inline(always)]
@@ -305,21 +296,27 @@ fn crossed_points(inside: &[u64], i: usize, delta: &[isize; 14], len: usize) -> 
     any
 }
 
-/// Edges shorter than this many grid spacings are welded after clustering (coincident crossings).
+/// Whether integrated clustering gives lone crossings to neighbouring groups.
+const LONE_CROSSINGS: bool = true;
+
+/// Passes of lone crossings after the islands settle (each: give, then test and repair).
+const LONE_PASSES: usize = 3;
+
+/// Passes over the slivers left after the lone passes (each: propose, then test and repair).
+const SLIVER_PASSES: usize = 2;
+
+/// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
+/// sample points): the meshoptimizer mode welds them first.
 const WELD: f32 = 1e-4;
 
-/// Integrated clustering ends with one collapse per triangle whose aspect ratio R/(2r) is above
-/// this (see [`crate::collapse::collapse_slivers`]); triangles of a good RMT mesh stay below 2.5.
-const SLIVER_AR: f32 = 4.0;
-
 /// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
-const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+pub(crate) const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
 /// Case table: for the corners inside (bit i: f(v_i) < T), a directed cycle of crossed edges whose
 /// right-hand normal points toward increasing f for a positively oriented tetrahedron. Length 3
 /// (triangle) or 4 (quad, split along its shorter diagonal); `u8::MAX` pads. Checked against
 /// geometry by `case_table_orients_triangles_along_the_gradient`.
-const CASES: [[u8; 4]; 16] = {
+pub(crate) const CASES: [[u8; 4]; 16] = {
     const X: u8 = u8::MAX;
     [
         [X, X, X, X],
@@ -341,17 +338,69 @@ const CASES: [[u8; 4]; 16] = {
     ]
 };
 
+/// The triangles of one tetrahedron (none, one, or two from a quad split along its shorter
+/// diagonal) as crossing ids, oriented by the case table: the one definition that the emission
+/// and the quotient test share, so that the test sees exactly the triangles that are written.
+/// `val`: the corner values; `dir[i][j]`: neighbour index of corner j from corner i; `id(o, d)`:
+/// the id of the crossing owned by corner `o` on its edge to neighbour `d`.
+#[inline(always)]
+pub(crate) fn tet_triangles(
+    val: [f32; 4],
+    iso: f32,
+    dir: &[[u8; 4]; 4],
+    id: impl Fn(usize, u8) -> u32,
+    positions: &[[f32; 3]],
+    out: &mut [[u32; 3]; 2],
+) -> usize {
+    let case = (val[0] < iso) as usize
+        | ((val[1] < iso) as usize) << 1
+        | ((val[2] < iso) as usize) << 2
+        | ((val[3] < iso) as usize) << 3;
+    if case == 0 || case == 15 {
+        return 0;
+    }
+    let cycle = &CASES[case];
+    let n = if cycle[3] == u8::MAX { 3 } else { 4 };
+    let mut ids = [0u32; 4];
+    for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
+        let (a, b) = TET_EDGES[e as usize];
+        let (o, d) = if owns(val[a], val[b], iso) {
+            (a, dir[a][b])
+        } else {
+            (b, dir[b][a])
+        };
+        *slot = id(o, d);
+    }
+    if n == 3 {
+        out[0] = [ids[0], ids[1], ids[2]];
+        1
+    } else {
+        // Split along the shorter diagonal, chosen by a table index rather than a branch (the
+        // choice is data-dependent and mispredicts half the time).
+        const SPLITS: [[usize; 6]; 2] = [[1, 2, 3, 1, 3, 0], [0, 1, 2, 0, 2, 3]];
+        let p = |i: u32| glam::Vec3::from(positions[i as usize]);
+        let short02 =
+            p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
+        let s = &SPLITS[usize::from(short02)];
+        out[0] = [ids[s[0] & 3], ids[s[1] & 3], ids[s[2] & 3]];
+        out[1] = [ids[s[3] & 3], ids[s[4] & 3], ids[s[5] & 3]];
+        2
+    }
+}
+
 /// Whether the end with value `f` (inside iff `f < iso`) owns the crossing shared with `g`.
 #[inline(always)]
-fn owns(f: f32, g: f32, iso: f32) -> bool {
+pub(crate) fn owns(f: f32, g: f32, iso: f32) -> bool {
     let (df, dg) = ((f - iso).abs(), (g - iso).abs());
     df < dg || (df == dg && f < iso)
 }
 
 /// A tetrahedron with storage-index deltas from a reference point and edge directions.
 #[derive(Clone, Copy, Debug)]
-struct TetTemplate {
-    delta: [isize; 4],
+pub(crate) struct TetTemplate {
+    /// Lattice offsets of the corners from the anchor.
+    pub(crate) off: [Offset; 4],
+    pub(crate) delta: [isize; 4],
     /// `dir[i][j]`: neighbour index of corner j seen from corner i.
     dir: [[u8; 4]; 4],
 }
@@ -427,19 +476,45 @@ fn case_triangles(case: usize) -> u8 {
 }
 
 /// The lattice in storage terms: neighbour deltas per parity and tetrahedron templates.
-struct Layout<'a> {
-    s: &'a Samples,
+pub(crate) struct Layout<'a> {
+    pub(crate) s: &'a Samples,
     lattice: Lattice,
     t: &'static LatticeTables,
     /// Storage-index delta of neighbour d, for even (`[0]`) and odd (`[1]`) points.
     delta: [[isize; 14]; 2],
-    tets: Vec<TetTemplate>,
+    pub(crate) tets: Vec<TetTemplate>,
     /// The tetrahedra visited together: per face axis (body-centred) or the cube (simple).
     groups: Vec<TetGroup>,
-    /// Existence (bit 16) and valid-neighbour mask (bits 0..14) of a point by the boundary
-    /// class of each coordinate ([`boundary_class`]) and its parity; empty for grids too small
+    /// Existence (bit 16), valid-neighbour mask (bits 0..14) and inner-edge mask (bits 17..31,
+    /// [`Layout::inner_dirs`]) of a point by the boundary class of each coordinate ([`boundary_class`]) and its parity; empty for grids too small
     /// for the classes to be apart (then computed point by point).
     border_table: Vec<u32>,
+    /// The tetrahedra around a point of each parity (`[0]` even, `[1]` odd): 24 on both
+    /// lattices ([`StarTet`]).
+    pub(crate) around: [Vec<StarTet>; 2],
+    /// Per template: `[d2 x d3, d3 x d1, d1 x d2]` for its edge vectors `d_i` from corner 0 on
+    /// the lattice (the gradient of the linear interpolant is their sum weighted by the value
+    /// differences, up to the positive determinant).
+    grad_coef: Vec<[glam::DVec3; 3]>,
+}
+
+/// One of the tetrahedra around a lattice point (which edges of the point have all their
+/// tetrahedra: [`Layout::inner_dirs`]): corners in the positive orientation of the lattice's
+/// templates (so the case table orients its triangles), relative to the point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StarTet {
+    /// Lattice offsets of the corners from the point (one of them is `[0, 0, 0]`).
+    pub(crate) off: [Offset; 4],
+    /// Storage-index deltas of the corners from the point (the tests rebuild plain MT from
+    /// these tetrahedra, which checks the table against the geometry pass).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(crate) delta: [isize; 4],
+    /// `dir[i][j]`: neighbour index of corner j seen from corner i (as `delta`).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(crate) dir: [[u8; 4]; 4],
+    /// The point's neighbour bits of the tetrahedron's other three corners (its edges from the
+    /// point).
+    pub(crate) from_point: u16,
 }
 
 /// Boundary classes per axis: the coordinates -1..=3, max-3..=max+1, and everything between.
@@ -488,6 +563,7 @@ impl<'a> Layout<'a> {
             .iter()
             .map(|tet| {
                 let mut tpl = TetTemplate {
+                    off: *tet,
                     delta: [0; 4],
                     dir: [[0; 4]; 4],
                 };
@@ -513,6 +589,22 @@ impl<'a> Layout<'a> {
             Lattice::BodyCentred => tets.chunks(4).map(TetGroup::new).collect(),
             Lattice::Simple => vec![TetGroup::new(&tets)],
         };
+        let around = [0, 1].map(|par| star_tets(lattice, t, refs[par], &idx));
+        // Lattice units per world unit along each axis: half cubes on the body-centred lattice.
+        let unit = match lattice {
+            Lattice::BodyCentred => s.spacing.as_dvec3() * 0.5,
+            Lattice::Simple => s.spacing.as_dvec3(),
+        };
+        let grad_coef = tets
+            .iter()
+            .map(|tpl| {
+                let d = [1, 2, 3].map(|i| {
+                    let o = [0, 1, 2].map(|a| f64::from(tpl.off[i][a] - tpl.off[0][a]));
+                    glam::DVec3::from(o) * unit
+                });
+                [d[1].cross(d[2]), d[2].cross(d[0]), d[0].cross(d[1])]
+            })
+            .collect();
         let mut layout = Self {
             s,
             lattice,
@@ -521,6 +613,8 @@ impl<'a> Layout<'a> {
             tets,
             groups,
             border_table: Vec::new(),
+            around,
+            grad_coef,
         };
         layout.border_table = layout.build_border_table();
         layout
@@ -559,7 +653,9 @@ impl<'a> Layout<'a> {
                             Lattice::Simple => true,
                         };
                         let entry = if exists {
-                            (1 << 16) | u32::from(self.valid_neighbours(p))
+                            (1 << 16)
+                                | u32::from(self.valid_neighbours(p))
+                                | u32::from(self.inner_dirs_of(p)) << 17
                         } else {
                             0
                         };
@@ -603,6 +699,39 @@ impl<'a> Layout<'a> {
         }
     }
 
+    /// Lattice coordinates of storage slot `slot`.
+    #[inline]
+    pub(crate) fn coords_of(&self, slot: usize) -> Offset {
+        let [dx, dy, _] = self.s.dims;
+        let (z, local) = (slot / (dx * dy), slot % (dx * dy));
+        self.coords(local % dx, local / dx, z)
+    }
+
+    /// Whether lattice point `p` exists (the simple lattice: inside the box).
+    #[inline]
+    pub(crate) fn exists(&self, p: Offset) -> bool {
+        match self.lattice {
+            Lattice::BodyCentred => self.s.bcdl_exists(p),
+            Lattice::Simple => (0..3).all(|a| p[a] >= 0 && p[a] <= self.max_coord(a)),
+        }
+    }
+
+    /// Whether the tetrahedron `tet` around point `p` is one of the extraction's: all its
+    /// corners exist and at most one is a ghost (two ghosts are never joined by an edge), as for
+    /// the faces the geometry pass visits (body-centred), or inside the box (simple).
+    #[inline]
+    pub(crate) fn has_tet(&self, p: Offset, tet: &StarTet) -> bool {
+        let mut ghosts = 0;
+        for o in &tet.off {
+            let q = add(p, *o);
+            if !self.exists(q) {
+                return false;
+            }
+            ghosts += usize::from(self.lattice == Lattice::BodyCentred && self.is_ghost(q));
+        }
+        ghosts <= 1
+    }
+
     /// Lattice coordinates of storage slot (sx, sy) of plane z, and whether the point exists.
     #[inline]
     fn point(&self, sx: usize, sy: usize, z: usize) -> (Offset, bool) {
@@ -613,7 +742,7 @@ impl<'a> Layout<'a> {
         }
     }
 
-    fn position(&self, p: Offset) -> glam::Vec3 {
+    pub(crate) fn position(&self, p: Offset) -> glam::Vec3 {
         match self.lattice {
             Lattice::BodyCentred => self.s.bcdl_position(p),
             Lattice::Simple => self
@@ -644,12 +773,79 @@ impl<'a> Layout<'a> {
 
     /// Whether all 14 neighbours of `p` are regular lattice points (no border, no ghosts).
     #[inline]
-    fn is_regular(&self, p: Offset) -> bool {
+    pub(crate) fn is_regular(&self, p: Offset) -> bool {
         let margin = match self.lattice {
             Lattice::BodyCentred => 2 + (p[0] & 1),
             Lattice::Simple => 1,
         };
         (0..3).all(|a| p[a] >= margin && p[a] <= self.max_coord(a) - margin)
+    }
+
+    /// The gradient of the linear interpolant of the field on template tetrahedron `tet` at
+    /// `anchor` (up to a positive factor, rounded to `f32`), from the sample positions (ghosts
+    /// on the box face included).
+    pub(crate) fn gradient(&self, anchor: usize, ti: usize) -> [f32; 3] {
+        let tet = &self.tets[ti];
+        let f = tet
+            .delta
+            .map(|d| f64::from(self.s.values[(anchor as isize + d) as usize]));
+        // Away from the ghosts (clamped onto the box faces) the corners sit on the lattice:
+        // the edge vectors, and so the coefficients, are the template's.
+        let p = match self.lattice {
+            Lattice::Simple => None,
+            Lattice::BodyCentred => Some(self.coords_of(anchor)),
+        };
+        let clamped = p.is_some_and(|p| {
+            tet.off
+                .iter()
+                .any(|o| (0..3).any(|a| p[a] + o[a] < 0 || p[a] + o[a] > self.max_coord(a)))
+        });
+        if !clamped {
+            let c = &self.grad_coef[ti];
+            let g = c[0] * (f[1] - f[0]) + c[1] * (f[2] - f[0]) + c[2] * (f[3] - f[0]);
+            return g.as_vec3().to_array();
+        }
+        let p = self.coords_of(anchor);
+        let pos = tet.off.map(|o| {
+            self.position([p[0] + o[0], p[1] + o[1], p[2] + o[2]])
+                .as_dvec3()
+        });
+        let (d1, d2, d3) = (pos[1] - pos[0], pos[2] - pos[0], pos[3] - pos[0]);
+        // D^-1 = [d2 x d3, d3 x d1, d1 x d2] / det, det > 0 for the lattice's tetrahedra.
+        let g = d2.cross(d3) * (f[1] - f[0])
+            + d3.cross(d1) * (f[2] - f[0])
+            + d1.cross(d2) * (f[3] - f[0]);
+        g.as_vec3().to_array()
+    }
+
+    /// Neighbour bits of the lattice edges at `p` that have every tetrahedron around them (a
+    /// crossing there is an inner vertex of plain MT; at the box faces some are missing).
+    pub(crate) fn inner_dirs(&self, p: Offset) -> u16 {
+        if self.is_regular(p) {
+            return FULL;
+        }
+        if self.border_table.is_empty() {
+            return self.inner_dirs_of(p);
+        }
+        // Like `border_info`: the boundary class of each coordinate decides.
+        let class = |a: usize| boundary_class(p[a], self.max_coord(a));
+        let odd = match self.lattice {
+            Lattice::BodyCentred => (p[0] & 1) as usize,
+            Lattice::Simple => 0,
+        };
+        let e = self.border_table[((class(0) * CLASSES + class(1)) * CLASSES + class(2)) * 2 + odd];
+        (e >> 17) as u16 & FULL
+    }
+
+    /// [`Layout::inner_dirs`] from the tetrahedra around `p` (what the border table stores).
+    fn inner_dirs_of(&self, p: Offset) -> u16 {
+        let mut missing = 0u16;
+        for tet in &self.around[(p[0] & 1) as usize] {
+            if !self.has_tet(p, tet) {
+                missing |= tet.from_point;
+            }
+        }
+        FULL & !missing
     }
 
     /// Neighbour bits of the lattice edges at `p` that belong to some tetrahedron.
@@ -679,6 +875,65 @@ impl<'a> Layout<'a> {
     }
 }
 
+/// The tetrahedra around lattice point `r` (which must be a lattice point of its parity), from
+/// the lattice's templates translated over the cells near it; `idx` gives storage indices.
+fn star_tets(
+    lattice: Lattice,
+    t: &LatticeTables,
+    r: Offset,
+    idx: &dyn Fn(Offset) -> isize,
+) -> Vec<StarTet> {
+    let mut out = Vec::with_capacity(24);
+    for x in -2..=2 {
+        for y in -2..=2 {
+            for z in -2..=2 {
+                let base = match lattice {
+                    // Templates are relative to a cell centre (odd point).
+                    Lattice::BodyCentred => {
+                        let c = |v: i32, k: i32| 2 * ((v - 1).div_euclid(2) + k) + 1;
+                        [c(r[0], x), c(r[1], y), c(r[2], z)]
+                    }
+                    Lattice::Simple => [r[0] + x, r[1] + y, r[2] + z],
+                };
+                for tet in &t.tetrahedra {
+                    let abs = tet.map(|o| add(base, o));
+                    if !abs.contains(&r) {
+                        continue;
+                    }
+                    let off = abs.map(|v| [v[0] - r[0], v[1] - r[1], v[2] - r[2]]);
+                    if out.iter().any(|s: &StarTet| s.off == off) {
+                        continue;
+                    }
+                    let mut dir = [[u8::MAX; 4]; 4];
+                    let mut from_point = 0u16;
+                    for i in 0..4 {
+                        for j in 0..4 {
+                            if i != j {
+                                let o = [
+                                    off[j][0] - off[i][0],
+                                    off[j][1] - off[i][1],
+                                    off[j][2] - off[i][2],
+                                ];
+                                dir[i][j] = t.direction(o).map_or(u8::MAX, |d| d as u8);
+                                if off[i] == [0; 3] {
+                                    from_point |= 1 << dir[i][j];
+                                }
+                            }
+                        }
+                    }
+                    out.push(StarTet {
+                        off,
+                        delta: abs.map(|v| idx(v) - idx(r)),
+                        dir,
+                        from_point,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
 fn add(a: Offset, b: Offset) -> Offset {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
@@ -705,20 +960,17 @@ pub fn extract(
     let layout = Layout::new(samples, lattice);
     let iso = settings.iso;
     let clustering = settings.clustering;
+    // Tetrahedra with a triangle, counted by the pass that wrote plain MT's triangles.
+    let mut plain_processed = 0;
     let propose = matches!(
         clustering,
         Clustering::Integrated | Clustering::IntegratedUnchecked
     );
-    // Tile rule (chunked extraction): lattice colours in global coordinates, and merges only
-    // inside one tile (`Tiling`).
-    let colour_shift: Offset = settings.tiles.map_or([0; 3], |t| {
-        let scale = if lattice == Lattice::BodyCentred {
-            2
-        } else {
-            1
-        };
-        t.grid_offset.map(|o| (o * scale) as i32)
-    });
+    let rules = if clustering == Clustering::Integrated {
+        Rules::Islands
+    } else {
+        Rules::Dissertation
+    };
     let mut keys: Vec<u64> = Vec::new();
 
     // Allocation: per-slot tables sized to the sample array.
@@ -774,9 +1026,7 @@ pub fn extract(
                     inside,
                     z,
                     iso,
-                    propose,
-                    clustering == Clustering::Integrated,
-                    colour_shift,
+                    propose.then_some(rules),
                     owned,
                     crossed,
                 )
@@ -874,250 +1124,301 @@ pub fn extract(
         }
     }
     let tiled = settings.tiles.is_some();
-    let allowed = |k: &[u32], keys: &[u64]| !tiled || crate::tiles::same_tile(keys, k);
+    stats.clusters_proposed = proposals.proposed;
+    stats.clusters_rejected_prefilter = proposals.rejected;
+    if propose {
+        // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
+        std::mem::swap(&mut mesh.positions, &mut buf.cpos);
+        if tiled {
+            // Tile rule: a group only inside one tile. With integrated clustering a candidate
+            // across tiles is dropped (its crossings may still join a group of their tile as
+            // lone crossings); integrated-unchecked keeps it without one crossing when that
+            // leaves two or more of one tile (the first such crossing in bit order), as the
+            // dissertation's commit did.
+            let t = layout.t;
+            let mut kept = Vec::with_capacity(buf.candidates.len());
+            let mut ids = Vec::with_capacity(14);
+            for c in buf.candidates.drain(..) {
+                ids.clear();
+                ids.extend(c.ids());
+                if crate::tiles::same_tile(&keys, &ids) {
+                    kept.push(c);
+                    continue;
+                }
+                let without_one = (rules == Rules::Dissertation && ids.len() > 2)
+                    .then(|| {
+                        let mut d = c.dirs;
+                        (0..ids.len()).find_map(|i| {
+                            let bit = d & d.wrapping_neg();
+                            d &= d - 1;
+                            let rest: Vec<u32> =
+                                (0..ids.len()).filter(|&j| j != i).map(|j| ids[j]).collect();
+                            crate::tiles::same_tile(&keys, &rest).then(|| c.restrict(c.dirs & !bit))
+                        })
+                    })
+                    .flatten();
+                match without_one {
+                    Some(r) if t.is_connected(r.dirs) || rules == Rules::Dissertation => {
+                        kept.push(r)
+                    }
+                    _ => stats.clusters_rejected_prefilter += 1,
+                }
+            }
+            buf.candidates = kept;
+        }
+        let step = std::time::Instant::now();
+        build_groups(buf, &layout, pool);
+        let checked = clustering == Clustering::Integrated;
+        if checked {
+            // Plain MT's triangles and every crossing's triangles: the stars of the tests.
+            plain_processed = plain_triangles(
+                &layout,
+                iso,
+                &buf.crossed,
+                &buf.cpos,
+                pool,
+                &mut buf.plain,
+                &mut buf.plain_grad,
+                &mut buf.inc_start,
+                &mut buf.inc,
+            );
+        } else {
+            buf.plain.clear();
+            buf.plain_grad.clear();
+            buf.inc_start.clear();
+            buf.inc.clear();
+        }
+        let mut islands = buf.candidates.len();
+        if !checked {
+            stats.t_groups_s += step.elapsed().as_secs_f64();
+        }
+        if checked {
+            let fixed = crate::quotient::Fixed {
+                l: &layout,
+                cpos: &buf.cpos,
+                groups: &buf.candidates,
+                tris: &buf.plain,
+                grad: &buf.plain_grad,
+                inc_start: &buf.inc_start,
+                inc: &buf.inc,
+                keys: tiled.then_some(&keys[..]),
+            };
+            let groups = &mut buf.groups;
+            groups.relabel(&fixed, pool);
+            if LONE_CROSSINGS {
+                // Crossings in no island join a neighbouring island: part of the proposal.
+                crate::quotient::give_lones(&fixed, groups, &buf.edge_of, false, pool);
+                groups.base_len.fill(0);
+            }
+            stats.t_groups_s += step.elapsed().as_secs_f64();
+            let all = (0..islands as u32).collect();
+            let settled =
+                crate::quotient::settle(&fixed, groups, all, crate::quotient::Phase::Islands, pool);
+            stats.repair_rounds = settled.rounds;
+            stats.t_tests_s += settled.t_tests_s;
+            stats.t_repair_s += settled.t_repair_s;
+        }
+        // Split islands of three or more come back without one crossing: their variants are
+        // appended to the candidates (not kept), and each split island takes its first variant
+        // that passes.
+        let mut variant_of = Vec::new();
+        if checked {
+            let step = std::time::Instant::now();
+            let t = layout.t;
+            variant_of.push(islands as u32);
+            for gi in 0..islands {
+                if buf.groups.active[gi] == 0 {
+                    let c = buf.candidates[gi];
+                    crate::quotient::variants(&c, t, &mut buf.candidates);
+                    variant_of.push(buf.candidates.len() as u32);
+                }
+            }
+            buf.groups.extend_to(buf.candidates.len());
+            stats.t_groups_s += step.elapsed().as_secs_f64();
+        }
+        // The fixed tables of the tests, over the candidates as they are.
+        macro_rules! fixed {
+            () => {
+                crate::quotient::Fixed {
+                    l: &layout,
+                    cpos: &buf.cpos,
+                    groups: &buf.candidates,
+                    tris: &buf.plain,
+                    grad: &buf.plain_grad,
+                    inc_start: &buf.inc_start,
+                    inc: &buf.inc,
+                    keys: tiled.then_some(&keys[..]),
+                }
+            };
+        }
+        if checked {
+            let fixed = fixed!();
+            let groups = &mut buf.groups;
+            let dirty = crate::quotient::revive(&fixed, groups, &variant_of, pool);
+            let settled = crate::quotient::settle(
+                &fixed,
+                groups,
+                dirty,
+                crate::quotient::Phase::Islands,
+                pool,
+            );
+            stats.repair_rounds += settled.rounds;
+            stats.t_tests_s += settled.t_tests_s;
+            stats.t_repair_s += settled.t_repair_s;
+            // Crossings left alone (in no island, or in one that split) join the nearest kept
+            // group; a group that fails with them gives them back, and they try another group
+            // in the next pass.
+            let no_new = crate::quotient::Phase::Additions {
+                born: fixed.groups.len() as u32,
+            };
+            for _ in 0..LONE_PASSES {
+                let step = std::time::Instant::now();
+                let dirty = crate::quotient::give_lones(&fixed, groups, &buf.edge_of, true, pool);
+                stats.t_groups_s += step.elapsed().as_secs_f64();
+                if dirty.is_empty() {
+                    break;
+                }
+                let settled = crate::quotient::settle(&fixed, groups, dirty, no_new, pool);
+                stats.repair_rounds += settled.rounds;
+                stats.t_tests_s += settled.t_tests_s;
+                stats.t_repair_s += settled.t_repair_s;
+            }
+        }
+        // Slivers left between the groups: a crossing left alone at one joins the group across
+        // its shortest edge, or pairs with the crossing there (a new group).
+        for _ in 0..SLIVER_PASSES {
+            if !checked {
+                break;
+            }
+            let step = std::time::Instant::now();
+            let props = {
+                let fixed = fixed!();
+                crate::quotient::sliver_proposals(&fixed, &buf.groups, &buf.edge_of, pool)
+            };
+            if props.lones.is_empty() && props.pairs.is_empty() {
+                break;
+            }
+            let born = buf.candidates.len();
+            for &(x, y) in &props.pairs {
+                let (slot, dir) = buf.edge_of[x as usize];
+                buf.candidates.push(Candidate {
+                    first: x,
+                    members: 1,
+                    dirs: 1 << dir,
+                    slot,
+                });
+                let _ = y;
+            }
+            islands += props.pairs.len();
+            stats.clusters_proposed += props.pairs.len();
+            let fixed = fixed!();
+            let groups = &mut buf.groups;
+            groups.add_pairs(&fixed, born, &props.pairs);
+            let mut dirty = crate::quotient::attach(&fixed, groups, props.lones, true, pool);
+            dirty.extend(crate::quotient::around(
+                &fixed,
+                groups,
+                born..fixed.groups.len(),
+                pool,
+            ));
+            dirty.sort_unstable();
+            dirty.dedup();
+            stats.t_groups_s += step.elapsed().as_secs_f64();
+            let phase = crate::quotient::Phase::Additions { born: born as u32 };
+            let settled = crate::quotient::settle(&fixed, groups, dirty, phase, pool);
+            stats.repair_rounds += settled.rounds;
+            stats.t_tests_s += settled.t_tests_s;
+            stats.t_repair_s += settled.t_repair_s;
+        }
+        let fixed = fixed!();
+        let groups = &buf.groups;
+        stats.lone_absorbed = (0..buf.candidates.len())
+            .filter(|&gi| groups.active[gi] != 0)
+            .map(|gi| usize::from(groups.lone_len[gi]))
+            .sum();
+        let step = std::time::Instant::now();
+        let q = crate::quotient::Quotient::new(&fixed, groups);
+        vertex_map(&q, &mut buf.vertex_of, &mut mesh.positions);
+        // An island is kept whole, or as one of its variants (at most one of them is kept).
+        stats.clusters_committed = groups.active.iter().filter(|&&a| a != 0).count();
+        stats.clusters_rejected_check = islands - stats.clusters_committed;
+        stats.t_vertices_s += step.elapsed().as_secs_f64();
+    }
     stats.t_vertex_s += t.elapsed().as_secs_f64();
 
-    // Geometry pass.
+    // Emission: the final triangles, written straight into the mesh.
     let t = std::time::Instant::now();
-    let layers = match lattice {
-        Lattice::BodyCentred => samples.cells[2] + 1,
-        Lattice::Simple => samples.cells[2],
-    };
-    // Triangles per layer, counted from the anchors' crossed edges, so that every layer writes its
-    // triangles straight into their final place (the mesh, or the merge buffers when clusters
-    // follow): no per-layer buffers, no second copy.
     let crossed = &buf.crossed;
     let keep = settings.keep_cells;
-    let counts: Vec<usize> = pool.install(|| {
-        (0..layers)
-            .into_par_iter()
-            .map(|k| count_layer(&layout, k, keep, crossed))
-            .collect()
-    });
-    let triangles: usize = counts.iter().sum();
-    let Mesh {
-        positions, indices, ..
-    } = &mut *mesh;
-    let out: &mut [u32] = if propose {
-        merge.triangles_to_fill(triangles)
-    } else {
+    if propose && keep.is_none() && !buf.plain.is_empty() {
+        // The plain triangles are at hand (the quotient test read them): map them through the
+        // groups, in order, dropping the collapsed ones.
+        let (plain, map) = (&buf.plain[..], &buf.vertex_of[..]);
+        const CHUNK: usize = 3 << 14;
+        let mapped = |t: &[u32]| {
+            let q = [t[0], t[1], t[2]].map(|i| map[i as usize]);
+            (q[0] != q[1] && q[1] != q[2] && q[0] != q[2]).then_some(q)
+        };
+        let counts: Vec<usize> = pool.install(|| {
+            plain
+                .par_chunks(CHUNK)
+                .map(|c| c.chunks_exact(3).filter(|t| mapped(t).is_some()).count())
+                .collect()
+        });
+        let kept: usize = counts.iter().sum();
+        let indices = &mut mesh.indices;
         indices.clear();
-        indices.resize(3 * triangles, 0);
-        indices
-    };
-    let mut parts = Vec::with_capacity(layers);
-    let mut rest = out;
-    for &n in &counts {
-        let (head, tail) = rest.split_at_mut(3 * n);
-        parts.push(head);
-        rest = tail;
+        indices.resize(3 * kept, 0);
+        let mut parts = Vec::with_capacity(counts.len());
+        let mut rest = &mut indices[..];
+        for &n in &counts {
+            let (head, tail) = rest.split_at_mut(3 * n);
+            parts.push(head);
+            rest = tail;
+        }
+        pool.install(|| {
+            plain
+                .par_chunks(CHUNK)
+                .zip(parts.into_par_iter())
+                .for_each(|(c, out)| {
+                    for (q, o) in c
+                        .chunks_exact(3)
+                        .filter_map(mapped)
+                        .zip(out.chunks_exact_mut(3))
+                    {
+                        o.copy_from_slice(&q);
+                    }
+                })
+        });
+        stats.tetrahedra_processed += plain_processed;
+        stats.discarded += plain.len() / 3 - kept;
+    } else {
+        emit_layers(&layout, iso, keep, crossed, propose, buf, mesh, pool, stats);
     }
-    let positions = &*positions;
-    stats.tetrahedra_processed += pool.install(|| {
-        parts
-            .into_par_iter()
-            .enumerate()
-            .map(|(k, out)| geometry_layer(&layout, k, iso, keep, crossed, positions, out))
-            .sum::<usize>()
-    });
+    if clustering == Clustering::IntegratedUnchecked {
+        // Without the test a vertex may lose all its triangles.
+        mesh.drop_unused_vertices(&mut buf.scratch);
+    }
     let [nx, ny, nz] = samples.cells;
     stats.tetrahedra_total = match lattice {
         Lattice::BodyCentred => 4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1)),
         Lattice::Simple => 6 * nx * ny * nz,
     };
     stats.t_geometry_s += t.elapsed().as_secs_f64();
-    // Lean: the per-point tables have no reader left (candidates name their crossings by id).
+    // Lean: the per-point tables have no reader left.
     let mut lean_bytes = 0;
     if buf.lean {
         lean_bytes = buf.table_bytes();
         buf.crossed = CrossedIndex::default();
         buf.inside = Vec::new();
         buf.plane_points = Vec::new();
+        buf.plain = Vec::new();
+        buf.plain_grad = Vec::new();
+        buf.inc_start = Vec::new();
+        buf.inc = Vec::new();
+        buf.edge_of = Vec::new();
+        buf.groups = crate::quotient::Groups::default();
         pool.broadcast(|_| LAYER_WINDOW.with_borrow_mut(|w| *w = Vec::new()));
-    }
-
-    // Clustering: commit one colour at a time (counted in the vertex pass, where the dissertation
-    // does its merging).
-    stats.clusters_proposed = proposals.proposed;
-    stats.clusters_rejected_prefilter = proposals.rejected;
-    if propose {
-        let t = std::time::Instant::now();
-        let check = clustering == Clustering::Integrated;
-        let step = std::time::Instant::now();
-        merge.load_filled(total);
-        stats.t_adjacency_s += step.elapsed().as_secs_f64();
-        lean_bytes += merge.bytes();
-        let MtBuffers {
-            candidates,
-            round,
-            commits,
-            ..
-        } = &mut *buf;
-        let members =
-            |c: &Candidate, members: u16, positions: &[[f32; 3]], k: &mut Vec<u32>| -> [f32; 3] {
-                k.clear();
-                let mut sum = glam::Vec3::ZERO;
-                for id in (Candidate { members, ..*c }).ids() {
-                    k.push(id);
-                    sum += glam::Vec3::from(positions[id as usize]);
-                }
-                (sum / k.len() as f32).to_array()
-            };
-        // Colour by colour, storage order inside a colour. Clusters of one colour share no
-        // tetrahedron, hence no triangle: check them in parallel against the mesh as the earlier
-        // colours left it, recording what each accepted merge changes, then apply the records in
-        // storage order. A round gathers at most `COMMIT_ROUND` candidates of the colour, so the
-        // records stay small (applying a round cannot change what the next round of the same
-        // colour sees), and the candidates need no sorting.
-        for colour in 0..lattice::colour_count(lattice) as u8 {
-            let mut of_colour = candidates.iter().filter(|c| c.colour == colour);
-            loop {
-                round.clear();
-                round.extend(of_colour.by_ref().take(COMMIT_ROUND));
-                if round.is_empty() {
-                    break;
-                }
-                let group = &round[..];
-                let blocks = group.len().div_ceil(COMMIT_BLOCK);
-                if commits.len() < blocks {
-                    commits.resize_with(blocks, CommitBlock::default);
-                }
-                let positions = &mesh.positions;
-                let merge_ref = &*merge;
-                let keys = &keys;
-                let try_block = |b: &mut CommitBlock, cands: &[Candidate]| {
-                    b.clear();
-                    for c in cands {
-                        let try_island = |island: u16, b: &mut CommitBlock| -> bool {
-                            let centre = members(c, island, positions, &mut b.k);
-                            if !allowed(&b.k, keys) {
-                                return false;
-                            }
-                            let first_edit = b.edits.len();
-                            if check {
-                                let (scratch, edits) = (&mut b.scratch, &mut b.edits);
-                                if merge_ref
-                                    .check_and_record(scratch, positions, &b.k, centre, edits)
-                                    .is_err()
-                                {
-                                    return false;
-                                }
-                            } else {
-                                merge_ref.record_unchecked(&mut b.scratch, &b.k, &mut b.edits);
-                            }
-                            let first_member = b.members.len();
-                            b.members.extend_from_slice(&b.k);
-                            b.accepted.push(Accepted {
-                                members: first_member as u32..b.members.len() as u32,
-                                edits: first_edit as u32..b.edits.len() as u32,
-                                centre,
-                                reduced: island != c.members,
-                            });
-                            true
-                        };
-                        // Refused: try the cluster without one of its crossings, in bit order,
-                        // before giving up (keeps most of the merge where one crossing is the
-                        // trouble).
-                        let mut without_one = (0..14)
-                            .filter(|d| c.members.count_ones() > 2 && c.members & (1 << d) != 0)
-                            .map(|d| c.members & !(1 << d));
-                        if !(try_island(c.members, b) || without_one.any(|sub| try_island(sub, b)))
-                        {
-                            b.rejected += 1;
-                        }
-                    }
-                };
-                let step = std::time::Instant::now();
-                pool.install(|| {
-                    commits[..blocks]
-                        .par_iter_mut()
-                        .zip(group.par_chunks(COMMIT_BLOCK))
-                        .for_each(|(b, cands)| try_block(b, cands));
-                });
-                stats.t_cluster_check_s += step.elapsed().as_secs_f64();
-                let step = std::time::Instant::now();
-                for b in &commits[..blocks] {
-                    for a in &b.accepted {
-                        stats.discarded += merge.apply_recorded(
-                            &mut mesh.positions,
-                            &b.members[a.members.start as usize..a.members.end as usize],
-                            a.centre,
-                            &b.edits[a.edits.start as usize..a.edits.end as usize],
-                        );
-                        stats.clusters_committed += 1;
-                        stats.clusters_reduced += usize::from(a.reduced);
-                    }
-                    stats.clusters_rejected_check += b.rejected;
-                }
-                stats.t_cluster_apply_s += step.elapsed().as_secs_f64();
-            }
-        }
-        if buf.lean {
-            buf.candidates = Vec::new();
-            buf.round = Vec::new();
-            buf.commits = Vec::new();
-        }
-        if check {
-            let step = std::time::Instant::now();
-            // Lone crossings (the only nearby crossing of their point on that sheet) join the
-            // nearest neighbouring cluster vertex when the exact check allows it: the one step
-            // beyond the dissertation's rules, worth about 5% fewer triangles and rounder ones.
-            let mut near = Vec::new();
-            for x in 0..total as u32 {
-                if merge.rep(x) != x || merge.has_members(x) {
-                    continue;
-                }
-                merge.neighbours(x, &mut near);
-                let px = glam::Vec3::from(mesh.positions[x as usize]);
-                let target = near
-                    .iter()
-                    .copied()
-                    .filter(|&u| merge.has_members(u) && allowed(&[u, x], &keys))
-                    .min_by(|&a, &b| {
-                        let da = px.distance_squared(glam::Vec3::from(mesh.positions[a as usize]));
-                        let db = px.distance_squared(glam::Vec3::from(mesh.positions[b as usize]));
-                        da.total_cmp(&db).then(a.cmp(&b))
-                    });
-                if let Some(u) = target {
-                    let n = merge.member_count(u);
-                    let pu = glam::Vec3::from(mesh.positions[u as usize]);
-                    let centre = ((pu * n as f32 + px) / (n as f32 + 1.0)).to_array();
-                    if let Ok(dropped) = merge.merge(&mut mesh.positions, &[u, x], centre, true) {
-                        stats.discarded += dropped;
-                        stats.lone_absorbed += 1;
-                    }
-                }
-            }
-            stats.t_lone_s += step.elapsed().as_secs_f64();
-            let step = std::time::Instant::now();
-            let (slivers, dropped) = crate::collapse::collapse_slivers(
-                merge,
-                &mut mesh.positions,
-                SLIVER_AR,
-                tiled.then_some(&keys[..]),
-            );
-            stats.slivers_collapsed += slivers;
-            stats.discarded += dropped;
-            stats.t_slivers_s += step.elapsed().as_secs_f64();
-        }
-        let step = std::time::Instant::now();
-        if buf.lean {
-            // Only the triangles and their liveness are read from here on: the adjacency goes
-            // before the output indices are allocated.
-            merge.release_adjacency();
-        }
-        merge.finish(&mut mesh.positions, &mut mesh.indices);
-        if tiled {
-            crate::tiles::compact_keys(merge, &mut keys, merge.triangle_count());
-        }
-        if check && (near_points > 0 || tiled) {
-            // Surfaces through sample points leave crossings on top of each other where a
-            // cluster could not take them (near the box, or refused): weld those, under the same
-            // check, so no flat triangle is left inside the box.
-            weld_coincident(merge, mesh, settings, tiled.then_some(&keys[..]), stats);
-        }
-        stats.t_finish_s += step.elapsed().as_secs_f64();
-        stats.t_vertex_s += t.elapsed().as_secs_f64();
     }
     stats.clusters_rejected = stats.clusters_rejected_prefilter + stats.clusters_rejected_check;
 
@@ -1139,7 +1440,7 @@ pub fn extract(
         if near_points > 0 {
             // meshoptimizer tells vertices apart by index: crossings on top of each other (the
             // surface through sample points) would look like seams and open holes. Weld them
-            // first, under the exact check, as integrated clustering does.
+            // first, under the exact check (integrated clustering groups them as one island).
             weld_coincident(merge, mesh, settings, None, stats);
         }
         stats.discarded +=
@@ -1151,7 +1452,12 @@ pub fn extract(
         // Measured before they were released.
         lean_bytes
     } else {
-        buf.table_bytes() + if propose { merge.bytes() } else { 0 }
+        buf.table_bytes()
+            + if matches!(clustering, Clustering::Postprocessed | Clustering::Meshopt) {
+                merge.bytes()
+            } else {
+                0
+            }
     };
     if buf.lean {
         *merge = MergeBuffers::default();
@@ -1163,6 +1469,256 @@ pub fn extract(
         mesh.indices.shrink_to_fit();
     }
     Ok(())
+}
+
+/// The group tables of the proposals in `buf.candidates`, every group kept: each crossing's
+/// group, each group's leader (lowest crossing id) and vertex position (the mean of its
+/// crossings); and `buf.edge_of`, every crossing's owner slot and edge.
+fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::ThreadPool) {
+    use crate::quotient::NONE;
+    let crossings = buf.cpos.len();
+    let MtBuffers {
+        candidates,
+        cpos,
+        groups: g,
+        crossed,
+        edge_of,
+        ..
+    } = buf;
+    let count = candidates.len();
+    g.group_of.clear();
+    g.group_of.resize(crossings, NONE);
+    for (gi, c) in candidates.iter().enumerate() {
+        for id in c.ids() {
+            g.group_of[id as usize] = gi as u32;
+        }
+    }
+    let cpos = &*cpos;
+    pool.install(|| {
+        candidates
+            .par_iter()
+            .map(|c| {
+                let mut sum = glam::Vec3::ZERO;
+                for id in c.ids() {
+                    sum += glam::Vec3::from(cpos[id as usize]);
+                }
+                (sum / c.size() as f32).to_array()
+            })
+            .collect_into_vec(&mut g.centroid)
+    });
+    g.leader.clear();
+    g.leader.extend(candidates.iter().map(|c| c.leader()));
+    g.active.clear();
+    g.active.resize(count, 1);
+    g.lone.clear();
+    g.lone_start.clear();
+    g.lone_start.resize(count + 1, 0);
+    g.lone_len.clear();
+    g.lone_len.resize(count, 0);
+    g.base_len.clear();
+    g.base_len.resize(count, 0);
+    g.refused.clear();
+    g.refused.resize(crossings, NONE);
+    // Every crossing's edge: plane by plane, points in slot order, edges in bit order, which
+    // is the order of the ids.
+    let plane = layout.s.dims[0] * layout.s.dims[1];
+    let crossed = &*crossed;
+    let per_plane: Vec<Vec<(u32, u8)>> = pool.install(|| {
+        (0..layout.s.dims[2])
+            .into_par_iter()
+            .map(|z| {
+                let mut out = Vec::new();
+                let mut r = crossed.rank_in(z, 0);
+                for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
+                    let entry = crossed.points[r];
+                    r += 1;
+                    let mut own = entry.owned;
+                    while own != 0 {
+                        out.push(((z * plane + local) as u32, own.trailing_zeros() as u8));
+                        own &= own - 1;
+                    }
+                });
+                out
+            })
+            .collect()
+    });
+    edge_of.clear();
+    edge_of.reserve(crossings);
+    for part in per_plane {
+        edge_of.extend_from_slice(&part);
+    }
+    debug_assert_eq!(edge_of.len(), crossings);
+}
+
+/// The geometry pass over the lattice, writing the final triangles into `mesh` (with `propose`,
+/// through the groups' vertex map, collapsed triangles dropped), only those of the cells `keep`.
+#[allow(clippy::too_many_arguments)]
+fn emit_layers(
+    layout: &Layout,
+    iso: f32,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    propose: bool,
+    buf: &MtBuffers,
+    mesh: &mut Mesh,
+    pool: &rayon::ThreadPool,
+    stats: &mut Stats,
+) {
+    let layers = match layout.lattice {
+        Lattice::BodyCentred => layout.s.cells[2] + 1,
+        Lattice::Simple => layout.s.cells[2],
+    };
+    // Triangles of plain MT per layer, counted from the anchors' crossed edges, so that every
+    // layer writes its triangles straight into its own slice of the output (with clustering,
+    // collapsed triangles leave the slice's end unused; the layers are then moved together).
+    let counts: Vec<usize> = pool.install(|| {
+        (0..layers)
+            .into_par_iter()
+            .map(|k| count_layer(layout, k, keep, crossed))
+            .collect()
+    });
+    let triangles: usize = counts.iter().sum();
+    let Mesh {
+        positions, indices, ..
+    } = mesh;
+    indices.clear();
+    indices.resize(3 * triangles, 0);
+    let mut parts = Vec::with_capacity(layers);
+    let mut rest = &mut indices[..];
+    for &n in &counts {
+        let (head, tail) = rest.split_at_mut(3 * n);
+        parts.push(head);
+        rest = tail;
+    }
+    let (positions, map) = if propose {
+        (&buf.cpos[..], Some(&buf.vertex_of[..]))
+    } else {
+        (&positions[..], None)
+    };
+    let written: Vec<(usize, usize)> = pool.install(|| {
+        parts
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, out)| {
+                geometry_layer(layout, k, iso, keep, crossed, positions, map, out, None)
+            })
+            .collect()
+    });
+    stats.tetrahedra_processed += written.iter().map(|w| w.0).sum::<usize>();
+    if propose {
+        // Move the layers' triangles together.
+        let (mut from, mut to) = (0, 0);
+        for (&n, &(_, w)) in counts.iter().zip(&written) {
+            indices.copy_within(3 * from..3 * (from + w), 3 * to);
+            from += n;
+            to += w;
+        }
+        indices.truncate(3 * to);
+        stats.discarded += triangles - to;
+    }
+}
+
+/// Plain MT's triangles over the whole box, in the order of the geometry pass (layer by
+/// layer), into `tris` (three crossing ids each), with each triangle's source tetrahedron
+/// gradient (of the linear interpolant on its source tetrahedron, up to a positive factor) in
+/// `grad`; then every crossing's triangles as a CSR
+/// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order). The quotient test reads
+/// a group's star from these instead of from the lattice.
+#[allow(clippy::too_many_arguments)]
+fn plain_triangles(
+    layout: &Layout,
+    iso: f32,
+    crossed: &CrossedIndex,
+    cpos: &[[f32; 3]],
+    pool: &rayon::ThreadPool,
+    tris: &mut Vec<u32>,
+    grad: &mut Vec<[f32; 3]>,
+    inc_start: &mut Vec<u32>,
+    inc: &mut Vec<u32>,
+) -> usize {
+    let layers = match layout.lattice {
+        Lattice::BodyCentred => layout.s.cells[2] + 1,
+        Lattice::Simple => layout.s.cells[2],
+    };
+    let counts: Vec<usize> = pool.install(|| {
+        (0..layers)
+            .into_par_iter()
+            .map(|k| count_layer(layout, k, None, crossed))
+            .collect()
+    });
+    let total: usize = counts.iter().sum();
+    tris.clear();
+    tris.resize(3 * total, 0);
+    grad.clear();
+    grad.resize(total, [0.0; 3]);
+    let mut parts = Vec::with_capacity(layers);
+    let (mut rest, mut rest_src) = (&mut tris[..], &mut grad[..]);
+    for &n in &counts {
+        let (head, tail) = rest.split_at_mut(3 * n);
+        let (head_src, tail_src) = rest_src.split_at_mut(n);
+        parts.push((head, head_src));
+        rest = tail;
+        rest_src = tail_src;
+    }
+    let processed: usize = pool.install(|| {
+        parts
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, (out, src))| {
+                geometry_layer(layout, k, iso, None, crossed, cpos, None, out, Some(src)).0
+            })
+            .sum()
+    });
+    // Incidence: count, prefix sums, fill (in triangle order, so the table is deterministic).
+    inc_start.clear();
+    inc_start.resize(cpos.len() + 1, 0);
+    for &x in tris.iter() {
+        inc_start[x as usize + 1] += 1;
+    }
+    for i in 0..cpos.len() {
+        inc_start[i + 1] += inc_start[i];
+    }
+    inc.clear();
+    inc.resize(tris.len(), 0);
+    let mut next: Vec<u32> = inc_start[..cpos.len()].to_vec();
+    for (t, tri) in tris.chunks_exact(3).enumerate() {
+        for &x in tri {
+            inc[next[x as usize] as usize] = t as u32;
+            next[x as usize] += 1;
+        }
+    }
+    processed
+}
+
+/// The output vertices: one per crossing outside the kept groups and one per kept group, in
+/// order of their lowest crossing id; `vertex_of` maps every crossing to its vertex.
+fn vertex_map(
+    q: &crate::quotient::Quotient,
+    vertex_of: &mut Vec<u32>,
+    positions: &mut Vec<[f32; 3]>,
+) {
+    use crate::quotient::NONE;
+    let n = q.cpos.len();
+    let g = q.g;
+    vertex_of.clear();
+    vertex_of.resize(n, 0);
+    positions.clear();
+    for x in 0..n {
+        let h = g.group_of[x];
+        if h != NONE && g.active[h as usize] != 0 {
+            let leader = g.leader[h as usize] as usize;
+            if leader == x {
+                vertex_of[x] = positions.len() as u32;
+                positions.push(g.centroid[h as usize]);
+            } else {
+                // The leader has the lowest id of the group: numbered already.
+                vertex_of[x] = vertex_of[leader];
+            }
+        } else {
+            vertex_of[x] = positions.len() as u32;
+            positions.push(q.cpos[x]);
+        }
+    }
 }
 
 /// Welds crossings closer than `WELD` grid spacings (crossings on top of each other where the
@@ -1194,9 +1750,7 @@ fn vertex_plane(
     inside_bits: &[u64],
     z: usize,
     iso: f32,
-    propose: bool,
-    pinch_rule: bool,
-    colour_shift: Offset,
+    propose: Option<Rules>,
     owned: &mut Vec<u32>,
     crossed_bits: &mut [u64],
 ) -> (PlaneCounts, Vec<Candidate>) {
@@ -1225,7 +1779,6 @@ fn vertex_plane(
         );
         // One point with at least one crossed edge: owned crossings, flags, proposals.
         let point = |sx: usize,
-                     p: Offset,
                      valid: u16,
                      owned: &mut Vec<u32>,
                      crossed_bits: &mut [u64],
@@ -1257,10 +1810,10 @@ fn vertex_plane(
             // candidates are joined.
             let first = counts.crossings as u32;
             counts.crossings += own.count_ones() as usize;
-            if propose && own.count_ones() >= 2 {
-                let colour = lattice::colour(l.lattice, add(p, colour_shift)) as u8;
+            if let Some(rules) = propose.filter(|_| own.count_ones() >= 2) {
+                let inner = l.inner_dirs(l.coords(sx, sy, z)) & valid;
                 counts.proposals.add(cluster::propose(
-                    l.t, first, colour, valid, own, crossed, pinch_rule, cands,
+                    l.t, first, i as u32, valid, inner, own, crossed, rules, cands,
                 ));
             }
         };
@@ -1276,7 +1829,7 @@ fn vertex_plane(
                 return;
             }
             counts.edges += valid.count_ones() as usize;
-            point(sx, p, valid, owned, crossed_bits, counts, cands);
+            point(sx, valid, owned, crossed_bits, counts, cands);
         };
         // The points tested 64 at a time: the whole row where every neighbour slot of it is in
         // storage (the test may then let through a border point whose only difference is with a
@@ -1308,17 +1861,16 @@ fn vertex_plane(
                 while block != 0 {
                     let x = sx + block.trailing_zeros() as usize;
                     block &= block - 1;
-                    let p = l.coords(x, sy, z);
                     let valid = if x >= lo && x < hi {
                         FULL
                     } else {
-                        let (exists, valid) = l.border_info(p);
+                        let (exists, valid) = l.border_info(l.coords(x, sy, z));
                         if !exists {
                             continue;
                         }
                         valid
                     };
-                    point(x, p, valid, owned, crossed_bits, &mut counts, &mut cands);
+                    point(x, valid, owned, crossed_bits, &mut counts, &mut cands);
                 }
                 sx += len;
             }
@@ -1473,8 +2025,11 @@ fn count_layer(l: &Layout, k: usize, keep: Option<CellRange>, crossed: &CrossedI
     n
 }
 
-/// Geometry pass over one z-layer: writes its triangles into `out`, sized by [`count_layer`];
-/// returns the tetrahedra processed.
+/// Emission over one z-layer: writes its triangles into `out`, sized by [`count_layer`] (the
+/// triangles of plain MT); with `map` (crossing id to output vertex, clustering) the triangles
+/// are written with the clustered vertices and those that collapsed are left out. Returns the
+/// tetrahedra processed and the triangles written.
+#[allow(clippy::too_many_arguments)]
 fn geometry_layer(
     l: &Layout,
     k: usize,
@@ -1482,8 +2037,10 @@ fn geometry_layer(
     keep: Option<CellRange>,
     crossed: &CrossedIndex,
     positions: &[[f32; 3]],
+    map: Option<&[u32]>,
     out: &mut [u32],
-) -> usize {
+    grad: Option<&mut [[f32; 3]]>,
+) -> (usize, usize) {
     let plane = l.s.dims[0] * l.s.dims[1];
     // The crossed points of the storage planes this layer reads, copied into a dense window (one
     // entry per slot) of this thread: a crossing's id is then one load away, where the rank
@@ -1501,7 +2058,19 @@ fn geometry_layer(
                 r += 1;
             });
         }
-        geometry_in_window(l, k, iso, keep, crossed, positions, &window[..], z0, out)
+        geometry_in_window(
+            l,
+            k,
+            iso,
+            keep,
+            crossed,
+            positions,
+            map,
+            &window[..],
+            z0,
+            out,
+            grad,
+        )
     })
 }
 
@@ -1521,77 +2090,75 @@ fn geometry_in_window(
     keep: Option<CellRange>,
     crossed: &CrossedIndex,
     positions: &[[f32; 3]],
+    map: Option<&[u32]>,
     window: &[CrossedPoint],
     z0: usize,
     out: &mut [u32],
-) -> usize {
+    mut grad: Option<&mut [[f32; 3]]>,
+) -> (usize, usize) {
     let v = &l.s.values;
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
     let mut w = 0;
-    let mut tet = |anchor: usize, tpl: &TetTemplate| {
+    let mut tet = |anchor: usize, ti: usize, tpl: &TetTemplate| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
-        let case = (val[0] < iso) as usize
-            | ((val[1] < iso) as usize) << 1
-            | ((val[2] < iso) as usize) << 2
-            | ((val[3] < iso) as usize) << 3;
-        if case == 0 || case == 15 {
-            return;
-        }
-        processed += 1;
-        let cycle = &CASES[case];
-        let n = if cycle[3] == u8::MAX { 3 } else { 4 };
-        let mut ids = [0u32; 4];
-        for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
-            let (a, b) = TET_EDGES[e as usize];
-            let (o, d) = if owns(val[a], val[b], iso) {
-                (a, tpl.dir[a][b])
-            } else {
-                (b, tpl.dir[b][a])
-            };
-            // The window starts at slot 0 of plane z0.
+        let mut tris = [[0u32; 3]; 2];
+        // The window starts at slot 0 of plane z0.
+        let id = |o: usize, d: u8| {
             let entry = window[idx[o] - z0 * plane];
             debug_assert_eq!(entry, crossed.get(idx[o]));
-            *slot = entry.id(d);
-        }
-        if n == 3 {
-            out[w..w + 3].copy_from_slice(&ids[..3]);
-            w += 3;
-        } else {
-            // Split along the shorter diagonal, chosen by a table index rather than a branch
-            // (the choice is data-dependent and mispredicts half the time).
-            const SPLITS: [[usize; 6]; 2] = [[1, 2, 3, 1, 3, 0], [0, 1, 2, 0, 2, 3]];
-            let p = |i: u32| glam::Vec3::from(positions[i as usize]);
-            let short02 =
-                p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
-            let s = &SPLITS[usize::from(short02)];
-            out[w..w + 6].copy_from_slice(&[
-                ids[s[0] & 3],
-                ids[s[1] & 3],
-                ids[s[2] & 3],
-                ids[s[3] & 3],
-                ids[s[4] & 3],
-                ids[s[5] & 3],
-            ]);
-            w += 6;
+            entry.id(d)
+        };
+        let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
+        processed += usize::from(n > 0);
+        match map {
+            None => {
+                // The gradient of the tetrahedron, for the quotient test's (c).
+                let g = if n > 0 && grad.is_some() {
+                    l.gradient(anchor, ti)
+                } else {
+                    [0.0; 3]
+                };
+                for t in &tris[..n] {
+                    if let Some(grad) = grad.as_deref_mut() {
+                        grad[w / 3] = g;
+                    }
+                    out[w..w + 3].copy_from_slice(t);
+                    w += 3;
+                }
+            }
+            Some(map) => {
+                // Clustered: the vertices of the groups' quotient; a triangle with two corners
+                // in one group collapsed and is dropped.
+                for t in &tris[..n] {
+                    let q = t.map(|i| map[i as usize]);
+                    if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
+                        out[w..w + 3].copy_from_slice(&q);
+                        w += 3;
+                    }
+                }
+            }
         }
     };
     for_each_group(l, k, keep, crossed, |anchor, _, g| {
-        let tets = match l.lattice {
-            Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
-            Lattice::Simple => &l.tets[..],
+        let first = match l.lattice {
+            Lattice::BodyCentred => 4 * g,
+            Lattice::Simple => 0,
         };
-        for tpl in tets {
-            tet(anchor, tpl);
+        let count = match l.lattice {
+            Lattice::BodyCentred => 4,
+            Lattice::Simple => l.tets.len(),
+        };
+        for ti in first..first + count {
+            tet(anchor, ti, &l.tets[ti]);
         }
     });
-    debug_assert_eq!(
-        w,
-        out.len(),
+    debug_assert!(
+        w == out.len() || (map.is_some() && w <= out.len()),
         "layer {k}: triangles counted and written differ"
     );
-    processed
+    (processed, w / 3)
 }
 
 #[cfg(test)]
@@ -1703,6 +2270,88 @@ mod tests {
             }
         }
         assert!(checked > 100, "only {checked} points own crossings");
+    }
+
+    #[test]
+    fn the_tetrahedra_around_the_points_give_exactly_the_emitted_triangles() {
+        // Every point sees 24 tetrahedra; over all points each tetrahedron of the extraction is
+        // seen from its 4 corners, and their triangles (the quotient test's view) are exactly
+        // the triangles the geometry pass writes, with the same orientation.
+        let field = rmt_fields::FnField(|p: glam::Vec3| {
+            (p.x * 5.3).sin() * (p.y * 3.9 + 0.2).cos() + (p.z * 4.7).sin() * 0.7 - 0.15
+        });
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("a pool of one thread");
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[3, 4, 5], [9, 8, 7]] {
+                let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
+                let l = Layout::new(&samples, lattice);
+                assert_eq!(l.around[0].len(), 24, "{lattice:?}");
+                assert_eq!(l.around[1].len(), 24, "{lattice:?}");
+                for tet in l.around.iter().flatten() {
+                    assert_eq!(crate::lattice::det(&tet.off).signum(), 1, "{lattice:?}");
+                    assert_eq!(tet.from_point.count_ones(), 3);
+                }
+                let canonical = |t: [u32; 3]| {
+                    let k = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
+                    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+                };
+                let mut seen = std::collections::HashMap::new();
+                let mut tets = 0;
+                let [dx, dy, dz] = samples.dims;
+                for z in 0..dz {
+                    for sy in 0..dy {
+                        for sx in 0..dx {
+                            let (p, exists) = l.point(sx, sy, z);
+                            if !exists {
+                                continue;
+                            }
+                            let slot = (z * dy + sy) * dx + sx;
+                            for tet in &l.around[(p[0] & 1) as usize] {
+                                if !l.has_tet(p, tet) {
+                                    continue;
+                                }
+                                tets += 1;
+                                let idx = tet.delta.map(|d| (slot as isize + d) as usize);
+                                let val = idx.map(|i| samples.values[i]);
+                                let id = |o: usize, d: u8| buf.crossed.get(idx[o]).id(d);
+                                let mut tris = [[0; 3]; 2];
+                                let n = tet_triangles(
+                                    val,
+                                    settings.iso,
+                                    &tet.dir,
+                                    id,
+                                    &mesh.positions,
+                                    &mut tris,
+                                );
+                                for t in &tris[..n] {
+                                    *seen.entry(canonical(*t)).or_insert(0) += 1;
+                                }
+                            }
+                        }
+                    }
+                }
+                let stats_tets = match lattice {
+                    Lattice::BodyCentred => {
+                        let [nx, ny, nz] = cells;
+                        4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1))
+                    }
+                    Lattice::Simple => 6 * cells.iter().product::<usize>(),
+                };
+                assert_eq!(tets, 4 * stats_tets, "{lattice:?} {cells:?}");
+                let emitted: std::collections::HashSet<[u32; 3]> = mesh
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| canonical([t[0], t[1], t[2]]))
+                    .collect();
+                assert_eq!(emitted.len() * 3, mesh.indices.len());
+                assert!(seen.values().all(|&c| c == 4), "{lattice:?} {cells:?}");
+                let seen: std::collections::HashSet<[u32; 3]> = seen.into_keys().collect();
+                assert_eq!(seen, emitted, "{lattice:?} {cells:?}");
+            }
+        }
     }
 
     #[test]
@@ -1889,6 +2538,13 @@ mod tests {
                                 (exists, valid),
                                 "{lattice:?} {cells:?} at {p:?}"
                             );
+                            if exists {
+                                assert_eq!(
+                                    l.inner_dirs(p),
+                                    l.inner_dirs_of(p),
+                                    "inner edges, {lattice:?} {cells:?} at {p:?}"
+                                );
+                            }
                         }
                     }
                 }

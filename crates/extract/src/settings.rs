@@ -184,8 +184,8 @@ pub struct ExtractSettings {
     pub threads: usize,
     /// How vertex normals are computed.
     pub normals: NormalMode,
-    /// Tile rule for chunked extraction: merges (clusters, lone absorption, welds, edge
-    /// collapses) only inside one tile. `None` (the default) leaves the output unchanged.
+    /// Tile rule for chunked extraction: merges (groups, edge collapses) only inside one tile.
+    /// `None` (the default) leaves the output unchanged.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tiles: Option<Tiling>,
     /// Keep only the triangles anchored in these grid cells (chunked extraction); `None` keeps
@@ -196,22 +196,19 @@ pub struct ExtractSettings {
 
 /// The tile rule of chunked extraction (see `crates/terrain` for the world that uses it).
 ///
-/// The integrated clustering commits clusters one lattice colour at a time, each after a check
-/// that sees the earlier commits; lone crossings, welds and edge collapses are sequential too.
-/// Without a rule, a decision may depend on decisions arbitrarily far away, so a sub-box cannot
-/// reproduce the whole volume's mesh and a local edit may change clusters anywhere. With a
+/// The repair rounds of integrated clustering and the edge collapses of post-processing let a
+/// decision depend on decisions further and further away, so without a rule a sub-box may not
+/// reproduce the whole volume's mesh and a local edit may change groups far from it. With a
 /// tiling, space is cut into tiles of `size` cells (global cell coordinates: tile `t` covers
-/// cells `t * size .. (t + 1) * size` per axis), and a merge is allowed only when every crossing
-/// it involves has its *footprint* (the tetrahedra around its lattice edge, where all triangles
-/// touching it come from) inside one and the same tile ([`crate::tiles`]).
+/// cells `t * size .. (t + 1) * size` per axis), and a group (or a collapse) is allowed only when
+/// every crossing it involves has its *footprint* (the tetrahedra around its lattice edge, where
+/// all triangles touching it come from) inside one and the same tile ([`crate::tiles`]).
 ///
-/// Merged vertices keep their representative's tile, so by induction every merge touches only
-/// triangles of tetrahedra inside its tile: merges of two tiles share no triangle and no vertex,
-/// and a tile's merges see only the tile, whose tetrahedra depend only on the samples of its
-/// closed box. Merge order inside a tile (lattice colour, storage order, vertex order) is the
-/// same in any box containing the tile, because [`Tiling::grid_offset`] makes the lattice colours
-/// global. The price: crossings whose footprint crosses a tile face are never merged (about half
-/// a cell to a cell on each side of every tile face).
+/// A group's quotient test then reads only tetrahedra of its tile, and the groups it sees are of
+/// the same tile: the tiles never interact, and a tile's tests and repairs see only the samples
+/// of its closed box. Priorities follow the storage order of the owner points, which is the same
+/// in any box containing the tile. The price: crossings whose footprint crosses a tile face are
+/// never merged (about half a cell to a cell on each side of every tile face).
 ///
 /// For a sub-box to reproduce the whole volume's triangles bit for bit, its positions must be
 /// computed exactly in both (e.g. unit cell spacing and integer box corners, as the terrain
@@ -221,7 +218,7 @@ pub struct Tiling {
     /// Tile edge in cells per axis (>= 1).
     pub size: [usize; 3],
     /// Global cell index of this grid's cell (0, 0, 0): a sub-box of a larger volume passes its
-    /// offset so that tiles and lattice colours line up with the whole volume's.
+    /// offset so that its tiles line up with the whole volume's.
     pub grid_offset: [usize; 3],
 }
 

@@ -48,38 +48,34 @@ pub struct Stats {
     pub t_normals_s: f64,
     /// Seconds for the whole extraction.
     pub t_total_s: f64,
-    /// Part of `t_vertex_s` (integrated clustering): building the vertex-to-triangle adjacency
-    /// the merges need. Serial.
-    pub t_adjacency_s: f64,
-    /// Part of `t_vertex_s` (integrated clustering): checking the cluster candidates against the
-    /// mesh, colour by colour, in parallel.
-    pub t_cluster_check_s: f64,
-    /// Part of `t_vertex_s` (integrated clustering): applying the accepted cluster merges, in
-    /// storage order. Serial.
-    pub t_cluster_apply_s: f64,
-    /// Part of `t_vertex_s` (checked integrated clustering): absorbing lone crossings into a
-    /// neighbouring cluster, one after the other. Serial.
-    pub t_lone_s: f64,
-    /// Part of `t_vertex_s` (checked integrated clustering): collapsing needle and cap
-    /// triangles. Serial.
-    pub t_slivers_s: f64,
-    /// Part of `t_vertex_s` (integrated clustering): writing the merged mesh out of the merge
-    /// buffers, and welding coincident crossings where that applies. Serial.
-    pub t_finish_s: f64,
-    /// Clusters (groups of at least two crossings at one point) found by the vertex pass.
+    /// Part of `t_vertex_s` (integrated clustering): the group tables (each crossing's group,
+    /// each group's vertex position); with the checked mode also plain MT's triangle list and
+    /// every crossing's triangles, and the additions' proposals (variants of split islands,
+    /// lone crossings, sliver pairs).
+    pub t_groups_s: f64,
+    /// Part of `t_vertex_s` (integrated clustering): the first round of quotient tests of every
+    /// settling step (the islands, then each addition), in parallel.
+    pub t_tests_s: f64,
+    /// Part of `t_vertex_s` (integrated clustering): the repair rounds after those, in
+    /// parallel.
+    pub t_repair_s: f64,
+    /// Part of `t_vertex_s` (integrated clustering): numbering the output vertices.
+    pub t_vertices_s: f64,
+    /// Clusters (groups of at least two crossings at one point) found by the vertex pass, plus
+    /// the pairs proposed at slivers (checked integrated clustering).
     pub clusters_proposed: usize,
-    /// Clusters merged into one vertex.
+    /// Clusters merged into one vertex (an island kept whole or as one of its variants, or a
+    /// sliver pair).
     pub clusters_committed: usize,
-    /// Committed clusters that the exact check accepted only without one of their crossings.
-    pub clusters_reduced: usize,
-    /// Lone crossings merged into a neighbouring cluster after the clusters (integrated mode).
+    /// Lone crossings (not in a kept island of their own point) in the kept groups at the end
+    /// (integrated clustering).
     pub lone_absorbed: usize,
-    /// Needle and cap triangles removed by one edge collapse each after the clusters
-    /// (integrated mode; see [`crate::collapse::collapse_slivers`]).
-    pub slivers_collapsed: usize,
+    /// Repair rounds that changed a group, over every settling step (integrated clustering; 0
+    /// when every group and addition passed the quotient test at once).
+    pub repair_rounds: usize,
     /// Clusters refused by the mask rules (more than 10 crossings, loops, pinches).
     pub clusters_rejected_prefilter: usize,
-    /// Clusters refused by the exact local check on the mesh.
+    /// Clusters refused by the exact quotient test: proposed and not kept in any form.
     pub clusters_rejected_check: usize,
     /// All refused clusters (pre-filter plus exact check).
     pub clusters_rejected: usize,
@@ -98,51 +94,42 @@ pub struct Stats {
 impl Stats {
     /// Names of the merging steps of integrated clustering, in the order of
     /// [`Stats::merge_steps`] (and of the work).
-    pub const MERGE_STEPS: [&'static str; 6] = [
-        "adjacency",
-        "cluster checks",
-        "apply",
-        "lone crossings",
-        "slivers",
-        "mesh out",
-    ];
+    pub const MERGE_STEPS: [&'static str; 4] = ["groups", "tests", "repair", "vertices"];
 
-    /// Seconds of each merging step inside `t_vertex_s` (see [`Stats::MERGE_STEPS`]); all zero
-    /// without integrated clustering. Only the cluster checks run in parallel.
-    ///
-    /// ```
-    /// let s = rmt_extract::Stats { t_lone_s: 0.25, ..Default::default() };
-    /// assert_eq!(s.merge_steps()[3], 0.25);
-    /// assert_eq!(rmt_extract::Stats::MERGE_STEPS[3], "lone crossings");
-    /// ```
     /// `values`, one per merging step in [`Stats::MERGE_STEPS`] order (in whatever unit the
-    /// caller prints), as one line: `adjacency 1.20 + cluster checks 9.00 (parallel) + ...`.
+    /// caller prints), as one line: `groups 1.20 + tests 9.00 (parallel) + ...`.
     ///
     /// ```
-    /// let line = rmt_extract::Stats::merge_steps_text([1.0, 2.0, 3.0, 4.0, 5.0, 6.0], 1);
-    /// assert!(line.starts_with("adjacency 1.0 + cluster checks 2.0 (parallel) + apply 3.0"));
+    /// let line = rmt_extract::Stats::merge_steps_text([1.0, 2.0, 3.0, 4.0], 1);
+    /// assert!(line.starts_with("groups 1.0 + tests 2.0 (parallel) + repair 3.0 (parallel)"));
     /// ```
-    pub fn merge_steps_text(values: [f64; 6], decimals: usize) -> String {
+    pub fn merge_steps_text(values: [f64; 4], decimals: usize) -> String {
         let parts: Vec<String> = Self::MERGE_STEPS
             .iter()
             .zip(values)
             .enumerate()
             .map(|(i, (name, v))| {
-                let parallel = if i == 1 { " (parallel)" } else { "" };
+                let parallel = if i == 1 || i == 2 { " (parallel)" } else { "" };
                 format!("{name} {v:.decimals$}{parallel}")
             })
             .collect();
         parts.join(" + ")
     }
 
-    pub fn merge_steps(&self) -> [f64; 6] {
+    /// Seconds of each merging step inside `t_vertex_s` (see [`Stats::MERGE_STEPS`]); all zero
+    /// without integrated clustering.
+    ///
+    /// ```
+    /// let s = rmt_extract::Stats { t_repair_s: 0.25, ..Default::default() };
+    /// assert_eq!(s.merge_steps()[2], 0.25);
+    /// assert_eq!(rmt_extract::Stats::MERGE_STEPS[2], "repair");
+    /// ```
+    pub fn merge_steps(&self) -> [f64; 4] {
         [
-            self.t_adjacency_s,
-            self.t_cluster_check_s,
-            self.t_cluster_apply_s,
-            self.t_lone_s,
-            self.t_slivers_s,
-            self.t_finish_s,
+            self.t_groups_s,
+            self.t_tests_s,
+            self.t_repair_s,
+            self.t_vertices_s,
         ]
     }
 }

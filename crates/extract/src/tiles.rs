@@ -11,7 +11,6 @@
 use std::sync::OnceLock;
 
 use crate::lattice::{LatticeTables, Offset};
-use crate::merge::MergeBuffers;
 use crate::{Lattice, Samples, Tiling};
 
 /// Key of crossings that no tile may merge.
@@ -140,27 +139,6 @@ pub(crate) fn crossing_keys(
 pub(crate) fn same_tile(keys: &[u64], k: &[u32]) -> bool {
     let first = keys[k[0] as usize];
     first != NO_TILE && k.iter().all(|&v| keys[v as usize] == first)
-}
-
-/// Renumbers `keys` the way [`MergeBuffers::finish`] renumbers vertices: those used by live
-/// triangles, in increasing old order.
-pub(crate) fn compact_keys(merge: &MergeBuffers, keys: &mut Vec<u64>, triangles: usize) {
-    let mut used = vec![false; keys.len()];
-    for t in 0..triangles {
-        if merge.is_alive(t) {
-            for v in merge.triangle(t) {
-                used[v as usize] = true;
-            }
-        }
-    }
-    let mut w = 0;
-    for v in 0..keys.len() {
-        if used[v] {
-            keys[w] = keys[v];
-            w += 1;
-        }
-    }
-    keys.truncate(w);
 }
 
 #[cfg(test)]

@@ -23,6 +23,13 @@ pub enum RandomFamily {
     Shell(Vec3, f32, f32),
     /// A tube of radius `t` along a circle of radius `r` around the y axis through `c`.
     Tube(Vec3, f32, f32),
+    /// A thin planar sheet `|n . p - d| - t` (normal `n`, normalised; offset `d`; half
+    /// thickness `t`). Not drawn by [`RandomField::from_seed`]; the property tests draw it.
+    Sheet(Vec3, f32, f32),
+    /// Integer steps of a slanted plane, `round(k . p + b)`: whole layers of sample points sit
+    /// exactly on the threshold, so the surface passes through sample points everywhere (and
+    /// many clustering tests fail together). Not drawn by [`RandomField::from_seed`].
+    Stairs(Vec3, f32),
 }
 
 /// A random field of [`RandomFamily`] in `[-1, 1]^3`, optionally quantised. Build one with
@@ -117,7 +124,8 @@ impl RandomField {
         self
     }
 
-    /// A short description of the family (for reports): `blobs`, `waves`, `shell` or `tube`,
+    /// A short description of the family (for reports): `blobs`, `waves`, `shell`, `tube`,
+    /// `sheet` or `stairs`,
     /// with `+quantised` when values are rounded.
     pub fn describe(&self) -> String {
         let f = match self.family {
@@ -125,6 +133,8 @@ impl RandomField {
             RandomFamily::Waves(..) => "waves",
             RandomFamily::Shell(..) => "shell",
             RandomFamily::Tube(..) => "tube",
+            RandomFamily::Sheet(..) => "sheet",
+            RandomFamily::Stairs(..) => "stairs",
         };
         if self.quantum > 0.0 {
             format!("{f}+quantised")
@@ -156,6 +166,8 @@ impl ScalarField for RandomField {
                 let ring = (q.x * q.x + q.z * q.z).sqrt() - r;
                 (ring * ring + q.y * q.y).sqrt() - t
             }
+            RandomFamily::Sheet(n, d, t) => (n.normalize_or_zero().dot(p) - d).abs() - t,
+            RandomFamily::Stairs(k, b) => (k.dot(p) + b).round(),
         };
         if self.quantum > 0.0 {
             (f / self.quantum).round() * self.quantum

@@ -41,7 +41,7 @@ fn main() -> Result<()> {
     let mut shown = 0;
     let (mut all_v, mut all_g, mut all_t) = (0.0, 0.0, 0.0);
     // The merging steps of the vertex pass (see `Stats`), summed over the chunks.
-    let mut all_steps = [0.0; 6];
+    let mut all_steps = [0.0; 4];
     for i in 0..world.chunk_count() {
         if shown == count {
             break;
@@ -54,7 +54,7 @@ fn main() -> Result<()> {
         }
         shown += 1;
         let (mut v, mut g, mut t) = (Vec::new(), Vec::new(), Vec::new());
-        let mut steps: [Vec<f64>; 6] = Default::default();
+        let mut steps: [Vec<f64>; 4] = Default::default();
         for _ in 0..reps {
             let st = world
                 .extract_chunk(i, &mut ex, &mut mesh)
@@ -74,7 +74,7 @@ fn main() -> Result<()> {
         all_g += g;
         all_t += t;
         println!(
-            "chunk {i:3}: vertex {:.3} ms  geometry {:.3} ms  total {:.3} ms  ({} points, {} crossings, {} triangles, {} clusters committed of {} proposed, {} prefilter-rejected, {} check-rejected, {} reduced, {} lone absorbed, {} slivers, {} welds)",
+            "chunk {i:3}: vertex {:.3} ms  geometry {:.3} ms  total {:.3} ms  ({} points, {} crossings, {} triangles, {} clusters committed of {} proposed, {} prefilter-rejected, {} check-rejected, {} repair rounds, {} welds)",
             v * 1e3,
             g * 1e3,
             t * 1e3,
@@ -85,9 +85,7 @@ fn main() -> Result<()> {
             first.clusters_proposed,
             first.clusters_rejected_prefilter,
             first.clusters_rejected_check,
-            first.clusters_reduced,
-            first.lone_absorbed,
-            first.slivers_collapsed,
+            first.repair_rounds,
             first.collapses
         );
     }
