@@ -3,9 +3,8 @@
 //! collapsed: the check refuses regions whose boundary touches the merged vertices.
 //!
 //! - [`collapse_short_edges`]: post-processed merging, every edge shorter than a threshold,
-//!   shortest first, the merged vertex at the edge's midpoint;
-//! - [`collapse_slivers`]: the last step of integrated clustering, one collapse per needle or cap
-//!   triangle left between clusters.
+//!   shortest first, the merged vertex at the edge's midpoint (integrated clustering handles
+//!   its slivers in the quotient instead, see [`crate::quotient`]).
 
 use rmt_mesh::Mesh;
 
