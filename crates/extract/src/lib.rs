@@ -13,7 +13,8 @@
 //!    where all groups are contracted at once (its star read from plain MT's triangles, listed
 //!    once), and failures are repaired by splitting groups in parallel rounds until every group
 //!    passes; then variants of split islands, lone crossings and sliver pairs are added the same
-//!    way ([`quotient`]);
+//!    way ([`quotient`] the test, [`repair`] the rounds, [`additions`] what comes after the
+//!    islands);
 //! 5. **emission**: one or two triangles per crossed tetrahedron from the case table, written
 //!    with the clustered vertex ids; collapsed ones are left out ([`mt`]).
 //!    Post-processing (edge collapse, meshopt) runs after it, on the mesh ([`merge`],
@@ -24,7 +25,7 @@
 //!
 //! Cost, on a 2-vCPU AMD EPYC VM at 64^3 cells on one thread (pre-sampled values): about 20-24 ns
 //! per sample point for marching tetrahedra on the body-centred lattice without clustering,
-//! 3.3-3.5 times that with integrated clustering (mostly its quotient tests;
+//! 3.0-3.3 times that with integrated clustering (mostly its quotient tests;
 //! [`Stats::merge_steps`] splits that time).
 //! Reproduce with `cargo run --release -p experiments -- bench` (side by side with
 //! fast-surface-nets and isomesh) or `cargo run --release -p rmt-extract --example passes`.
@@ -45,6 +46,7 @@
 //! Orientation convention: triangles are counter-clockwise seen from the side of increasing
 //! field value, so their right-hand normals point outward for a signed distance field.
 
+pub mod additions;
 pub mod cluster;
 pub mod collapse;
 pub mod lattice;
@@ -53,6 +55,7 @@ pub mod measure;
 pub mod merge;
 pub mod mt;
 pub mod quotient;
+pub mod repair;
 pub mod samples;
 pub mod settings;
 pub mod simplify;

@@ -24,7 +24,8 @@
 //! island). Integrated clustering then lists plain MT's triangles once (the same pass as the
 //! emission, with each triangle's tetrahedron gradient and every crossing's triangles), keeps
 //! the groups that pass the exact quotient test, repairing failures by splitting groups in
-//! parallel rounds, and settles its additions the same way ([`crate::quotient`]);
+//! parallel rounds, and settles its additions the same way ([`crate::quotient`],
+//! [`crate::repair`], [`crate::additions`]);
 //! integrated-unchecked keeps every proposal. Every crossing then maps to an output vertex, and
 //! the emission writes the triangles with those vertices directly (mapping the listed plain
 //! triangles, or running the geometry pass), leaving out the ones that collapsed: no
@@ -1127,222 +1128,18 @@ pub fn extract(
     stats.clusters_proposed = proposals.proposed;
     stats.clusters_rejected_prefilter = proposals.rejected;
     if propose {
-        // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
-        std::mem::swap(&mut mesh.positions, &mut buf.cpos);
-        if tiled {
-            // Tile rule: a group only inside one tile. With integrated clustering a candidate
-            // across tiles is dropped (its crossings may still join a group of their tile as
-            // lone crossings); integrated-unchecked keeps it without one crossing when that
-            // leaves two or more of one tile (the first such crossing in bit order), as the
-            // dissertation's commit did.
-            let t = layout.t;
-            let mut kept = Vec::with_capacity(buf.candidates.len());
-            let mut ids = Vec::with_capacity(14);
-            for c in buf.candidates.drain(..) {
-                ids.clear();
-                ids.extend(c.ids());
-                if crate::tiles::same_tile(&keys, &ids) {
-                    kept.push(c);
-                    continue;
-                }
-                let without_one = (rules == Rules::Dissertation && ids.len() > 2)
-                    .then(|| {
-                        let mut d = c.dirs;
-                        (0..ids.len()).find_map(|i| {
-                            let bit = d & d.wrapping_neg();
-                            d &= d - 1;
-                            let rest: Vec<u32> =
-                                (0..ids.len()).filter(|&j| j != i).map(|j| ids[j]).collect();
-                            crate::tiles::same_tile(&keys, &rest).then(|| c.restrict(c.dirs & !bit))
-                        })
-                    })
-                    .flatten();
-                match without_one {
-                    Some(r) if t.is_connected(r.dirs) || rules == Rules::Dissertation => {
-                        kept.push(r)
-                    }
-                    _ => stats.clusters_rejected_prefilter += 1,
-                }
-            }
-            buf.candidates = kept;
-        }
-        let step = std::time::Instant::now();
-        build_groups(buf, &layout, pool);
-        let checked = clustering == Clustering::Integrated;
-        if checked {
-            // Plain MT's triangles and every crossing's triangles: the stars of the tests.
-            plain_processed = plain_triangles(
-                &layout,
-                iso,
-                &buf.crossed,
-                &buf.cpos,
-                pool,
-                &mut buf.plain,
-                &mut buf.plain_grad,
-                &mut buf.inc_start,
-                &mut buf.inc,
-            );
-        } else {
-            buf.plain.clear();
-            buf.plain_grad.clear();
-            buf.inc_start.clear();
-            buf.inc.clear();
-        }
-        let mut islands = buf.candidates.len();
-        if !checked {
-            stats.t_groups_s += step.elapsed().as_secs_f64();
-        }
-        if checked {
-            let fixed = crate::quotient::Fixed {
-                l: &layout,
-                cpos: &buf.cpos,
-                groups: &buf.candidates,
-                tris: &buf.plain,
-                grad: &buf.plain_grad,
-                inc_start: &buf.inc_start,
-                inc: &buf.inc,
-                keys: tiled.then_some(&keys[..]),
-            };
-            let groups = &mut buf.groups;
-            groups.relabel(&fixed, pool);
-            if LONE_CROSSINGS {
-                // Crossings in no island join a neighbouring island: part of the proposal.
-                crate::quotient::give_lones(&fixed, groups, &buf.edge_of, false, pool);
-                groups.base_len.fill(0);
-            }
-            stats.t_groups_s += step.elapsed().as_secs_f64();
-            let all = (0..islands as u32).collect();
-            let settled =
-                crate::quotient::settle(&fixed, groups, all, crate::quotient::Phase::Islands, pool);
-            stats.repair_rounds = settled.rounds;
-            stats.t_tests_s += settled.t_tests_s;
-            stats.t_repair_s += settled.t_repair_s;
-        }
-        // Split islands of three or more come back without one crossing: their variants are
-        // appended to the candidates (not kept), and each split island takes its first variant
-        // that passes.
-        let mut variant_of = Vec::new();
-        if checked {
-            let step = std::time::Instant::now();
-            let t = layout.t;
-            variant_of.push(islands as u32);
-            for gi in 0..islands {
-                if buf.groups.active[gi] == 0 {
-                    let c = buf.candidates[gi];
-                    crate::quotient::variants(&c, t, &mut buf.candidates);
-                    variant_of.push(buf.candidates.len() as u32);
-                }
-            }
-            buf.groups.extend_to(buf.candidates.len());
-            stats.t_groups_s += step.elapsed().as_secs_f64();
-        }
-        // The fixed tables of the tests, over the candidates as they are.
-        macro_rules! fixed {
-            () => {
-                crate::quotient::Fixed {
-                    l: &layout,
-                    cpos: &buf.cpos,
-                    groups: &buf.candidates,
-                    tris: &buf.plain,
-                    grad: &buf.plain_grad,
-                    inc_start: &buf.inc_start,
-                    inc: &buf.inc,
-                    keys: tiled.then_some(&keys[..]),
-                }
-            };
-        }
-        if checked {
-            let fixed = fixed!();
-            let groups = &mut buf.groups;
-            let dirty = crate::quotient::revive(&fixed, groups, &variant_of, pool);
-            let settled = crate::quotient::settle(
-                &fixed,
-                groups,
-                dirty,
-                crate::quotient::Phase::Islands,
-                pool,
-            );
-            stats.repair_rounds += settled.rounds;
-            stats.t_tests_s += settled.t_tests_s;
-            stats.t_repair_s += settled.t_repair_s;
-            // Crossings left alone (in no island, or in one that split) join the nearest kept
-            // group; a group that fails with them gives them back, and they try another group
-            // in the next pass.
-            let no_new = crate::quotient::Phase::Additions {
-                born: fixed.groups.len() as u32,
-            };
-            for _ in 0..LONE_PASSES {
-                let step = std::time::Instant::now();
-                let dirty = crate::quotient::give_lones(&fixed, groups, &buf.edge_of, true, pool);
-                stats.t_groups_s += step.elapsed().as_secs_f64();
-                if dirty.is_empty() {
-                    break;
-                }
-                let settled = crate::quotient::settle(&fixed, groups, dirty, no_new, pool);
-                stats.repair_rounds += settled.rounds;
-                stats.t_tests_s += settled.t_tests_s;
-                stats.t_repair_s += settled.t_repair_s;
-            }
-        }
-        // Slivers left between the groups: a crossing left alone at one joins the group across
-        // its shortest edge, or pairs with the crossing there (a new group).
-        for _ in 0..SLIVER_PASSES {
-            if !checked {
-                break;
-            }
-            let step = std::time::Instant::now();
-            let props = {
-                let fixed = fixed!();
-                crate::quotient::sliver_proposals(&fixed, &buf.groups, &buf.edge_of, pool)
-            };
-            if props.lones.is_empty() && props.pairs.is_empty() {
-                break;
-            }
-            let born = buf.candidates.len();
-            for &(x, y) in &props.pairs {
-                let (slot, dir) = buf.edge_of[x as usize];
-                buf.candidates.push(Candidate {
-                    first: x,
-                    members: 1,
-                    dirs: 1 << dir,
-                    slot,
-                });
-                let _ = y;
-            }
-            islands += props.pairs.len();
-            stats.clusters_proposed += props.pairs.len();
-            let fixed = fixed!();
-            let groups = &mut buf.groups;
-            groups.add_pairs(&fixed, born, &props.pairs);
-            let mut dirty = crate::quotient::attach(&fixed, groups, props.lones, true, pool);
-            dirty.extend(crate::quotient::around(
-                &fixed,
-                groups,
-                born..fixed.groups.len(),
-                pool,
-            ));
-            dirty.sort_unstable();
-            dirty.dedup();
-            stats.t_groups_s += step.elapsed().as_secs_f64();
-            let phase = crate::quotient::Phase::Additions { born: born as u32 };
-            let settled = crate::quotient::settle(&fixed, groups, dirty, phase, pool);
-            stats.repair_rounds += settled.rounds;
-            stats.t_tests_s += settled.t_tests_s;
-            stats.t_repair_s += settled.t_repair_s;
-        }
-        let fixed = fixed!();
-        let groups = &buf.groups;
-        stats.lone_absorbed = (0..buf.candidates.len())
-            .filter(|&gi| groups.active[gi] != 0)
-            .map(|gi| usize::from(groups.lone_len[gi]))
-            .sum();
-        let step = std::time::Instant::now();
-        let q = crate::quotient::Quotient::new(&fixed, groups);
-        vertex_map(&q, &mut buf.vertex_of, &mut mesh.positions);
-        // An island is kept whole, or as one of its variants (at most one of them is kept).
-        stats.clusters_committed = groups.active.iter().filter(|&&a| a != 0).count();
-        stats.clusters_rejected_check = islands - stats.clusters_committed;
-        stats.t_vertices_s += step.elapsed().as_secs_f64();
+        cluster(
+            buf,
+            &layout,
+            iso,
+            clustering,
+            rules,
+            tiled.then_some(&keys[..]),
+            mesh,
+            stats,
+            &mut plain_processed,
+            pool,
+        );
     }
     stats.t_vertex_s += t.elapsed().as_secs_f64();
 
@@ -1548,6 +1345,239 @@ fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::ThreadPool) 
         edge_of.extend_from_slice(&part);
     }
     debug_assert_eq!(edge_of.len(), crossings);
+}
+
+/// The clustering steps between the vertex pass and the emission (`propose`): the proposals
+/// under the tile rule, the group tables, and with integrated (checked) clustering plain MT's
+/// triangle list, the islands' quotient tests and repair ([`crate::repair`]), then the
+/// additions ([`crate::additions`]); at the end every crossing's output vertex
+/// (`buf.vertex_of`) and the vertex positions (`mesh.positions`; the crossings' own move to
+/// `buf.cpos`). `keys`: the tile rule's keys, when tiled. Counts the tetrahedra that the
+/// triangle list read into `plain_processed`.
+#[allow(clippy::too_many_arguments)]
+fn cluster(
+    buf: &mut MtBuffers,
+    layout: &Layout,
+    iso: f32,
+    clustering: Clustering,
+    rules: Rules,
+    keys: Option<&[u64]>,
+    mesh: &mut Mesh,
+    stats: &mut Stats,
+    plain_processed: &mut usize,
+    pool: &rayon::ThreadPool,
+) {
+    let tiled = keys.is_some();
+    let keys = keys.unwrap_or(&[]);
+    // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
+    std::mem::swap(&mut mesh.positions, &mut buf.cpos);
+    if tiled {
+        // Tile rule: a group only inside one tile. With integrated clustering a candidate
+        // across tiles is dropped (its crossings may still join a group of their tile as
+        // lone crossings); integrated-unchecked keeps it without one crossing when that
+        // leaves two or more of one tile (the first such crossing in bit order), as the
+        // dissertation's commit did.
+        let t = layout.t;
+        let mut kept = Vec::with_capacity(buf.candidates.len());
+        let mut ids = Vec::with_capacity(14);
+        for c in buf.candidates.drain(..) {
+            ids.clear();
+            ids.extend(c.ids());
+            if crate::tiles::same_tile(keys, &ids) {
+                kept.push(c);
+                continue;
+            }
+            let without_one = (rules == Rules::Dissertation && ids.len() > 2)
+                .then(|| {
+                    let mut d = c.dirs;
+                    (0..ids.len()).find_map(|i| {
+                        let bit = d & d.wrapping_neg();
+                        d &= d - 1;
+                        let rest: Vec<u32> =
+                            (0..ids.len()).filter(|&j| j != i).map(|j| ids[j]).collect();
+                        crate::tiles::same_tile(keys, &rest).then(|| c.restrict(c.dirs & !bit))
+                    })
+                })
+                .flatten();
+            match without_one {
+                Some(r) if t.is_connected(r.dirs) || rules == Rules::Dissertation => kept.push(r),
+                _ => stats.clusters_rejected_prefilter += 1,
+            }
+        }
+        buf.candidates = kept;
+    }
+    let step = std::time::Instant::now();
+    build_groups(buf, layout, pool);
+    let checked = clustering == Clustering::Integrated;
+    if checked {
+        // Plain MT's triangles and every crossing's triangles: the stars of the tests.
+        *plain_processed = plain_triangles(
+            layout,
+            iso,
+            &buf.crossed,
+            &buf.cpos,
+            pool,
+            &mut buf.plain,
+            &mut buf.plain_grad,
+            &mut buf.inc_start,
+            &mut buf.inc,
+        );
+    } else {
+        buf.plain.clear();
+        buf.plain_grad.clear();
+        buf.inc_start.clear();
+        buf.inc.clear();
+    }
+    let mut islands = buf.candidates.len();
+    if !checked {
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+    }
+    if checked {
+        let fixed = crate::quotient::Fixed {
+            l: layout,
+            cpos: &buf.cpos,
+            groups: &buf.candidates,
+            tris: &buf.plain,
+            grad: &buf.plain_grad,
+            inc_start: &buf.inc_start,
+            inc: &buf.inc,
+            keys: tiled.then_some(keys),
+        };
+        let groups = &mut buf.groups;
+        groups.relabel(&fixed, pool);
+        if LONE_CROSSINGS {
+            // Crossings in no island join a neighbouring island: part of the proposal.
+            crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
+            groups.base_len.fill(0);
+        }
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+        let all = (0..islands as u32).collect();
+        let settled =
+            crate::repair::settle(&fixed, groups, all, crate::repair::Phase::Islands, pool);
+        stats.repair_rounds = settled.rounds;
+        stats.t_tests_s += settled.t_tests_s;
+        stats.t_repair_s += settled.t_repair_s;
+    }
+    // Split islands of three or more come back without one crossing: their variants are
+    // appended to the candidates (not kept), and each split island takes its first variant
+    // that passes.
+    let mut variant_of = Vec::new();
+    if checked {
+        let step = std::time::Instant::now();
+        let t = layout.t;
+        variant_of.push(islands as u32);
+        for gi in 0..islands {
+            if buf.groups.active[gi] == 0 {
+                let c = buf.candidates[gi];
+                crate::additions::variants(&c, t, &mut buf.candidates);
+                variant_of.push(buf.candidates.len() as u32);
+            }
+        }
+        buf.groups.extend_to(buf.candidates.len());
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+    }
+    // The fixed tables of the tests, over the candidates as they are.
+    macro_rules! fixed {
+        () => {
+            crate::quotient::Fixed {
+                l: layout,
+                cpos: &buf.cpos,
+                groups: &buf.candidates,
+                tris: &buf.plain,
+                grad: &buf.plain_grad,
+                inc_start: &buf.inc_start,
+                inc: &buf.inc,
+                keys: tiled.then_some(keys),
+            }
+        };
+    }
+    if checked {
+        let fixed = fixed!();
+        let groups = &mut buf.groups;
+        let dirty = crate::additions::revive(&fixed, groups, &variant_of, pool);
+        let settled =
+            crate::repair::settle(&fixed, groups, dirty, crate::repair::Phase::Islands, pool);
+        stats.repair_rounds += settled.rounds;
+        stats.t_tests_s += settled.t_tests_s;
+        stats.t_repair_s += settled.t_repair_s;
+        // Crossings left alone (in no island, or in one that split) join the nearest kept
+        // group; a group that fails with them gives them back, and they try another group
+        // in the next pass.
+        let no_new = crate::repair::Phase::Additions {
+            born: fixed.groups.len() as u32,
+        };
+        for _ in 0..LONE_PASSES {
+            let step = std::time::Instant::now();
+            let dirty = crate::additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
+            stats.t_groups_s += step.elapsed().as_secs_f64();
+            if dirty.is_empty() {
+                break;
+            }
+            let settled = crate::repair::settle(&fixed, groups, dirty, no_new, pool);
+            stats.repair_rounds += settled.rounds;
+            stats.t_tests_s += settled.t_tests_s;
+            stats.t_repair_s += settled.t_repair_s;
+        }
+    }
+    // Slivers left between the groups: a crossing left alone at one joins the group across
+    // its shortest edge, or pairs with the crossing there (a new group).
+    for _ in 0..SLIVER_PASSES {
+        if !checked {
+            break;
+        }
+        let step = std::time::Instant::now();
+        let props = {
+            let fixed = fixed!();
+            crate::additions::sliver_proposals(&fixed, &buf.groups, &buf.edge_of, pool)
+        };
+        if props.lones.is_empty() && props.pairs.is_empty() {
+            break;
+        }
+        let born = buf.candidates.len();
+        for &(x, y) in &props.pairs {
+            let (slot, dir) = buf.edge_of[x as usize];
+            buf.candidates.push(Candidate {
+                first: x,
+                members: 1,
+                dirs: 1 << dir,
+                slot,
+            });
+            let _ = y;
+        }
+        islands += props.pairs.len();
+        stats.clusters_proposed += props.pairs.len();
+        let fixed = fixed!();
+        let groups = &mut buf.groups;
+        groups.add_pairs(&fixed, born, &props.pairs);
+        let mut dirty = crate::additions::attach(&fixed, groups, props.lones, true, pool);
+        dirty.extend(crate::additions::around(
+            &fixed,
+            groups,
+            born..fixed.groups.len(),
+            pool,
+        ));
+        dirty.sort_unstable();
+        dirty.dedup();
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+        let phase = crate::repair::Phase::Additions { born: born as u32 };
+        let settled = crate::repair::settle(&fixed, groups, dirty, phase, pool);
+        stats.repair_rounds += settled.rounds;
+        stats.t_tests_s += settled.t_tests_s;
+        stats.t_repair_s += settled.t_repair_s;
+    }
+    let fixed = fixed!();
+    let groups = &buf.groups;
+    stats.lone_absorbed = (0..buf.candidates.len())
+        .filter(|&gi| groups.active[gi] != 0)
+        .map(|gi| usize::from(groups.lone_len[gi]))
+        .sum();
+    let step = std::time::Instant::now();
+    let q = crate::quotient::Quotient::new(&fixed, groups);
+    vertex_map(&q, &mut buf.vertex_of, &mut mesh.positions);
+    // An island is kept whole, or as one of its variants (at most one of them is kept).
+    stats.clusters_committed = groups.active.iter().filter(|&&a| a != 0).count();
+    stats.clusters_rejected_check = islands - stats.clusters_committed;
+    stats.t_vertices_s += step.elapsed().as_secs_f64();
 }
 
 /// The geometry pass over the lattice, writing the final triangles into `mesh` (with `propose`,

@@ -1,0 +1,432 @@
+//! What integrated clustering proposes once the islands settle, each step a function of the
+//! state the previous one left around each crossing (so still order-free), each settled by
+//! [`crate::repair::settle`] in [`crate::repair::Phase::Additions`]:
+//!
+//! 1. every split island of three or more takes back its first variant (the island without one
+//!    crossing, then pairs of its crossings) that passes in the current state ([`revive`]);
+//! 2. crossings left alone join the nearest kept group they share a triangle with, at most
+//!    [`MAX_LONES`] per group, in a few passes; a group that fails with them gives them back,
+//!    and a crossing given back tries another group in the next pass ([`give_lones`]);
+//! 3. slivers (triangles of the quotient with an aspect ratio above [`SLIVER_AR`]): a crossing
+//!    left alone at one joins the group across the sliver's shortest edge, or pairs with the
+//!    crossing there into a new group ([`sliver_proposals`]).
+//!
+//! Each step only keeps what then passes every test, so the result stays closed, manifold and of
+//! the same topology as plain MT.
+
+use rayon::prelude::*;
+
+use crate::cluster::Candidate;
+use crate::quotient::{Fixed, Groups, Lone, Quotient, Star, MAX_LONES, NONE};
+
+/// The groups that may replace a split island, in the order they are tried: its island without
+/// one crossing, for each crossing in bit order, when that leaves a connected part; then (for
+/// islands of four or more) every pair of its crossings joined by a mesh edge, in bit order
+/// (lattice adjacency joins the crossings of one point through mesh edges, see
+/// [`crate::cluster`]).
+pub(crate) fn variants(c: &Candidate, t: &crate::lattice::LatticeTables, out: &mut Vec<Candidate>) {
+    if c.size() < 3 {
+        return;
+    }
+    // Bit `d` of `dirs` is bit `rank(d)` of `members`: the k-th set bits correspond.
+    let bits: Vec<(u16, u16)> = {
+        let (mut dirs, mut members) = (c.dirs, c.members);
+        let mut v = Vec::with_capacity(14);
+        while dirs != 0 {
+            v.push((dirs & dirs.wrapping_neg(), members & members.wrapping_neg()));
+            dirs &= dirs - 1;
+            members &= members - 1;
+        }
+        v
+    };
+    let mut push = |dirs: u16, members: u16| {
+        out.push(Candidate {
+            first: c.first,
+            members,
+            dirs,
+            slot: c.slot,
+        })
+    };
+    for &(d, m) in &bits {
+        if t.is_connected(c.dirs & !d) {
+            push(c.dirs & !d, c.members & !m);
+        }
+    }
+    if bits.len() >= 4 {
+        for (i, &(d1, m1)) in bits.iter().enumerate() {
+            for &(d2, m2) in &bits[i + 1..] {
+                if t.is_connected(d1 | d2) {
+                    push(d1 | d2, m1 | m2);
+                }
+            }
+        }
+    }
+}
+
+/// Each split island `k` (its variants at `variant_of[k]..variant_of[k + 1]` in the candidates,
+/// not kept) takes its first variant that passes every test in the current
+/// state; all of them at once (each decided from the state before any is taken). Returns the
+/// groups to test again: the taken variants and the groups around them.
+pub(crate) fn revive(
+    f: &Fixed,
+    g: &mut Groups,
+    variant_of: &[u32],
+    pool: &rayon::ThreadPool,
+) -> Vec<u32> {
+    if let (Some(&first), Some(&end)) = (variant_of.first(), variant_of.last()) {
+        for v in first..end {
+            g.refresh(f, v as usize);
+        }
+    }
+    let q = Quotient::new(f, g);
+    let taken: Vec<u32> = pool.install(|| {
+        (0..variant_of.len().saturating_sub(1))
+            .into_par_iter()
+            .map_init(Box::<Star>::default, |s, k| {
+                (variant_of[k]..variant_of[k + 1]).find(|&v| q.passes_all(v as usize, s))
+            })
+            .flatten()
+            .collect()
+    });
+    for &v in &taken {
+        let vi = v as usize;
+        g.active[vi] = 1;
+        for id in f.groups[vi].ids() {
+            g.group_of[id as usize] = v;
+        }
+        g.refresh(f, vi);
+        g.set_vertices(f, vi);
+    }
+    let q = Quotient::new(f, g);
+    let mut dirty: Vec<u32> = pool.install(|| {
+        taken
+            .par_iter()
+            .map_init(Box::<Star>::default, |s, &v| {
+                let mut out = vec![v];
+                q.neighbours(v as usize, s, &mut out);
+                out
+            })
+            .flatten()
+            .collect()
+    });
+    dirty.sort_unstable();
+    dirty.dedup();
+    dirty
+}
+
+/// The groups `range` and the active groups around them (to test).
+pub(crate) fn around(
+    f: &Fixed,
+    g: &Groups,
+    range: std::ops::Range<usize>,
+    pool: &rayon::ThreadPool,
+) -> Vec<u32> {
+    let q = Quotient::new(f, g);
+    pool.install(|| {
+        range
+            .into_par_iter()
+            .map_init(Box::<Star>::default, |s, gi| {
+                let mut out = vec![gi as u32];
+                q.neighbours(gi, s, &mut out);
+                out
+            })
+            .flatten()
+            .collect()
+    })
+}
+
+/// A triangle is a sliver when its aspect ratio (circumradius over twice the inradius, 1 for an
+/// equilateral triangle) exceeds this.
+pub(crate) const SLIVER_AR: f32 = 4.0;
+
+/// The aspect ratio of triangle `a b c` (as [`SLIVER_AR`] measures it): infinite when flat.
+fn aspect_ratio(a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> f32 {
+    let (la, lb, lc) = ((b - c).length(), (c - a).length(), (a - b).length());
+    let double_area = (b - a).cross(c - a).length();
+    if double_area <= 0.0 {
+        return f32::INFINITY;
+    }
+    let ar = la * lb * lc * (la + lb + lc) / (4.0 * double_area * double_area);
+    if ar.is_finite() {
+        ar
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// What the slivers left after the lone passes propose: lone crossings for groups, and pairs of
+/// crossings to become new groups.
+#[derive(Debug, Default)]
+pub(crate) struct SliverProposals {
+    /// (group, crossing).
+    pub(crate) lones: Vec<(u32, Lone)>,
+    /// (lower crossing, higher crossing).
+    pub(crate) pairs: Vec<(u32, u32)>,
+}
+
+/// Every inner crossing left alone that is a corner of a sliver of the quotient (a triangle
+/// whose aspect ratio exceeds [`SLIVER_AR`]) whose shortest edge it shares, picks the other
+/// end of the shortest such edge (then the lower label): a kept group takes it as a lone
+/// crossing; a crossing left alone that picked it back forms a pair with it. A function of the
+/// current state around each crossing, so order-free. The tile rule keeps groups and pairs
+/// inside one tile.
+pub(crate) fn sliver_proposals(
+    f: &Fixed,
+    g: &Groups,
+    edge_of: &[(u32, u8)],
+    pool: &rayon::ThreadPool,
+) -> SliverProposals {
+    let q = Quotient::new(f, g);
+    let pick = |x: u32| -> u32 {
+        let (slot, dir) = edge_of[x as usize];
+        if !q.alone(x) || !q.joinable(x) || !q.inner(slot as usize, dir) {
+            return NONE;
+        }
+        let mut best: Option<(f32, u32)> = None;
+        for &t in q.tris_of(x) {
+            let c = q.tri(t).map(|y| q.label(y));
+            if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
+                continue;
+            }
+            let p = c.map(|y| glam::Vec3::from(q.position(y)));
+            if aspect_ratio(p[0], p[1], p[2]) <= SLIVER_AR {
+                continue;
+            }
+            let edges = [(0, 1), (1, 2), (2, 0)].map(|(a, b)| (p[a].distance_squared(p[b]), a, b));
+            let Some(&(len, a, b)) = edges.iter().min_by(|e, o| {
+                e.0.total_cmp(&o.0)
+                    .then((c[e.1], c[e.2]).cmp(&(c[o.1], c[o.2])))
+            }) else {
+                continue;
+            };
+            let other = if c[a] == x {
+                c[b]
+            } else if c[b] == x {
+                c[a]
+            } else {
+                continue;
+            };
+            if best.is_none_or(|(bl, bu)| (len, other) < (bl, bu)) {
+                best = Some((len, other));
+            }
+        }
+        best.map_or(NONE, |(_, u)| u)
+    };
+    let choice: Vec<u32> = pool.install(|| {
+        (0..edge_of.len() as u32)
+            .into_par_iter()
+            .map(pick)
+            .collect()
+    });
+    let mut out = SliverProposals::default();
+    for (x, &u) in choice.iter().enumerate() {
+        let x = x as u32;
+        if u == NONE {
+            continue;
+        }
+        let h = g.group_of[u as usize];
+        if h != NONE && g.active[h as usize] != 0 {
+            if g.refused[x as usize] != h && q.same_tile(x, h) {
+                out.lones.push((h, Lone { id: x }));
+            }
+        } else if x < u
+            && choice[u as usize] == x
+            && f.keys.is_none_or(|k| k[x as usize] == k[u as usize])
+        {
+            out.pairs.push((x, u));
+        }
+    }
+    out
+}
+
+/// Gives every inner crossing left alone (in no kept group) to the nearest kept group it shares
+/// a triangle with, up to [`MAX_LONES`] lone crossings per group (lowest ids first); returns the
+/// groups to test: those that took some, and (with `want_dirty`) the groups around them. `edge_of` gives every
+/// crossing's owner slot and edge; the tile rule keeps groups inside one tile.
+pub(crate) fn give_lones(
+    f: &Fixed,
+    g: &mut Groups,
+    edge_of: &[(u32, u8)],
+    want_dirty: bool,
+    pool: &rayon::ThreadPool,
+) -> Vec<u32> {
+    let q = Quotient::new(f, g);
+    let found: Vec<(u32, Lone)> = pool.install(|| {
+        (0..edge_of.len())
+            .into_par_iter()
+            .filter(|&x| q.alone(x as u32) && q.joinable(x as u32))
+            .filter_map(|x| {
+                let (slot, dir) = edge_of[x];
+                if !q.inner(slot as usize, dir) {
+                    return None;
+                }
+                let refused = q.g.refused[x];
+                let h = q.nearest_group(x as u32, |h| h != refused && q.same_tile(x as u32, h))?;
+                Some((h, Lone { id: x as u32 }))
+            })
+            .collect()
+    });
+    attach(f, g, found, want_dirty, pool)
+}
+
+/// Gives the lone crossings `found` (group, crossing) to their groups, up to [`MAX_LONES`] per
+/// group (lowest ids first): the kept groups' lone tables are rebuilt, their lones so far
+/// first (the count [`Groups::base_len`] a failing group sheds back to). Returns the groups
+/// that took some, and (with `want_dirty`) the groups around them.
+pub(crate) fn attach(
+    f: &Fixed,
+    g: &mut Groups,
+    mut found: Vec<(u32, Lone)>,
+    want_dirty: bool,
+    pool: &rayon::ThreadPool,
+) -> Vec<u32> {
+    found.sort_unstable_by_key(|&(h, l)| (h, l.id));
+    // The new lone table: each kept group's lones so far, then its new ones.
+    let count = f.groups.len();
+    let mut lone = Vec::with_capacity(g.lone.len() + found.len());
+    let mut lone_start = Vec::with_capacity(count + 1);
+    let mut changed = Vec::new();
+    let mut next = found.iter().peekable();
+    for gi in 0..count {
+        lone_start.push(lone.len() as u32);
+        let start = g.lone_start[gi] as usize;
+        let kept = if g.active[gi] != 0 {
+            g.lone_len[gi] as usize
+        } else {
+            0
+        };
+        lone.extend_from_slice(&g.lone[start..start + kept]);
+        g.base_len[gi] = kept as u8;
+        let mut len = kept;
+        while let Some(&&(h, l)) = next.peek() {
+            if h as usize != gi {
+                break;
+            }
+            next.next();
+            if len < MAX_LONES {
+                lone.push(l);
+                g.group_of[l.id as usize] = h;
+                len += 1;
+            }
+        }
+        g.lone_len[gi] = len as u8;
+        if len > kept {
+            changed.push(gi as u32);
+        }
+    }
+    lone_start.push(lone.len() as u32);
+    g.lone = lone;
+    g.lone_start = lone_start;
+    for &gi in &changed {
+        g.refresh(f, gi as usize);
+        g.set_vertices(f, gi as usize);
+    }
+    if !want_dirty {
+        return changed;
+    }
+    let q = Quotient::new(f, g);
+    let mut dirty: Vec<u32> = pool.install(|| {
+        changed
+            .par_iter()
+            .map_init(Box::<Star>::default, |s, &gi| {
+                let mut out = vec![gi];
+                q.neighbours(gi as usize, s, &mut out);
+                out
+            })
+            .flatten()
+            .collect()
+    });
+    dirty.sort_unstable();
+    dirty.dedup();
+    dirty
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variants_drop_one_crossing_then_keep_pairs_all_connected() {
+        use crate::cluster::compress;
+        use crate::lattice::LatticeTables;
+        use crate::Lattice;
+        let t = LatticeTables::get(Lattice::BodyCentred);
+        // +x (0) with its adjacent diagonals 6 and 7, and 8 (adjacent to 0 too), owned along
+        // with -x (1), which is not in the island.
+        let owned: u16 = (1 << 0) | (1 << 1) | (1 << 6) | (1 << 7) | (1 << 8);
+        let island: u16 = (1 << 0) | (1 << 6) | (1 << 7) | (1 << 8);
+        assert!(t.is_connected(island));
+        let c = Candidate {
+            first: 40,
+            members: compress(island, owned),
+            dirs: island,
+            slot: 9,
+        };
+        let mut out = Vec::new();
+        variants(&c, t, &mut out);
+        let without_one: Vec<u16> = [0, 6, 7, 8]
+            .iter()
+            .map(|&d| island & !(1 << d))
+            .filter(|&m| t.is_connected(m))
+            .collect();
+        let pairs = (out.len() - without_one.len()) as u32;
+        assert_eq!(
+            out.iter()
+                .take(without_one.len())
+                .map(|v| v.dirs)
+                .collect::<Vec<_>>(),
+            without_one,
+            "the islands without one crossing come first, in bit order"
+        );
+        for v in &out {
+            assert!(t.is_connected(v.dirs), "{:b}", v.dirs);
+            assert_eq!(
+                v.members,
+                compress(v.dirs, owned),
+                "members follow the edges"
+            );
+            assert_eq!((v.first, v.slot), (40, 9));
+            assert_eq!(v.dirs & !island, 0);
+        }
+        // Every connected pair of the island, each once.
+        let expected = [0, 6, 7, 8]
+            .iter()
+            .enumerate()
+            .flat_map(|(i, &a)| {
+                [0, 6, 7, 8][i + 1..]
+                    .iter()
+                    .map(move |&b| (1u16 << a) | (1 << b))
+            })
+            .filter(|&m| t.is_connected(m))
+            .count() as u32;
+        assert_eq!(pairs, expected);
+        // Islands of two have no variant; of three, no pairs.
+        let mut none = Vec::new();
+        let two = (1 << 0) | (1 << 6);
+        variants(
+            &Candidate {
+                first: 0,
+                members: compress(two, owned),
+                dirs: two,
+                slot: 0,
+            },
+            t,
+            &mut none,
+        );
+        assert!(none.is_empty());
+    }
+
+    #[test]
+    fn aspect_ratio_is_one_for_equilateral_and_grows_for_needles() {
+        use glam::Vec3;
+        let s3 = 3f32.sqrt();
+        let eq = aspect_ratio(Vec3::ZERO, Vec3::X, Vec3::new(0.5, s3 / 2.0, 0.0));
+        assert!((eq - 1.0).abs() < 1e-5, "{eq}");
+        let needle = aspect_ratio(Vec3::ZERO, Vec3::X, Vec3::new(0.5, 0.01, 0.0));
+        assert!(needle > SLIVER_AR, "{needle}");
+        assert_eq!(
+            aspect_ratio(Vec3::ZERO, Vec3::X, 2.0 * Vec3::X),
+            f32::INFINITY
+        );
+    }
+}
