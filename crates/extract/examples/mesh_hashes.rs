@@ -14,10 +14,8 @@ use rmt_extract::{
     BufferPolicy, CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Method,
     NormalMode, Sampling, Tiling,
 };
-use rmt_fields::{
-    Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, ScalarField, Sphere, SvobodaParams,
-    SvobodaTerrain, Torus,
-};
+#[path = "common/objects.rs"]
+mod objects;
 use rmt_mesh::Mesh;
 
 /// FNV-1a over 64-bit words.
@@ -40,37 +38,8 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
     } else {
         Sampling::Sparse
     };
-    let fields: Vec<(&str, Box<dyn ScalarField>)> = vec![
-        ("sphere", Box::new(Sphere::new(glam::Vec3::ZERO, 0.8))),
-        // Touches the box and passes through sample points: welds and border rules.
-        ("inscribed", Box::new(Sphere::new(glam::Vec3::ZERO, 1.0))),
-        (
-            "asteroid",
-            Box::new(Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default())),
-        ),
-        (
-            "gyroid",
-            Box::new(Gyroid {
-                frequency: 1.5,
-                thickness: 0.3,
-            }),
-        ),
-    ];
-    let more: Vec<(&str, Box<dyn ScalarField>)> = vec![
-        (
-            "torus",
-            Box::new(Torus {
-                centre: glam::Vec3::new(0.05, -0.1, 0.0),
-                major: 0.6,
-                minor: 0.25,
-            }),
-        ),
-        (
-            "terrain",
-            Box::new(SvobodaTerrain::new(SvobodaParams::default())),
-        ),
-        ("caves", Box::new(CaveTerrain::new(CaveParams::default()))),
-    ];
+    let fields = objects::original();
+    let more = objects::added();
     // The original listing, then marching cubes and meshopt for its fields, then the terrains
     // and the torus in every mode.
     let original = [

@@ -5,10 +5,10 @@
 //! `QC_ONLY=gyroid` keeps one object, `QC_DEBUG=1` also prints the clustering counters (groups
 //! proposed and kept, repair rounds, lone crossings) to stderr.
 use rmt_extract::{measure, Clustering, ExtractSettings, Extractor, Grid, Lattice, NormalMode};
-use rmt_fields::{
-    Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, MeshSdf, ScalarField, Sphere,
-    SvobodaParams, SvobodaTerrain, Torus,
-};
+use rmt_fields::{MeshSdf, ScalarField};
+
+#[path = "common/objects.rs"]
+mod objects;
 use rmt_mesh::Mesh;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -27,34 +27,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let bmax = glam::Vec3::new(4.95, 9.66, 3.81);
     let bunny_grid = Grid::new([75, 40, 56], bmin, bmax);
     let bunny = MeshSdf::fit(&bunny_mesh, bmin, bmax, 0.09)?.with_band(2.0 * bunny_grid.h());
-    let fields: Vec<(&str, Box<dyn ScalarField>)> = vec![
-        ("sphere", Box::new(Sphere::new(glam::Vec3::ZERO, 0.8))),
-        ("inscribed", Box::new(Sphere::new(glam::Vec3::ZERO, 1.0))),
-        (
-            "asteroid",
-            Box::new(Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default())),
-        ),
-        (
-            "gyroid",
-            Box::new(Gyroid {
-                frequency: 1.5,
-                thickness: 0.3,
-            }),
-        ),
-        (
-            "torus",
-            Box::new(Torus {
-                centre: glam::Vec3::new(0.05, -0.1, 0.0),
-                major: 0.6,
-                minor: 0.25,
-            }),
-        ),
-        (
-            "terrain",
-            Box::new(SvobodaTerrain::new(SvobodaParams::default())),
-        ),
-        ("caves", Box::new(CaveTerrain::new(CaveParams::default()))),
-    ];
+    let mut fields = objects::original();
+    fields.extend(objects::added());
     let mut jobs: Vec<(&str, &dyn ScalarField, Grid)> = Vec::new();
     for (name, f) in &fields {
         for &n in &sizes {

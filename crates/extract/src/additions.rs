@@ -97,42 +97,27 @@ pub(crate) fn revive(
         g.refresh(f, vi);
         g.set_vertices(f, vi);
     }
+    around(f, g, &taken, pool)
+}
+
+/// The groups `groups` and the active groups around them (those whose test may change when
+/// they change), sorted, each once.
+pub(crate) fn around(f: &Fixed, g: &Groups, groups: &[u32], pool: &rayon::ThreadPool) -> Vec<u32> {
     let q = Quotient::new(f, g);
-    let mut dirty: Vec<u32> = pool.install(|| {
-        taken
+    let mut out: Vec<u32> = pool.install(|| {
+        groups
             .par_iter()
-            .map_init(Box::<Star>::default, |s, &v| {
-                let mut out = vec![v];
-                q.neighbours(v as usize, s, &mut out);
+            .map_init(Box::<Star>::default, |s, &gi| {
+                let mut out = vec![gi];
+                q.neighbours(gi as usize, s, &mut out);
                 out
             })
             .flatten()
             .collect()
     });
-    dirty.sort_unstable();
-    dirty.dedup();
-    dirty
-}
-
-/// The groups `range` and the active groups around them (to test).
-pub(crate) fn around(
-    f: &Fixed,
-    g: &Groups,
-    range: std::ops::Range<usize>,
-    pool: &rayon::ThreadPool,
-) -> Vec<u32> {
-    let q = Quotient::new(f, g);
-    pool.install(|| {
-        range
-            .into_par_iter()
-            .map_init(Box::<Star>::default, |s, gi| {
-                let mut out = vec![gi as u32];
-                q.neighbours(gi, s, &mut out);
-                out
-            })
-            .flatten()
-            .collect()
-    })
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 /// A triangle is a sliver when its aspect ratio (circumradius over twice the inradius, 1 for an
@@ -324,21 +309,7 @@ pub(crate) fn attach(
     if !want_dirty {
         return changed;
     }
-    let q = Quotient::new(f, g);
-    let mut dirty: Vec<u32> = pool.install(|| {
-        changed
-            .par_iter()
-            .map_init(Box::<Star>::default, |s, &gi| {
-                let mut out = vec![gi];
-                q.neighbours(gi as usize, s, &mut out);
-                out
-            })
-            .flatten()
-            .collect()
-    });
-    dirty.sort_unstable();
-    dirty.dedup();
-    dirty
+    around(f, g, &changed, pool)
 }
 
 #[cfg(test)]

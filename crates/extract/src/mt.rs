@@ -1550,12 +1550,8 @@ fn cluster(
         let groups = &mut buf.groups;
         groups.add_pairs(&fixed, born, &props.pairs);
         let mut dirty = crate::additions::attach(&fixed, groups, props.lones, true, pool);
-        dirty.extend(crate::additions::around(
-            &fixed,
-            groups,
-            born..fixed.groups.len(),
-            pool,
-        ));
+        let new: Vec<u32> = (born as u32..fixed.groups.len() as u32).collect();
+        dirty.extend(crate::additions::around(&fixed, groups, &new, pool));
         dirty.sort_unstable();
         dirty.dedup();
         stats.t_groups_s += step.elapsed().as_secs_f64();
@@ -1594,19 +1590,11 @@ fn emit_layers(
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
-    let layers = match layout.lattice {
-        Lattice::BodyCentred => layout.s.cells[2] + 1,
-        Lattice::Simple => layout.s.cells[2],
-    };
     // Triangles of plain MT per layer, counted from the anchors' crossed edges, so that every
     // layer writes its triangles straight into its own slice of the output (with clustering,
     // collapsed triangles leave the slice's end unused; the layers are then moved together).
-    let counts: Vec<usize> = pool.install(|| {
-        (0..layers)
-            .into_par_iter()
-            .map(|k| count_layer(layout, k, keep, crossed))
-            .collect()
-    });
+    let counts = layer_counts(layout, keep, crossed, pool);
+    let layers = counts.len();
     let triangles: usize = counts.iter().sum();
     let Mesh {
         positions, indices, ..
@@ -1666,16 +1654,8 @@ fn plain_triangles(
     inc_start: &mut Vec<u32>,
     inc: &mut Vec<u32>,
 ) -> usize {
-    let layers = match layout.lattice {
-        Lattice::BodyCentred => layout.s.cells[2] + 1,
-        Lattice::Simple => layout.s.cells[2],
-    };
-    let counts: Vec<usize> = pool.install(|| {
-        (0..layers)
-            .into_par_iter()
-            .map(|k| count_layer(layout, k, None, crossed))
-            .collect()
-    });
+    let counts = layer_counts(layout, None, crossed, pool);
+    let layers = counts.len();
     let total: usize = counts.iter().sum();
     tris.clear();
     tris.resize(3 * total, 0);
@@ -2037,6 +2017,25 @@ fn for_each_group(
             }
         }
     }
+}
+
+/// Triangles of every geometry layer (those of the cells `keep`), in layer order.
+fn layer_counts(
+    l: &Layout,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    pool: &rayon::ThreadPool,
+) -> Vec<usize> {
+    let layers = match l.lattice {
+        Lattice::BodyCentred => l.s.cells[2] + 1,
+        Lattice::Simple => l.s.cells[2],
+    };
+    pool.install(|| {
+        (0..layers)
+            .into_par_iter()
+            .map(|k| count_layer(l, k, keep, crossed))
+            .collect()
+    })
 }
 
 /// Triangles geometry layer `k` will give: per group, a table lookup by the anchor's crossed
