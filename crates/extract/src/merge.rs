@@ -163,34 +163,50 @@ pub struct MergeBuffers {
     scratch: Option<Box<Scratch>>,
 }
 
+/// Every vertex's triangles as a CSR table: `inc[inc_start[v]..inc_start[v + 1]]` lists the
+/// triangles of `indices` (three per triangle) holding vertex `v`, in triangle order.
+/// `cursor` is working memory.
+pub(crate) fn incidence(
+    vertex_count: usize,
+    indices: &[u32],
+    inc_start: &mut Vec<u32>,
+    inc: &mut Vec<u32>,
+    cursor: &mut Vec<u32>,
+) {
+    inc_start.clear();
+    inc_start.resize(vertex_count + 1, 0);
+    for &v in indices {
+        inc_start[v as usize + 1] += 1;
+    }
+    for i in 0..vertex_count {
+        inc_start[i + 1] += inc_start[i];
+    }
+    inc.clear();
+    inc.resize(indices.len() - indices.len() % 3, 0);
+    cursor.clear();
+    cursor.extend_from_slice(&inc_start[..vertex_count]);
+    for (t, tri) in indices.chunks_exact(3).enumerate() {
+        for &v in tri {
+            inc[cursor[v as usize] as usize] = t as u32;
+            cursor[v as usize] += 1;
+        }
+    }
+}
+
 impl MergeBuffers {
     /// Loads `vertex_count` vertices and the triangles `indices` (three per triangle).
     pub fn load(&mut self, vertex_count: usize, indices: &[u32]) {
         self.tris.clear();
         self.tris
             .extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
-        self.inc_start.clear();
-        self.inc_start.resize(vertex_count + 1, 0);
-        for tri in &self.tris {
-            for &v in tri {
-                self.inc_start[v as usize + 1] += 1;
-            }
-        }
-        for i in 0..vertex_count {
-            self.inc_start[i + 1] += self.inc_start[i];
-        }
-        self.inc.clear();
-        self.inc.resize(self.tris.len() * 3, 0);
         // `next_member` serves as the fill cursors first (no separate array).
-        let fill = &mut self.next_member;
-        fill.clear();
-        fill.extend_from_slice(&self.inc_start[..vertex_count]);
-        for (t, tri) in self.tris.iter().enumerate() {
-            for &v in tri {
-                self.inc[fill[v as usize] as usize] = t as u32;
-                fill[v as usize] += 1;
-            }
-        }
+        incidence(
+            vertex_count,
+            indices,
+            &mut self.inc_start,
+            &mut self.inc,
+            &mut self.next_member,
+        );
         self.next_member.fill(NONE);
         self.rep.clear();
         self.rep.extend(0..vertex_count as u32);

@@ -297,9 +297,6 @@ fn crossed_points(inside: &[u64], i: usize, delta: &[isize; 14], len: usize) -> 
     any
 }
 
-/// Whether integrated clustering gives lone crossings to neighbouring groups.
-const LONE_CROSSINGS: bool = true;
-
 /// Passes of lone crossings after the islands settle (each: give, then test and repair).
 const LONE_PASSES: usize = 3;
 
@@ -1445,11 +1442,9 @@ fn cluster(
         };
         let groups = &mut buf.groups;
         groups.relabel(&fixed, pool);
-        if LONE_CROSSINGS {
-            // Crossings in no island join a neighbouring island: part of the proposal.
-            crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
-            groups.base_len.fill(0);
-        }
+        // Crossings in no island join a neighbouring island: part of the proposal.
+        crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
+        groups.base_len.fill(0);
         stats.t_groups_s += step.elapsed().as_secs_f64();
         let all = (0..islands as u32).collect();
         let settled =
@@ -1679,24 +1674,9 @@ fn plain_triangles(
             })
             .sum()
     });
-    // Incidence: count, prefix sums, fill (in triangle order, so the table is deterministic).
-    inc_start.clear();
-    inc_start.resize(cpos.len() + 1, 0);
-    for &x in tris.iter() {
-        inc_start[x as usize + 1] += 1;
-    }
-    for i in 0..cpos.len() {
-        inc_start[i + 1] += inc_start[i];
-    }
-    inc.clear();
-    inc.resize(tris.len(), 0);
-    let mut next: Vec<u32> = inc_start[..cpos.len()].to_vec();
-    for (t, tri) in tris.chunks_exact(3).enumerate() {
-        for &x in tri {
-            inc[next[x as usize] as usize] = t as u32;
-            next[x as usize] += 1;
-        }
-    }
+    // Incidence in triangle order, so the table is deterministic.
+    let mut cursor = Vec::new();
+    crate::merge::incidence(cpos.len(), tris, inc_start, inc, &mut cursor);
     processed
 }
 
