@@ -1,16 +1,17 @@
-//! `experiments report`: figures, tables and a README rebuilt from a run folder (plus an optional
-//! scaling run and the questionnaire data) with `rmt-report`; `--check` rebuilds into a
+//! `experiments report`: figures, tables and a README rebuilt from a run folder (plus optional
+//! scaling and check-cost runs and the questionnaire data) with `rmt-report`; `--check` rebuilds into a
 //! temporary folder and compares with the committed report instead of writing.
 //!
 //! ```text
-//! experiments report --run results/paper-20260301-120000 --scaling results/scaling-... --out reports
+//! experiments report --run results/paper-20260301-120000 --scaling results/scaling-... \
+//!     --check-cost results/check-cost-... --out reports
 //! experiments report --check        # reports/ against a rebuild from reports/data
 //! ```
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use rmt_report::{build, check, default_scaling, Questionnaire, ReportInputs};
+use rmt_report::{build, check, default_check_cost, default_scaling, Questionnaire, ReportInputs};
 
 /// Arguments of `report`.
 #[derive(clap::Args, Debug)]
@@ -24,6 +25,12 @@ pub struct Args {
     /// Leave out the time-against-resolution figure and table.
     #[arg(long)]
     pub no_scaling: bool,
+    /// Run folder of the check-cost manifest [default: RUN/check-cost when it holds a run].
+    #[arg(long, conflicts_with = "no_check_cost")]
+    pub check_cost: Option<PathBuf>,
+    /// Leave out the section on the cost of the exact check.
+    #[arg(long)]
+    pub no_check_cost: bool,
     /// Report folder to write (or, with --check, to compare with).
     #[arg(long, default_value = "reports")]
     pub out: PathBuf,
@@ -58,6 +65,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         args.scaling.clone().or_else(|| default_scaling(&args.run))
     };
+    let check_cost = if args.no_check_cost {
+        None
+    } else {
+        args.check_cost
+            .clone()
+            .or_else(|| default_check_cost(&args.run))
+    };
     let questionnaire = (!args.no_questionnaire).then(|| Questionnaire {
         inputs: rmt_analysis::Inputs::in_dir(&args.questionnaire),
         options: rmt_analysis::Options {
@@ -70,6 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let inputs = ReportInputs {
         run: args.run.clone(),
         scaling,
+        check_cost,
         questionnaire,
         keep_raw: !args.no_raw,
     };

@@ -1285,6 +1285,8 @@ pub const PAPER_METRICS: [(&str, &str); 16] = [
 
 /// Joins a summary with the dissertation's table (`data/paper/benchmark.csv`) on configuration
 /// id: `id,metric,ours,theirs,ratio` (ratio = ours / theirs, empty when theirs is 0 or missing).
+/// Our `integrated-unchecked` rows (`as_bc`) join the dissertation's integrated rows (`as_bi`):
+/// its clustering had no exact check.
 /// Rows whose resolution (`rx`, `ry`, `rz`) differs from the dissertation's are left out.
 pub fn paper_comparison(summary: &Table, benchmark: &Path) -> Result<Table> {
     let paper = Table::read(benchmark)?;
@@ -1307,6 +1309,22 @@ pub fn paper_comparison(summary: &Table, benchmark: &Path) -> Result<Table> {
         })
     };
     let their_row = |id: &str| paper.rows.iter().position(|r| r[id_col] == id);
+    // The dissertation's integrated clustering had no exact check: its rules are our
+    // `integrated-unchecked` (letter `c`), so those rows compare with its `i` rows.
+    let dissertation_id = |id: &str| -> String {
+        match id.split_once('_') {
+            Some((prefix, rest)) => {
+                let mut letters = rest.chars();
+                match (letters.next(), letters.next()) {
+                    (Some(lattice), Some('c')) => {
+                        format!("{prefix}_{lattice}i{}", letters.as_str())
+                    }
+                    _ => id.to_string(),
+                }
+            }
+            None => id.to_string(),
+        }
+    };
     let ours_baseline_id = |row: usize| -> Option<String> {
         // Our baseline: the same id with the clustering letter replaced by `u`.
         let id = summary.get(row, "id")?;
@@ -1321,7 +1339,9 @@ pub fn paper_comparison(summary: &Table, benchmark: &Path) -> Result<Table> {
         let Some(id) = summary.get(r, "id") else {
             continue;
         };
-        let Some(pr) = their_row(id) else { continue };
+        let Some(pr) = their_row(&dissertation_id(id)) else {
+            continue;
+        };
         // Same id at another resolution (e.g. the CI manifest's small grids) is not comparable.
         let same_resolution = ["rx", "ry", "rz"].iter().all(|axis| {
             match (summary.get(r, axis), paper.get(pr, axis)) {
@@ -1489,6 +1509,46 @@ mod tests {
         assert_eq!(reduction[3], "0.75");
         let other = paper_comparison(&summary("8"), &bench).unwrap();
         assert!(other.rows.is_empty(), "{:?}", other.rows);
+    }
+
+    #[test]
+    fn unchecked_rows_compare_with_the_dissertations_integrated_rows() {
+        let dir = tempfile::tempdir().unwrap();
+        let bench = dir.path().join("benchmark.csv");
+        std::fs::write(
+            &bench,
+            "id,rx,ry,rz,n_tetrahedra,n_vertices,n_triangles,n_discarded,f_discard,ar_mean,ar_sd,\
+             t_total_s,t_sampling_s,t_vertex_s,t_geometry_s,b_lattice,b_edges,b_vertices,b_indices\n\
+             as_bu,50,50,50,9,52,100,0,0,2,1,1,1,1,1,1,1,1,1\n\
+             as_bi,50,50,50,9,14,25,75,75,2,1,1,1,1,1,1,1,1,1\n",
+        )
+        .unwrap();
+        let summary = Table {
+            header: ["id", "rx", "ry", "rz", "triangles"]
+                .map(String::from)
+                .to_vec(),
+            rows: vec![
+                ["as_bu", "50", "50", "50", "90"].map(String::from).to_vec(),
+                ["as_bc", "50", "50", "50", "30"].map(String::from).to_vec(),
+                ["as_bc_t0.3", "50", "50", "50", "31"]
+                    .map(String::from)
+                    .to_vec(),
+            ],
+        };
+        let table = paper_comparison(&summary, &bench).unwrap();
+        let find = |id: &str, metric: &str| {
+            table
+                .rows
+                .iter()
+                .find(|r| r[0] == id && r[1] == metric)
+                .cloned()
+        };
+        let tri = find("as_bc", "triangles").unwrap();
+        assert_eq!((tri[2].as_str(), tri[3].as_str()), ("30", "25"));
+        // Reduction: ours against our `as_bu`, theirs against their `as_bu`.
+        assert_eq!(find("as_bc", "triangle_reduction").unwrap()[3], "0.75");
+        // A sweep id keeps its suffix and so has no counterpart.
+        assert!(find("as_bc_t0.3", "triangles").is_none());
     }
 
     #[test]

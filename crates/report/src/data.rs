@@ -229,6 +229,10 @@ pub struct Configuration {
     pub fidelity_max_h: Option<f64>,
     /// No interior boundary edge, non-manifold edge or vertex, or orientation error.
     pub closed_manifold: bool,
+    /// Mesh defects: interior boundary edges, non-manifold edges, non-manifold vertices,
+    /// orientation errors and duplicate triangles (the last none in runs made before it was
+    /// counted).
+    pub defects: Defects,
     /// Euler characteristic.
     pub euler: f64,
     /// Connected components.
@@ -289,6 +293,21 @@ impl Configuration {
         let [x, y, z] = self.resolution;
         ((x * y * z) as f64).cbrt()
     }
+}
+
+/// Defect counts of one configuration's mesh (see `rmt_mesh::validate`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Defects {
+    /// Boundary edges not on the sampled box (holes).
+    pub boundary_edges_interior: f64,
+    /// Edges with more than two triangles.
+    pub non_manifold_edges: f64,
+    /// Vertices whose triangles do not form one fan.
+    pub non_manifold_vertices: f64,
+    /// Edges whose two triangles disagree on orientation.
+    pub orientation_errors: f64,
+    /// Triangles with the same three vertices as another.
+    pub duplicate_triangles: Option<f64>,
 }
 
 /// Display name of a lattice: `BCDL`, `simple cubic`.
@@ -352,6 +371,13 @@ pub fn read_summary(path: &Path) -> Result<Vec<Configuration>> {
         for d in defects {
             closed_manifold &= count(d)? == 0.0;
         }
+        let defects = Defects {
+            boundary_edges_interior: count(defects[0])?,
+            non_manifold_edges: count(defects[1])?,
+            non_manifold_vertices: count(defects[2])?,
+            orientation_errors: count(defects[3])?,
+            duplicate_triangles: file.optional(r, "duplicate_triangles")?,
+        };
         let resolution = |name: &str| -> Result<u64> {
             let v = count(name)?;
             if v >= 1.0 && v.fract() == 0.0 {
@@ -385,6 +411,7 @@ pub fn read_summary(path: &Path) -> Result<Vec<Configuration>> {
             fidelity_mean_h: file.optional(r, "fidelity_mean_h")?,
             fidelity_max_h: file.optional(r, "fidelity_max_h")?,
             closed_manifold,
+            defects,
             euler: count("euler")?,
             components: count("components")?,
             triangle_reduction: file.optional(r, "triangle_reduction")?,

@@ -3,8 +3,8 @@
 //! questionnaire analysis, gathered under one `README.md`.
 //!
 //! The input is a run folder of `experiments run` (`run.json`, `summary.csv`, optionally
-//! `paper_comparison.csv`, `raw.csv`), optionally a second run folder of the scaling manifest,
-//! and the questionnaire CSV files. The output folder gets figures (PNG and SVG, plotters with a
+//! `paper_comparison.csv`, `raw.csv`), optionally run folders of the scaling and check-cost
+//! manifests, and the questionnaire CSV files. The output folder gets figures (PNG and SVG, plotters with a
 //! bundled font), tables (Markdown and CSV), the questionnaire analysis, a copy of the input
 //! files under `data/` and the README with the run's provenance at the top.
 //!
@@ -17,6 +17,8 @@
 //!   and column;
 //! - [`tables`], [`figures`], [`scaling`]: what the report shows; [`plot`] draws it;
 //! - [`seeds`]: the section "Across N asteroids" of a seed study (`seeds.csv`);
+//! - [`check_cost`]: the cost of the exact check (plain MT, unchecked and checked integrated
+//!   clustering, with the dissertation's own ratio) and the defects of each mesh;
 //! - [`readme`]: the one-page README; [`report`]: building and checking the folder.
 //!
 //! ```no_run
@@ -26,6 +28,7 @@
 //! let inputs = ReportInputs {
 //!     run: PathBuf::from("results/paper-20260301-120000"),
 //!     scaling: None,
+//!     check_cost: None,
 //!     questionnaire: None,
 //!     keep_raw: true,
 //! };
@@ -39,6 +42,7 @@
 //! Cost: a few hundred milliseconds for the benchmark part; the questionnaire's bootstrap
 //! (10,000 resamples by default) takes a few seconds in a release build.
 
+pub mod check_cost;
 pub mod csv_file;
 pub mod data;
 pub mod error;
@@ -54,5 +58,6 @@ pub mod tables;
 
 pub use error::{ReportError, Result};
 pub use report::{
-    build, check, compare, default_scaling, validate, CheckOutcome, Questionnaire, ReportInputs,
+    build, check, compare, default_check_cost, default_scaling, validate, CheckOutcome,
+    Questionnaire, ReportInputs,
 };

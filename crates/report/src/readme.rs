@@ -36,6 +36,8 @@ pub struct ReadmeInput<'a> {
     pub questionnaire: Option<&'a QuestionnaireSummary>,
     /// Files copied to `data/`, relative to it.
     pub data_files: &'a [String],
+    /// The check-cost run, when given.
+    pub check_cost: Option<&'a Run>,
 }
 
 fn provenance_rows(info: &RunInfo) -> Vec<(String, String)> {
@@ -409,6 +411,37 @@ pub fn readme(input: &ReadmeInput) -> String {
         }
     }
 
+    if let (Some(cost_run), Some(table)) = (
+        input.check_cost,
+        input.tables.iter().find(|t| t.name == "check_cost"),
+    ) {
+        out.push_str("## The cost of the exact check\n\n");
+        out.push_str(&format!(
+            "Plain MT, the dissertation's integrated clustering without our exact test \
+             (`integrated-unchecked`) and RMT with it (`integrated`), from run `{}` on {} \
+             (commit `{}`, {}). Passes are the vertex plus the geometry pass; ratios are over \
+             plain MT.\n\n",
+            cost_run.info.name,
+            cost_run.info.machine(),
+            cost_run.info.commit(),
+            cost_run.info.date
+        ));
+        if let Some(sentence) = crate::check_cost::summary_sentence(cost_run) {
+            out.push_str(&sentence);
+            out.push_str("\n\n");
+        }
+        for block in &table.blocks {
+            if let Some(caption) = &block.caption {
+                out.push_str(&format!("### {caption}\n\n"));
+            }
+            out.push_str(&markdown_block(block));
+            out.push('\n');
+        }
+        if let Some(link) = table_link(input.tables, "check_cost") {
+            out.push_str(&format!("Table: {link}.\n\n"));
+        }
+    }
+
     if let Some(rows) = &run.seeds {
         out.push_str(&crate::seeds::readme_section(
             rows,
@@ -498,6 +531,8 @@ pub fn readme(input: &ReadmeInput) -> String {
         };
         let scope = if file.starts_with("scaling/") {
             " (scaling run)"
+        } else if file.starts_with("check-cost/") {
+            " (check-cost run)"
         } else {
             ""
         };
@@ -518,8 +553,9 @@ pub fn readme(input: &ReadmeInput) -> String {
          # from new runs\n\
          cargo run --release -p experiments -- run experiments/manifests/paper.toml\n\
          cargo run --release -p experiments -- run experiments/manifests/scaling.toml\n\
+         cargo run --release -p experiments -- run experiments/manifests/check-cost.toml\n\
          cargo run --release -p experiments -- report --run results/<paper run> --scaling \
-         results/<scaling run>\n```\n",
+         results/<scaling run> --check-cost results/<check-cost run>\n```\n",
     );
     out
 }

@@ -6,12 +6,14 @@
 //! <out>/data/                the run's run.json, manifest.toml, configurations.csv, summary.csv,
 //!                            raw.csv, paper_comparison.csv (copied; the report's own input)
 //! <out>/data/scaling/        the same files of the scaling run, when given
+//! <out>/data/check-cost/     the same files of the check-cost run, when given
 //! <out>/figures/NAME.{png,svg}
 //! <out>/tables/NAME.{md,csv}
 //! <out>/questionnaire/       the questionnaire analysis (rmt-analysis: tables and charts)
 //! ```
 //!
-//! `data/` is itself a valid run folder (with `data/scaling/` found by default), so a report
+//! `data/` is itself a valid run folder (with `data/scaling/` and `data/check-cost/` found by
+//! default), so a report
 //! rebuilds from its own copy: that is what [`check`] does.
 
 use std::collections::BTreeSet;
@@ -54,6 +56,9 @@ pub struct ReportInputs {
     pub run: PathBuf,
     /// The scaling run folder, if any (see [`default_scaling`]).
     pub scaling: Option<PathBuf>,
+    /// The run folder of `experiments/manifests/check-cost.toml`, if any (see
+    /// [`default_check_cost`]): plain MT, unchecked and checked integrated clustering.
+    pub check_cost: Option<PathBuf>,
     /// The questionnaire, if it is part of the report.
     pub questionnaire: Option<Questionnaire>,
     /// Copy `raw.csv` into `data/` (it can be large; `summary.csv` holds what the report uses).
@@ -62,7 +67,21 @@ pub struct ReportInputs {
 
 /// `run/scaling` when it holds a scaling run (as a report's `data/` folder does).
 pub fn default_scaling(run: &Path) -> Option<PathBuf> {
-    let candidate = run.join("scaling");
+    sub_run(run, SCALING_DIR)
+}
+
+/// `run/check-cost` when it holds a run (as a report's `data/` folder does).
+pub fn default_check_cost(run: &Path) -> Option<PathBuf> {
+    sub_run(run, CHECK_COST_DIR)
+}
+
+/// The folder of `data/` that holds the scaling run.
+pub const SCALING_DIR: &str = "scaling";
+/// The folder of `data/` that holds the check-cost run.
+pub const CHECK_COST_DIR: &str = "check-cost";
+
+fn sub_run(run: &Path, name: &str) -> Option<PathBuf> {
+    let candidate = run.join(name);
     candidate.join(SUMMARY_CSV).is_file().then_some(candidate)
 }
 
@@ -136,27 +155,37 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         }
         None => None,
     };
-    // Read every input before writing anything: `out/data` may be the input.
-    let data = read_data_files(&inputs.run, inputs.keep_raw)?;
-    let scaling_data = match &inputs.scaling {
-        Some(folder) => Some(read_data_files(folder, inputs.keep_raw)?),
+    let check_cost = match &inputs.check_cost {
+        Some(folder) => Some(Run::read(folder)?),
         None => None,
     };
+    // Read every input before writing anything: `out/data` may be the input.
+    let data = read_data_files(&inputs.run, inputs.keep_raw)?;
+    let sub_data = |folder: &Option<PathBuf>| match folder {
+        Some(folder) => read_data_files(folder, inputs.keep_raw).map(Some),
+        None => Ok(None),
+    };
+    let subs = [
+        (SCALING_DIR, sub_data(&inputs.scaling)?),
+        (CHECK_COST_DIR, sub_data(&inputs.check_cost)?),
+    ];
 
     let mut written: Vec<PathBuf> = Vec::new();
     std::fs::create_dir_all(out).map_err(io_error(out))?;
     let data_dir = out.join("data");
     let mut data_files = write_data_files(&data_dir, &data)?;
-    let scaling_dir = data_dir.join("scaling");
-    match &scaling_data {
-        Some(files) => {
-            let names = write_data_files(&scaling_dir, files)?;
-            data_files.extend(names.into_iter().map(|n| format!("scaling/{n}")));
+    for (name, files) in &subs {
+        let dir = data_dir.join(name);
+        match files {
+            Some(files) => {
+                let names = write_data_files(&dir, files)?;
+                data_files.extend(names.into_iter().map(|n| format!("{name}/{n}")));
+            }
+            None if dir.is_dir() => {
+                write_data_files(&dir, &[])?;
+            }
+            None => {}
         }
-        None if scaling_dir.is_dir() => {
-            write_data_files(&scaling_dir, &[])?;
-        }
-        None => {}
     }
     written.extend(data_files.iter().map(|f| data_dir.join(f)));
 
@@ -173,6 +202,12 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
     }
     if let Some(rows) = &run.seeds {
         all_tables.push(crate::seeds::seed_table(rows));
+    }
+    if let Some(table) = check_cost
+        .as_ref()
+        .and_then(crate::check_cost::check_cost_table)
+    {
+        all_tables.push(table);
     }
     let mut kept = BTreeSet::new();
     for table in &all_tables {
@@ -253,6 +288,7 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
     let text = readme(&ReadmeInput {
         run: &run,
         scaling: scaling.as_ref().map(|(r, f)| (r, f.as_slice())),
+        check_cost: check_cost.as_ref(),
         figures: &figure_names,
         tables: &all_tables,
         questionnaire: questionnaire.as_ref(),

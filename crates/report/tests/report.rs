@@ -26,6 +26,7 @@ fn inputs(run: &Path, scaling: Option<&Path>, resamples: Option<usize>) -> Repor
     ReportInputs {
         run: run.to_path_buf(),
         scaling: scaling.map(Path::to_path_buf),
+        check_cost: None,
         questionnaire: resamples.map(questionnaire),
         keep_raw: true,
     }
@@ -391,4 +392,123 @@ fn a_bad_cell_names_file_line_and_column() {
         error.ends_with("summary.csv: line 3, column `triangles`: `many` is not a number"),
         "{error}"
     );
+}
+
+/// Reads `id`'s row of a CSV file as (column, cell) pairs.
+fn csv_row(path: &Path, key_col: &str, key: &str) -> BTreeMap<String, String> {
+    let mut reader = csv::Reader::from_path(path).unwrap();
+    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    let k = header.iter().position(|h| h == key_col).unwrap();
+    for record in reader.records() {
+        let record = record.unwrap();
+        if &record[k] == key {
+            return header
+                .iter()
+                .cloned()
+                .zip(record.iter().map(String::from))
+                .collect();
+        }
+    }
+    panic!("{key} not in {}", path.display());
+}
+
+#[test]
+fn the_check_cost_section_compares_unchecked_and_checked_with_the_dissertation() {
+    let out = tempfile::tempdir().unwrap();
+    let ci = fixtures().join("ci");
+    let cost_run = fixtures().join("check-cost");
+    let with_cost = ReportInputs {
+        check_cost: Some(cost_run.clone()),
+        ..inputs(&ci, None, None)
+    };
+    build(&with_cost, out.path()).unwrap();
+    assert!(out.path().join("data/check-cost/summary.csv").is_file());
+    let table = out.path().join("tables/check_cost.csv");
+    let text = std::fs::read_to_string(&table).unwrap();
+    // One row per configuration of the run: 3 objects x 2 lattices x 3 modes.
+    assert_eq!(text.lines().count(), 1 + 18, "{text}");
+
+    // Every row's counts are the run's own.
+    let summary = cost_run.join("summary.csv");
+    let mut reader = csv::Reader::from_path(&table).unwrap();
+    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    for record in reader.records() {
+        let record = record.unwrap();
+        let ours = csv_row(&summary, "id", &record[col("id")]);
+        for c in [
+            "triangles",
+            "non_manifold_edges",
+            "duplicate_triangles",
+            "euler",
+        ] {
+            let a: f64 = record[col(c)].parse().unwrap();
+            let b: f64 = ours[c].parse().unwrap();
+            assert_eq!(a, b, "{} {c}", &record[col("id")]);
+        }
+        let passes = |row: &BTreeMap<String, String>| {
+            row["t_vertex_s_mean"].parse::<f64>().unwrap()
+                + row["t_geometry_s_mean"].parse::<f64>().unwrap()
+        };
+        let base_id = format!("{}u", &record[col("id")][..4]);
+        let base = csv_row(&summary, "id", &base_id);
+        let ratio: f64 = record[col("passes_over_none")].parse().unwrap();
+        assert!((ratio - passes(&ours) / passes(&base)).abs() < 1e-5 * ratio);
+    }
+
+    // The dissertation's ratio on the unchecked row: its integrated passes over its unclustered
+    // passes, straight from data/paper/benchmark.csv.
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/paper/benchmark.csv");
+    let theirs = |id: &str| {
+        let row = csv_row(&bench, "id", id);
+        row["t_vertex_s"].parse::<f64>().unwrap() + row["t_geometry_s"].parse::<f64>().unwrap()
+    };
+    let row = csv_row(&table, "id", "as_bc");
+    let expected = theirs("as_bi") / theirs("as_bu");
+    let got: f64 = row["dissertation_passes_over_none"].parse().unwrap();
+    assert!((got - expected).abs() < 1e-5, "{got} against {expected}");
+    assert_eq!(
+        csv_row(&table, "id", "as_bi")["dissertation_passes_over_none"],
+        ""
+    );
+
+    // The README's sentence counts defects from the data: unchecked meshes that have any, and
+    // checked ones (RMT's guarantee: none).
+    let broken = ["ss", "as", "bs"]
+        .iter()
+        .flat_map(|o| ["b", "s"].map(|l| format!("{o}_{l}c")))
+        .filter(|id| {
+            let r = csv_row(&summary, "id", id);
+            [
+                "non_manifold_edges",
+                "duplicate_triangles",
+                "boundary_edges_interior",
+            ]
+            .iter()
+            .any(|c| r[*c] != "0")
+        })
+        .count();
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(readme.contains("## The cost of the exact check"));
+    assert!(
+        readme.contains(&format!(
+            "Without the check, {broken} of 6 meshes have defects"
+        )),
+        "{readme}"
+    );
+    assert!(readme.contains("with it, 0 of 6 have defects and 0 change the topology"));
+    assert!(readme.contains("(tables/check_cost.md)"));
+
+    // The report's own data copy finds the run again, and a rebuild without it removes it all.
+    let again = ReportInputs {
+        check_cost: rmt_report::default_check_cost(&out.path().join("data")),
+        ..inputs(&out.path().join("data"), None, None)
+    };
+    assert!(check(&again, out.path()).unwrap().passed());
+    build(&inputs(&ci, None, None), out.path()).unwrap();
+    for gone in ["tables/check_cost.csv", "data/check-cost/summary.csv"] {
+        assert!(!out.path().join(gone).exists(), "{gone} left behind");
+    }
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(!readme.contains("The cost of the exact check"));
 }
