@@ -280,8 +280,82 @@ impl Quotient<'_> {
     /// Whether group `gi` passes tests (a), (b) and (c) in the current state, as if it were
     /// kept and every other group as it is.
     pub(crate) fn passes_all(&self, gi: usize, s: &mut Star) -> bool {
-        self.star(gi, s);
-        self.contractible(gi, s) && self.passes(gi, s, false)
+        self.verdict(gi, s, true) == Verdict::Passes
+    }
+
+    /// The tests of group `gi` in one walk over its star: (a) when `test_a` (its crossings,
+    /// with the MT edges and triangles among them, form a contractible complex: connected,
+    /// Euler characteristic 1), then (b) and (c), without
+    /// listing the star first: each triangle is read once, from its first member corner.
+    pub(crate) fn verdict(&self, gi: usize, s: &mut Star, test_a: bool) -> Verdict {
+        let g = &self.groups[gi];
+        let lones = self.lones_of(gi);
+        let member = |y: u32| g.has(y) || lones.iter().any(|l| l.id == y);
+        let me = self.g.leader[gi];
+        s.src.clear();
+        s.dst.clear();
+        // Test (a)'s complex: member adjacency (bit sets by `local` index) and its faces.
+        let mut adj = [0u32; 32];
+        let mut faces = 0i32;
+        let mut geometry = true;
+        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+            for &ti in self.tris_of(x) {
+                let t = self.tri(ti);
+                let mask = (0..3).fold(0u8, |m, i| m | u8::from(member(t[i])) << i);
+                // Each triangle once: from its first member corner.
+                if t[mask.trailing_zeros() as usize] != x {
+                    continue;
+                }
+                if mask.count_ones() >= 2 {
+                    // Collapsed: only test (a) reads it.
+                    if test_a {
+                        for e in 0..3 {
+                            let (a, b) = (e, (e + 1) % 3);
+                            if mask >> a & 1 != 0 && mask >> b & 1 != 0 {
+                                let ra = Self::local(g, lones, t[a]);
+                                let rb = Self::local(g, lones, t[b]);
+                                adj[ra] |= 1 << rb;
+                                adj[rb] |= 1 << ra;
+                            }
+                        }
+                        faces += i32::from(mask == 0b111);
+                    }
+                    continue;
+                }
+                let q = [0, 1, 2].map(|i| {
+                    if mask >> i & 1 != 0 {
+                        me
+                    } else {
+                        self.label(t[i])
+                    }
+                });
+                if q[0] == q[1] || q[1] == q[2] || q[0] == q[2] {
+                    continue;
+                }
+                let k = mask.trailing_zeros() as usize;
+                s.src.push(q[(k + 1) % 3]);
+                s.dst.push(q[(k + 2) % 3]);
+                if geometry && !self.geometry_ok(gi, t, q, ti) {
+                    if !test_a {
+                        return Verdict::FailsLink;
+                    }
+                    geometry = false;
+                }
+            }
+        }
+        if test_a {
+            let edges: u32 = adj.iter().map(|m| m.count_ones()).sum::<u32>() / 2;
+            let members = u32::from(g.members) | ((1u32 << lones.len()) - 1) << 16;
+            if !connected(&adj, members) || members.count_ones() as i32 - edges as i32 + faces != 1
+            {
+                return Verdict::FailsContractible;
+            }
+        }
+        if geometry && simple_cycle(&s.src, &s.dst, &mut s.next) {
+            Verdict::Passes
+        } else {
+            Verdict::FailsLink
+        }
     }
 
     /// Number of crossings in group `gi`.
@@ -343,56 +417,12 @@ impl Quotient<'_> {
         self.l.inner_dirs(p) & (1 << dir) != 0
     }
 
-    /// Test (a): the crossings of group `gi`, with the MT edges and triangles among them, form a
-    /// contractible complex (connected, Euler characteristic 1). `s` is its star.
-    pub(crate) fn contractible(&self, gi: usize, s: &Star) -> bool {
-        // Every member is an inner vertex: the proposals take no crossing on the mesh boundary.
-        let g = &self.groups[gi];
-        let lones = self.lones_of(gi);
-        let mut adj = [0u32; 32];
-        let mut faces = 0i32;
-        for (&ti, &mask) in s.tris.iter().zip(&s.mask) {
-            let t = self.tri(ti);
-            let inside = [0, 1, 2].map(|i| mask >> i & 1 != 0);
-            for e in 0..3 {
-                let (a, b) = (e, (e + 1) % 3);
-                if inside[a] && inside[b] {
-                    let (ra, rb) = (Self::local(g, lones, t[a]), Self::local(g, lones, t[b]));
-                    adj[ra] |= 1 << rb;
-                    adj[rb] |= 1 << ra;
-                }
-            }
-            faces += i32::from(inside == [true; 3]);
-        }
-        let edges: u32 = adj.iter().map(|m| m.count_ones()).sum::<u32>() / 2;
-        let members = u32::from(g.members) | ((1u32 << lones.len()) - 1) << 16;
-        // Connected: grow from the lowest member along the edges.
-        let mut reached = members & members.wrapping_neg();
-        loop {
-            let mut grown = reached;
-            let mut bits = reached;
-            while bits != 0 {
-                grown |= adj[bits.trailing_zeros() as usize];
-                bits &= bits - 1;
-            }
-            if grown == reached {
-                break;
-            }
-            reached = grown;
-        }
-        reached == members && members.count_ones() as i32 - edges as i32 + faces == 1
-    }
-
-    /// Tests (b) and (c) of group `gi` in the current state; `s` is its star. With `link`, the
-    /// labels of its link vertices (or, when it has no triangle left, of every vertex of its
-    /// star) are left in `s.link`.
-    pub(crate) fn passes(&self, gi: usize, s: &mut Star, link: bool) -> bool {
+    /// Leaves in `s.link` the labels of the link vertices of group `gi` in the current state
+    /// (both ends of every link edge of test (b)), or, when it has no triangle left, of every
+    /// vertex of its star; `s` is its star.
+    pub(crate) fn link(&self, gi: usize, s: &mut Star) {
         let me = self.g.leader[gi];
-        let mine = |x: u32| self.is_member(gi, x);
-        s.src.clear();
-        s.dst.clear();
         s.link.clear();
-        let mut ok = true;
         for (&ti, &mask) in s.tris.iter().zip(&s.mask) {
             if mask.count_ones() >= 2 {
                 // Two corners in the group: collapsed.
@@ -409,33 +439,18 @@ impl Quotient<'_> {
             if q[0] == q[1] || q[1] == q[2] || q[0] == q[2] {
                 continue;
             }
-            // Rotate so that the group comes first: the link edge is the opposite side.
-            let k = q.iter().position(|&x| x == me).unwrap_or(0);
-            let (a, b) = (q[(k + 1) % 3], q[(k + 2) % 3]);
-            s.src.push(a);
-            s.dst.push(b);
-            if ok && !self.geometry_ok(gi, t, q, ti) {
-                ok = false;
-                if !link {
-                    return false;
-                }
-            }
+            s.link.extend(q.into_iter().filter(|&x| x != me));
         }
-        if link {
-            s.link.extend_from_slice(&s.src);
-            s.link.extend_from_slice(&s.dst);
-            if s.src.is_empty() {
-                // No triangle left: the neighbours in plain MT stand for the star.
-                for &ti in &s.tris {
-                    for x in self.tri(ti) {
-                        if !mine(x) {
-                            s.link.push(self.label(x));
-                        }
+        if s.link.is_empty() {
+            // No triangle left: the neighbours in plain MT stand for the star.
+            for &ti in &s.tris {
+                for x in self.tri(ti) {
+                    if !self.is_member(gi, x) {
+                        s.link.push(self.label(x));
                     }
                 }
             }
         }
-        ok && simple_cycle(&s.src, &s.dst, &mut s.next)
     }
 
     /// Test (c) for one triangle: `t` its MT crossings, `q` its quotient labels (in the same
@@ -473,7 +488,7 @@ impl Quotient<'_> {
     /// possibly more than once.
     pub(crate) fn closed_star(&self, gi: usize, s: &mut Star, mut visit: impl FnMut(usize)) {
         self.star(gi, s);
-        self.passes(gi, s, true);
+        self.link(gi, s);
         for &x in &s.link {
             let h = self.g.group_of[x as usize];
             if h != NONE && h as usize != gi && self.g.active[h as usize] != 0 {
@@ -542,6 +557,35 @@ impl Quotient<'_> {
             }
         }
         best.map(|(_, h)| h)
+    }
+}
+
+/// The outcome of a group's tests ([`Quotient::verdict`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Verdict {
+    /// (a), (b) and (c) hold.
+    Passes,
+    /// (b) or (c) fails (and (a) holds, or was not asked).
+    FailsLink,
+    /// (a) fails.
+    FailsContractible,
+}
+
+/// Whether the members (bit set) are connected along `adj` (member adjacency bit sets): grown
+/// from the lowest member.
+fn connected(adj: &[u32; 32], members: u32) -> bool {
+    let mut reached = members & members.wrapping_neg();
+    loop {
+        let mut grown = reached;
+        let mut bits = reached;
+        while bits != 0 {
+            grown |= adj[bits.trailing_zeros() as usize];
+            bits &= bits - 1;
+        }
+        if grown == reached {
+            return reached == members;
+        }
+        reached = grown;
     }
 }
 

@@ -16,7 +16,7 @@
 
 use rayon::prelude::*;
 
-use crate::quotient::{Fixed, Groups, Quotient, Star, NONE};
+use crate::quotient::{Fixed, Groups, Quotient, Star, Verdict, NONE};
 
 /// The outcome of the repair rounds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -84,18 +84,15 @@ pub(crate) fn settle(
                 .copied()
                 .map_init(Box::<Star>::default, |s, gi| {
                     let i = gi as usize;
-                    q.star(i, s);
                     let test_a = first
                         && match phase {
                             Phase::Islands => true,
                             Phase::Additions { born } => gi >= born || q.has_new_lones(i),
                         };
-                    if test_a && !q.contractible(i, s) {
-                        Some((gi, 2))
-                    } else if !q.passes(i, s, false) {
-                        Some((gi, 1))
-                    } else {
-                        None
+                    match q.verdict(i, s, test_a) {
+                        Verdict::Passes => None,
+                        Verdict::FailsLink => Some((gi, 1)),
+                        Verdict::FailsContractible => Some((gi, 2)),
                     }
                 })
                 .flatten()
