@@ -67,6 +67,10 @@ pub struct BatchFbm {
     lacunarity: f64,
     persistence: f64,
     scale: f64,
+    /// Each octave's attenuation, and `rest[k]`: the sum of their magnitudes from octave `k` on
+    /// (`rest[octaves] = 0`), for the interval bound.
+    atts: Vec<f64>,
+    rest: Vec<f64>,
     /// Whether the CPU has AVX2 (then `get_lanes` runs the AVX2 build of the same code).
     avx2: bool,
 }
@@ -85,9 +89,24 @@ impl BatchFbm {
         let perms: Vec<[u8; 256]> = (0..octaves)
             .map(|k| permutation(seed.wrapping_add(k as u32)))
             .collect();
+        let mut attenuation = persistence;
+        let atts: Vec<f64> = perms
+            .iter()
+            .map(|_| {
+                let a = attenuation;
+                attenuation *= persistence;
+                a
+            })
+            .collect();
+        let mut rest = vec![0.0f64; atts.len() + 1];
+        for k in (0..atts.len()).rev() {
+            rest[k] = rest[k + 1] + atts[k].abs();
+        }
         Self {
             perms32: perms.iter().map(|p| p.map(u32::from)).collect(),
             perms,
+            atts,
+            rest,
             frequency: reference.frequency,
             lacunarity: reference.lacunarity,
             persistence,
@@ -476,21 +495,7 @@ impl BatchFbm {
         if !(lo.iter().chain(&hi).all(|v| v.is_finite())) {
             return full;
         }
-        // The attenuations of the octaves from k on, for every k.
-        let mut rest = [0.0f64; 33];
-        let mut attenuation = self.persistence;
-        let atts: Vec<f64> = self
-            .perms
-            .iter()
-            .map(|_| {
-                let a = attenuation;
-                attenuation *= self.persistence;
-                a
-            })
-            .collect();
-        for k in (0..atts.len()).rev() {
-            rest[k] = rest[k + 1] + atts[k].abs();
-        }
+        let (atts, rest) = (&self.atts, &self.rest);
         let bound = |total_lo: f64, total_hi: f64, k: usize| {
             let r = rest[k] * (1.0 + 1e-12);
             let (a, b) = (
@@ -505,7 +510,7 @@ impl BatchFbm {
             return (a, b);
         }
         let mut scale = self.frequency;
-        for (k, (perm, &attenuation)) in self.perms.iter().zip(&atts).enumerate() {
+        for (k, (perm, &attenuation)) in self.perms.iter().zip(atts).enumerate() {
             let widen = |v: f64, s: f64| v * scale + s * (1e-12 * (v * scale).abs() + 1e-12);
             let b0: [f64; 3] = std::array::from_fn(|a| {
                 widen(lo[a].min(hi[a]), -1.0).min(widen(lo[a].max(hi[a]), -1.0))
