@@ -1,0 +1,560 @@
+//! The vertex pass (parallel over storage planes): which points are inside, which lattice edges
+//! the surface crosses, who owns each crossing, and every crossing's id and position.
+//!
+//! For each sample point C and each of its neighbours S, the edge C-S is crossed when C and S lie
+//! on opposite sides of the threshold T (inside is f < T). The crossing belongs to the nearer end
+//! (|f - T| smaller; on a tie, the inside end), so every crossing has exactly one owner and its
+//! vertex id does not depend on processing order: ids are numbered by owner (storage order),
+//! then by neighbour index. Only points with a crossed edge are stored ([`CrossedIndex`]: a bit
+//! per slot, a rank per 64 slots, and per crossed point its 14 owned-crossing bits and the id of
+//! its first owned crossing), so `id(C, d) = first(C) + popcount(owned(C) & ((1 << d) - 1))`
+//! with no table per slot beyond those bits. With clustering, the pass also proposes clusters
+//! ([`crate::cluster`]).
+//!
+//! ```text
+//!   S1 (out)        C owns the crossings on C-S1 and C-S2 (it is nearer T than S1 and S2);
+//!     \             the crossing on C-S3 belongs to S3: ids = first(C) + 0, first(C) + 1
+//!      C (in) ---- S2 (out)
+//!      |
+//!      S3 (out, nearer T than C)
+//! ```
+
+use super::*;
+
+/// A point with a crossed edge: the id of its first owned crossing and its owned crossings (bit d:
+/// the crossing on the edge to neighbour d). `id(C, d) = first + popcount(owned & ((1 << d) - 1))`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct CrossedPoint {
+    pub(crate) first: u32,
+    pub(crate) owned: u16,
+    /// All its crossed edges (owned or not), by neighbour bit.
+    pub(crate) crossed: u16,
+}
+
+impl CrossedPoint {
+    /// Id of the crossing this point owns on its edge to neighbour `d`.
+    #[inline(always)]
+    pub(crate) fn id(self, d: u8) -> u32 {
+        self.first + (self.owned & ((1u16 << d) - 1)).count_ones()
+    }
+}
+
+/// The points with a crossed edge, found from any storage slot in a few operations and stored
+/// sparsely: a bit per slot, the number of set bits before each word (a rank directory), and one
+/// [`CrossedPoint`] per set bit. About 1.5 bits per slot plus 8 bytes per crossed point, where a
+/// dense table of owned bits and ids took 3.25 bytes per slot.
+///
+/// The bits are kept per storage plane ([`plane_words`] words each, the last one padding) so that
+/// planes are written in parallel; a slot's plane comes from a division by a multiplication.
+#[derive(Default)]
+pub(crate) struct CrossedIndex {
+    /// One bit per storage slot, set where the point has a crossed edge (owned or not).
+    pub(crate) bits: Vec<u64>,
+    /// Per word of `bits`: how many bits are set in the words before it.
+    pub(crate) rank: Vec<u32>,
+    /// The crossed points in storage order (rank order).
+    pub(crate) points: Vec<CrossedPoint>,
+    /// Slots per storage plane, and words per plane.
+    pub(crate) plane: usize,
+    pub(crate) wpp: usize,
+    /// `ceil(2^64 / plane)`: `slot / plane == (slot * div) >> 64` for every slot below 2^32
+    /// (Lemire, Kaser and Kurz 2019); 0 when a plane has one slot.
+    pub(crate) div: u64,
+}
+
+impl CrossedIndex {
+    /// Bits cleared and sized for `planes` storage planes of `plane` slots; the rest is filled by
+    /// [`CrossedIndex::rank_planes`] and the numbering.
+    pub(crate) fn reset(&mut self, plane: usize, planes: usize) {
+        self.plane = plane;
+        self.wpp = plane_words(plane);
+        self.div = if plane > 1 {
+            u64::MAX / plane as u64 + 1
+        } else {
+            0
+        };
+        self.bits.clear();
+        self.bits.resize(self.wpp * planes, 0);
+        self.rank.resize(self.bits.len(), 0);
+    }
+
+    /// The storage plane of `slot` (below 2^32).
+    #[inline(always)]
+    pub(crate) fn plane_of(&self, slot: usize) -> usize {
+        if self.div == 0 {
+            return slot;
+        }
+        ((u128::from(self.div) * slot as u128) >> 64) as usize
+    }
+
+    /// Word of `bits` holding `slot`, and the slot's bit in it.
+    #[cfg(test)]
+    pub(crate) fn word(&self, slot: usize) -> (usize, usize) {
+        let z = self.plane_of(slot);
+        let local = slot - z * self.plane;
+        (z * self.wpp + (local >> 6), local & 63)
+    }
+
+    /// Whether `slot` has a crossed edge.
+    #[cfg(test)]
+    pub(crate) fn is_crossed(&self, slot: usize) -> bool {
+        let (w, b) = self.word(slot);
+        self.bits[w] >> b & 1 != 0
+    }
+
+    /// The entry of a crossed `slot` (meaningless for others).
+    #[inline(always)]
+    pub(crate) fn get(&self, slot: usize) -> CrossedPoint {
+        let z = self.plane_of(slot);
+        self.points[self.rank_in(z, slot - z * self.plane)]
+    }
+
+    /// The rank of slot `local` of storage plane `z`: how many crossed points come before it.
+    #[inline(always)]
+    pub(crate) fn rank_in(&self, z: usize, local: usize) -> usize {
+        let (w, b) = (z * self.wpp + (local >> 6), local & 63);
+        (self.rank[w] + (self.bits[w] & ((1u64 << b) - 1)).count_ones()) as usize
+    }
+
+    /// Bits of plane `z`.
+    pub(crate) fn plane_bits(&self, z: usize) -> &[u64] {
+        &self.bits[z * self.wpp..(z + 1) * self.wpp]
+    }
+
+    /// Fills the rank directory, given the number of crossed points before each plane
+    /// (`starts[z]`), and sizes `points`.
+    pub(crate) fn rank_planes(&mut self, starts: &[usize], total: usize, pool: &rayon::ThreadPool) {
+        let wpp = self.wpp;
+        pool.install(|| {
+            self.rank
+                .par_chunks_mut(wpp)
+                .zip(self.bits.par_chunks(wpp))
+                .zip(starts.par_iter())
+                .for_each(|((rank, bits), &start)| {
+                    let mut r = start as u32;
+                    for (out, w) in rank.iter_mut().zip(bits) {
+                        *out = r;
+                        r += w.count_ones();
+                    }
+                });
+        });
+        self.points.resize(total, CrossedPoint::default());
+    }
+
+    pub(crate) fn bytes(&self) -> usize {
+        self.bits.len() * 8 + self.rank.len() * 4 + self.points.len() * 8
+    }
+}
+
+/// Words of the crossed-point bit set per storage plane of `plane` slots: one bit per slot plus
+/// a zero word of padding, so that 64 bits can be read from any slot of the plane.
+pub(crate) fn plane_words(plane: usize) -> usize {
+    plane.div_ceil(64) + 1
+}
+
+/// Calls `visit(n)` for each set bit `n < len` of the bit set `words` counted from bit `start`.
+#[inline(always)]
+pub(crate) fn for_each_bit(words: &[u64], start: usize, len: usize, mut visit: impl FnMut(usize)) {
+    let mut n = 0;
+    while n < len {
+        let take = (len - n).min(64);
+        let mut bits = bits_at(words, start + n);
+        if take < 64 {
+            bits &= (1u64 << take) - 1;
+        }
+        while bits != 0 {
+            visit(n + bits.trailing_zeros() as usize);
+            bits &= bits - 1;
+        }
+        n += take;
+    }
+}
+
+/// Bit k set where `values[k] < iso` (at most 64 values). A full word is built a byte at a time,
+/// which the compiler turns into wide comparisons (about 40% faster than bit by bit).
+#[inline(always)]
+pub(crate) fn inside_word(values: &[f32], iso: f32) -> u64 {
+    match <&[f32; 64]>::try_from(values) {
+        Ok(v) => {
+            let mut bytes = [0u8; 8];
+            for (b, c) in bytes.iter_mut().zip(v.as_chunks::<8>().0) {
+                *b = c
+                    .iter()
+                    .enumerate()
+                    .fold(0u8, |b, (k, &f)| b | (u8::from(f < iso) << k));
+            }
+            u64::from_le_bytes(bytes)
+        }
+        Err(_) => values
+            .iter()
+            .enumerate()
+            .fold(0u64, |x, (k, &f)| x | (u64::from(f < iso) << k)),
+    }
+}
+
+/// The 64 bits of `words` starting at bit `pos` (bit k = slot `pos + k`); `words` has one word
+/// of padding past the last slot.
+#[inline(always)]
+pub(crate) fn bits_at(words: &[u64], pos: usize) -> u64 {
+    let (w, s) = (pos >> 6, pos & 63);
+    let lo = words[w] >> s;
+    if s == 0 {
+        lo
+    } else {
+        lo | (words[w + 1] << (64 - s))
+    }
+}
+
+/// Which of the `len` (<= 64) points from slot `i` on have a crossed edge: the inside bits of the
+/// points against those of each neighbour (all 14 must exist: the fast path of a row).
+#[inline(always)]
+pub(crate) fn crossed_points(inside: &[u64], i: usize, delta: &[isize; 14], len: usize) -> u64 {
+    let own = bits_at(inside, i);
+    let mut any = 0u64;
+    for &off in delta {
+        any |= own ^ bits_at(inside, (i as isize + off) as usize);
+    }
+    if len < 64 {
+        any &= (1u64 << len) - 1;
+    }
+    any
+}
+
+/// Counters of one plane of the vertex pass.
+#[derive(Default, Clone, Copy)]
+pub(crate) struct PlaneCounts {
+    pub(crate) crossings: usize,
+    pub(crate) edges: usize,
+    pub(crate) proposals: ProposalCounts,
+}
+
+/// Vertex pass over one storage plane: counts, cluster proposals, the plane's crossed-point bits
+/// (`crossed`, [`plane_words`] words, all zero on entry) and, per crossed point in slot order,
+/// its owned and crossed edges as `owned | crossed << 16` (`owned`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn vertex_plane(
+    l: &Layout,
+    inside_bits: &[u64],
+    z: usize,
+    iso: f32,
+    propose: Option<Rules>,
+    owned: &mut Vec<u32>,
+    crossed_bits: &mut [u64],
+) -> (PlaneCounts, Vec<Candidate>) {
+    owned.clear();
+    let v = &l.s.values;
+    let [dx, dy, _] = l.s.dims;
+    let slots = v.len();
+    let mut counts = PlaneCounts::default();
+    let mut cands = Vec::new();
+    for sy in 0..dy {
+        // The run of points in this row whose 14 neighbours are all regular lattice points: no
+        // existence or border tests there.
+        let (p0, _) = l.point(0, sy, z);
+        let odd = (p0[2] & 1) as usize;
+        let (lo, hi) = match l.lattice {
+            Lattice::BodyCentred => (1 + odd, l.s.cells[0]),
+            Lattice::Simple => (1, l.s.cells[0]),
+        };
+        let row_regular = lo < hi && l.is_regular(l.point(lo, sy, z).0);
+        let (lo, hi) = if row_regular { (lo, hi) } else { (dx, dx) };
+        let row = z * dx * dy + sy * dx;
+        let delta = &l.delta[odd];
+        let (dmin, dmax) = (
+            delta.iter().copied().min().unwrap_or(0),
+            delta.iter().copied().max().unwrap_or(0),
+        );
+        // One point with at least one crossed edge: owned crossings, flags, proposals.
+        let point = |sx: usize,
+                     valid: u16,
+                     owned: &mut Vec<u32>,
+                     crossed_bits: &mut [u64],
+                     counts: &mut PlaneCounts,
+                     cands: &mut Vec<Candidate>| {
+            let local = sy * dx + sx;
+            let i = row + sx;
+            let f = v[i];
+            let inside = f < iso;
+            let (mut own, mut crossed) = (0u16, 0u16);
+            let mut bits = valid;
+            while bits != 0 {
+                let d = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let g = v[(i as isize + delta[d]) as usize];
+                if (g < iso) != inside {
+                    crossed |= 1 << d;
+                    if owns(f, g, iso) {
+                        own |= 1 << d;
+                    }
+                }
+            }
+            if crossed != 0 {
+                // Points come in slot order: `owned` stays aligned with the bits.
+                owned.push(u32::from(own) | u32::from(crossed) << 16);
+                crossed_bits[local >> 6] |= 1 << (local & 63);
+            }
+            // Ids within the plane for now; the plane's first id is added when the planes'
+            // candidates are joined.
+            let first = counts.crossings as u32;
+            counts.crossings += own.count_ones() as usize;
+            if let Some(rules) = propose.filter(|_| own.count_ones() >= 2) {
+                let inner = l.inner_dirs(l.coords(sx, sy, z)) & valid;
+                counts.proposals.add(cluster::propose(
+                    l.t, first, i as u32, valid, inner, own, crossed, rules, cands,
+                ));
+            }
+        };
+        // Border points one by one (existence and valid neighbours from the border table).
+        let border = |sx: usize,
+                      owned: &mut Vec<u32>,
+                      crossed_bits: &mut [u64],
+                      counts: &mut PlaneCounts,
+                      cands: &mut Vec<Candidate>| {
+            let p = l.coords(sx, sy, z);
+            let (exists, valid) = l.border_info(p);
+            if !exists {
+                return;
+            }
+            counts.edges += valid.count_ones() as usize;
+            point(sx, valid, owned, crossed_bits, counts, cands);
+        };
+        // The points tested 64 at a time: the whole row where every neighbour slot of it is in
+        // storage (the test may then let through a border point whose only difference is with a
+        // slot that is not its neighbour; `point` tests the real neighbours), else the regular
+        // run. The others one by one.
+        let (flo, fhi) = if row as isize + dmin >= 0 && (row + dx) as isize + dmax <= slots as isize
+        {
+            (0, dx)
+        } else {
+            (lo, hi)
+        };
+        for sx in 0..flo {
+            border(sx, owned, crossed_bits, &mut counts, &mut cands);
+        }
+        if flo < fhi {
+            if lo < hi {
+                counts.edges += 14 * (hi - lo);
+            }
+            for sx in (flo..lo.min(fhi)).chain(hi.max(flo)..fhi) {
+                let (exists, valid) = l.border_info(l.coords(sx, sy, z));
+                if exists {
+                    counts.edges += valid.count_ones() as usize;
+                }
+            }
+            let mut sx = flo;
+            while sx < fhi {
+                let len = (fhi - sx).min(64);
+                let mut block = crossed_points(inside_bits, row + sx, delta, len);
+                while block != 0 {
+                    let x = sx + block.trailing_zeros() as usize;
+                    block &= block - 1;
+                    let valid = if x >= lo && x < hi {
+                        FULL
+                    } else {
+                        let (exists, valid) = l.border_info(l.coords(x, sy, z));
+                        if !exists {
+                            continue;
+                        }
+                        valid
+                    };
+                    point(x, valid, owned, crossed_bits, &mut counts, &mut cands);
+                }
+                sx += len;
+            }
+        }
+        for sx in fhi.max(flo)..dx {
+            border(sx, owned, crossed_bits, &mut counts, &mut cands);
+        }
+    }
+    (counts, cands)
+}
+
+/// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points'
+/// entries (`entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the crossings'
+/// positions (`out`). Returns how many crossings lie within `WELD` of their owner (surfaces
+/// through sample points).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn number_plane(
+    l: &Layout,
+    z: usize,
+    iso: f32,
+    owned: &[u32],
+    crossed: &[u64],
+    start: u32,
+    entries: &mut [CrossedPoint],
+    out: &mut [[f32; 3]],
+) -> usize {
+    let v = &l.s.values;
+    let [dx, dy, _] = l.s.dims;
+    let plane = dx * dy;
+    let mut next = start;
+    let (mut w, mut r) = (0, 0);
+    let mut near_points = 0;
+    for_each_bit(crossed, 0, plane, |local| {
+        let own = owned[r] as u16;
+        entries[r] = CrossedPoint {
+            first: next,
+            owned: own,
+            crossed: (owned[r] >> 16) as u16,
+        };
+        r += 1;
+        if own == 0 {
+            return;
+        }
+        next += own.count_ones();
+        let (sy, sx) = (local / dx, local % dx);
+        let p = l.coords(sx, sy, z);
+        let i = z * plane + local;
+        let f = v[i];
+        let pp = l.position(p);
+        let mut bits = own;
+        while bits != 0 {
+            let d = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let q = add(p, l.t.offsets[d]);
+            let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
+            let t = (iso - f) / (g - f);
+            near_points += (t < WELD) as usize;
+            out[w] = pp.lerp(l.position(q), t).to_array();
+            w += 1;
+        }
+    });
+    debug_assert_eq!(
+        r,
+        owned.len(),
+        "plane {z}: crossed bits and points disagree"
+    );
+    near_points
+}
+
+/// The vertex pass, after [`super::allocate`]: step 0, the inside bit of every sample point;
+/// step 1 (parallel over storage planes), each plane's crossed points, their owned crossings
+/// and (with `propose`) the cluster proposals ([`crate::cluster`]), copied into
+/// `buf.candidates`; step 2 (parallel over planes), every crossing's id and position
+/// (`mesh.positions`, one vertex per crossing). Returns how many crossings lie on a sample
+/// point (within the weld distance).
+///
+/// ```text
+///   inside bits  ->  crossed points (bits + rank)  ->  ids: first(C) + popcount(owned & below d)
+///   1 0 0 1 ...      C: owned = {d : |f(C)-T| < |f(S_d)-T|, C-S_d crossed}
+/// ```
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn vertex_pass(
+    layout: &Layout,
+    samples: &Samples,
+    iso: f32,
+    propose: Option<Rules>,
+    pool: &rayon::ThreadPool,
+    buf: &mut MtBuffers,
+    mesh: &mut Mesh,
+    stats: &mut Stats,
+) -> Result<usize, ExtractError> {
+    let slots = samples.values.len();
+    let words = slots.div_ceil(64);
+    let planes = samples.dims[2];
+    // Vertex pass, step 0: the inside bits.
+    {
+        let values = &samples.values;
+        pool.install(|| {
+            buf.inside[..words]
+                .par_chunks_mut(1024)
+                .enumerate()
+                .for_each(|(c, chunk)| {
+                    for (j, word) in chunk.iter_mut().enumerate() {
+                        let start = (c * 1024 + j) * 64;
+                        let end = (start + 64).min(slots);
+                        *word = inside_word(&values[start..end], iso);
+                    }
+                });
+        });
+        buf.inside[words] = 0;
+    }
+
+    // Vertex pass, step 1: owned crossings and proposals per plane.
+    let inside = &buf.inside;
+    let wpp = buf.crossed.wpp;
+    let per_plane: Vec<(PlaneCounts, Vec<Candidate>)> = pool.install(|| {
+        buf.plane_points[..planes]
+            .par_iter_mut()
+            .zip(buf.crossed.bits.par_chunks_mut(wpp))
+            .enumerate()
+            .map(|(z, (owned, crossed))| {
+                vertex_plane(layout, inside, z, iso, propose, owned, crossed)
+            })
+            .collect()
+    });
+    let mut starts = Vec::with_capacity(per_plane.len() + 1);
+    let mut point_starts = Vec::with_capacity(per_plane.len() + 1);
+    let mut total = 0usize;
+    let mut total_points = 0usize;
+    let mut proposals = ProposalCounts::default();
+    for (z, (c, cands)) in per_plane.iter().enumerate() {
+        starts.push(total);
+        total += c.crossings;
+        point_starts.push(total_points);
+        total_points += buf.plane_points[z].len();
+        stats.edges += c.edges;
+        proposals.add(c.proposals);
+        let start = starts[z] as u32;
+        buf.candidates.extend(cands.iter().map(|c| Candidate {
+            first: start + c.first,
+            ..*c
+        }));
+    }
+    stats.edges /= 2;
+    stats.crossings = total;
+    if total > u32::MAX as usize - 1 {
+        return Err(ExtractError::TooLarge {
+            cells: samples.cells,
+            limit: u32::MAX as usize,
+        });
+    }
+    buf.crossed.rank_planes(&point_starts, total_points, pool);
+    // Step 2: number the crossings and place them.
+    let near_points;
+    mesh.positions.resize(total, [0.0; 3]);
+    {
+        let mut rest: &mut [[f32; 3]] = &mut mesh.positions;
+        let mut chunks = Vec::with_capacity(per_plane.len());
+        for (c, _) in &per_plane {
+            let (head, tail) = rest.split_at_mut(c.crossings);
+            chunks.push(head);
+            rest = tail;
+        }
+        // Plane z numbers its crossed points.
+        let CrossedIndex { bits, points, .. } = &mut buf.crossed;
+        let mut rest: &mut [CrossedPoint] = points;
+        let mut entries = Vec::with_capacity(per_plane.len());
+        for owned in &buf.plane_points[..planes] {
+            let (head, tail) = rest.split_at_mut(owned.len());
+            entries.push(head);
+            rest = tail;
+        }
+        let (bits, plane_points) = (&*bits, &buf.plane_points);
+        near_points = pool.install(|| {
+            entries
+                .into_par_iter()
+                .zip(chunks.into_par_iter())
+                .enumerate()
+                .map(|(z, (entries, out))| {
+                    number_plane(
+                        layout,
+                        z,
+                        iso,
+                        &plane_points[z],
+                        &bits[z * wpp..(z + 1) * wpp],
+                        starts[z] as u32,
+                        entries,
+                        out,
+                    )
+                })
+                .sum::<usize>()
+        });
+    }
+    // The per-plane proposals were copied into `buf.candidates`: free them before the geometry
+    // pass and the clustering allocate.
+    drop(per_plane);
+    stats.clusters_proposed = proposals.proposed;
+    stats.clusters_rejected_prefilter = proposals.rejected;
+    Ok(near_points)
+}

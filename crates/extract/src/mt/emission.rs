@@ -1,0 +1,447 @@
+//! Emission, the geometry pass (parallel over z-layers): every tetrahedron whose corners disagree
+//! gives one or two triangles from the case table. Each layer's triangles are counted first,
+//! from the crossed edges of the face or cube anchors (`TetGroup` tables), so that every layer
+//! writes into its own slice of the output in layer order: the same output for any thread count,
+//! and the triangles stored once. Cubes (or body-centred faces) whose anchor has no crossed edge
+//! are skipped before any tetrahedron is looked at.
+//!
+//! With integrated clustering the same pass lists plain MT's triangles once
+//! ([`plain_triangles`], with each triangle's tetrahedron gradient and every crossing's
+//! triangles: the stars of the quotient test), and the emission maps that list through the
+//! output vertices, leaving out the triangles that collapsed ([`emit`]).
+//!
+//! ```text
+//!   layer k:  count (anchors' crossed edges -> triangles)  ->  slice k of the output
+//!             write (tetrahedra of each anchor, case table) ->  [ layer 0 | layer 1 | ... ]
+//! ```
+
+use super::*;
+
+/// The geometry pass over the lattice, writing the final triangles into `mesh` (with `propose`,
+/// through the groups' vertex map, collapsed triangles dropped), only those of the cells `keep`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn emit_layers(
+    layout: &Layout,
+    iso: f32,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    propose: bool,
+    buf: &MtBuffers,
+    mesh: &mut Mesh,
+    pool: &rayon::ThreadPool,
+    stats: &mut Stats,
+) {
+    // Triangles of plain MT per layer, counted from the anchors' crossed edges, so that every
+    // layer writes its triangles straight into its own slice of the output (with clustering,
+    // collapsed triangles leave the slice's end unused; the layers are then moved together).
+    let counts = layer_counts(layout, keep, crossed, pool);
+    let layers = counts.len();
+    let triangles: usize = counts.iter().sum();
+    let Mesh {
+        positions, indices, ..
+    } = mesh;
+    indices.clear();
+    indices.resize(3 * triangles, 0);
+    let mut parts = Vec::with_capacity(layers);
+    let mut rest = &mut indices[..];
+    for &n in &counts {
+        let (head, tail) = rest.split_at_mut(3 * n);
+        parts.push(head);
+        rest = tail;
+    }
+    let (positions, map) = if propose {
+        (&buf.cpos[..], Some(&buf.vertex_of[..]))
+    } else {
+        (&positions[..], None)
+    };
+    let written: Vec<(usize, usize)> = pool.install(|| {
+        parts
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, out)| {
+                geometry_layer(layout, k, iso, keep, crossed, positions, map, out, None)
+            })
+            .collect()
+    });
+    stats.tetrahedra_processed += written.iter().map(|w| w.0).sum::<usize>();
+    if propose {
+        // Move the layers' triangles together.
+        let (mut from, mut to) = (0, 0);
+        for (&n, &(_, w)) in counts.iter().zip(&written) {
+            indices.copy_within(3 * from..3 * (from + w), 3 * to);
+            from += n;
+            to += w;
+        }
+        indices.truncate(3 * to);
+        stats.discarded += triangles - to;
+    }
+}
+
+/// Plain MT's triangles over the whole box, in the order of the geometry pass (layer by
+/// layer), into `tris` (three crossing ids each), with each triangle's source tetrahedron
+/// gradient (of the linear interpolant on its source tetrahedron, up to a positive factor) in
+/// `grad`; then every crossing's triangles as a CSR
+/// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order). The quotient test reads
+/// a group's star from these instead of from the lattice.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plain_triangles(
+    layout: &Layout,
+    iso: f32,
+    crossed: &CrossedIndex,
+    cpos: &[[f32; 3]],
+    pool: &rayon::ThreadPool,
+    tris: &mut Vec<u32>,
+    grad: &mut Vec<[f32; 3]>,
+    inc_start: &mut Vec<u32>,
+    inc: &mut Vec<u32>,
+) -> usize {
+    let counts = layer_counts(layout, None, crossed, pool);
+    let layers = counts.len();
+    let total: usize = counts.iter().sum();
+    tris.clear();
+    tris.resize(3 * total, 0);
+    grad.clear();
+    grad.resize(total, [0.0; 3]);
+    let mut parts = Vec::with_capacity(layers);
+    let (mut rest, mut rest_src) = (&mut tris[..], &mut grad[..]);
+    for &n in &counts {
+        let (head, tail) = rest.split_at_mut(3 * n);
+        let (head_src, tail_src) = rest_src.split_at_mut(n);
+        parts.push((head, head_src));
+        rest = tail;
+        rest_src = tail_src;
+    }
+    let processed: usize = pool.install(|| {
+        parts
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, (out, src))| {
+                geometry_layer(layout, k, iso, None, crossed, cpos, None, out, Some(src)).0
+            })
+            .sum()
+    });
+    // Incidence in triangle order, so the table is deterministic.
+    let mut cursor = Vec::new();
+    crate::merge::incidence(cpos.len(), tris, inc_start, inc, &mut cursor);
+    processed
+}
+
+/// Calls `visit(anchor, rank, group)` for each body-centred face (group: its axis) or cube
+/// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot) has a
+/// crossed edge and, in a chunk, its cell is kept. The anchor's entry is `crossed.points[rank]`. The count and the geometry pass both walk the
+/// layer with it, so they see the same groups.
+pub(crate) fn for_each_group(
+    l: &Layout,
+    k: usize,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    mut visit: impl FnMut(usize, usize, usize),
+) {
+    let [nx, ny, nz] = l.s.cells;
+    let plane = l.s.dims[0] * l.s.dims[1];
+    // The anchors of one row are consecutive storage slots: scan their bits, visit only the
+    // crossed ones (`cell(n)`: the cell of the n-th, to test against the kept cells).
+    let mut row =
+        |start: usize, z: usize, len: usize, g: usize, cell: &dyn Fn(usize) -> [usize; 3]| {
+            let local = start - z * plane;
+            let mut rank = crossed.rank_in(z, local);
+            for_each_bit(crossed.plane_bits(z), local, len, |n| {
+                let r = rank;
+                rank += 1;
+                if keep.is_some_and(|range| !range.contains(cell(n))) {
+                    return;
+                }
+                visit(start + n, r, g);
+            });
+        };
+    match l.lattice {
+        Lattice::Simple => {
+            // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface
+            // in the cube.
+            for j in 0..ny {
+                row(l.s.simple_index(0, j, k), k, nx, 0, &|i| [i, j, k]);
+            }
+        }
+        Lattice::BodyCentred => {
+            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by their
+            // anchor A, the centre below (B and the 4 face corners are neighbours of A: without
+            // a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a face anchor
+            // moves by one storage slot.
+            let ki = k as i32;
+            let mut faces = |first: Offset, len: usize, axis: usize| {
+                // Storage plane (see `Samples::bcdl_index`); the anchor cell is above the face
+                // along `axis` (clamped into the grid).
+                let z = (first[2] + 1) as usize;
+                let cell = |n: usize| {
+                    let a = [first[0] + 2 * n as i32, first[1], first[2]];
+                    let mut c = a.map(|x| ((x - 1) / 2) as usize);
+                    c[axis] = (((a[axis] + 1) / 2) as usize).min(l.s.cells[axis] - 1);
+                    c
+                };
+                row(l.s.bcdl_index(first), z, len, axis, &cell);
+            };
+            for j in 0..ny as i32 {
+                faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
+            }
+            if k < nz {
+                for j in 0..ny as i32 {
+                    faces([-1, 2 * j + 1, 2 * ki + 1], nx + 1, 0);
+                }
+                for f in 0..=ny as i32 {
+                    faces([1, 2 * f - 1, 2 * ki + 1], nx, 1);
+                }
+            }
+        }
+    }
+}
+
+/// Triangles of every geometry layer (those of the cells `keep`), in layer order.
+pub(crate) fn layer_counts(
+    l: &Layout,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    pool: &rayon::ThreadPool,
+) -> Vec<usize> {
+    let layers = match l.lattice {
+        Lattice::BodyCentred => l.s.cells[2] + 1,
+        Lattice::Simple => l.s.cells[2],
+    };
+    pool.install(|| {
+        (0..layers)
+            .into_par_iter()
+            .map(|k| count_layer(l, k, keep, crossed))
+            .collect()
+    })
+}
+
+/// Triangles geometry layer `k` will give: per group, a table lookup by the anchor's crossed
+/// edges.
+pub(crate) fn count_layer(
+    l: &Layout,
+    k: usize,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+) -> usize {
+    let mut n = 0;
+    for_each_group(l, k, keep, crossed, |_, rank, g| {
+        let group = &l.groups[g];
+        let mask = usize::from(crossed.points[rank].crossed);
+        let mut code = 0;
+        for (i, &d) in group.dirs[1..group.len].iter().enumerate() {
+            code |= ((mask >> d) & 1) << (i + 1);
+        }
+        n += usize::from(group.triangles[code]);
+    });
+    n
+}
+
+/// Emission over one z-layer: writes its triangles into `out`, sized by [`count_layer`] (the
+/// triangles of plain MT); with `map` (crossing id to output vertex, clustering) the triangles
+/// are written with the clustered vertices and those that collapsed are left out. Returns the
+/// tetrahedra processed and the triangles written.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn geometry_layer(
+    l: &Layout,
+    k: usize,
+    iso: f32,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    positions: &[[f32; 3]],
+    map: Option<&[u32]>,
+    out: &mut [u32],
+    grad: Option<&mut [[f32; 3]]>,
+) -> (usize, usize) {
+    let plane = l.s.dims[0] * l.s.dims[1];
+    // The crossed points of the storage planes this layer reads, copied into a dense window (one
+    // entry per slot) of this thread: a crossing's id is then one load away, where the rank
+    // directory needs two dependent ones. A few planes per thread, not a table per slot.
+    let (z0, z1) = l.layer_planes(k);
+    LAYER_WINDOW.with_borrow_mut(|window| {
+        if window.len() < (z1 + 1 - z0) * plane {
+            window.resize((z1 + 1 - z0) * plane, CrossedPoint::default());
+        }
+        for z in z0..=z1 {
+            let base = (z - z0) * plane;
+            let mut r = crossed.rank_in(z, 0);
+            for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
+                window[base + local] = crossed.points[r];
+                r += 1;
+            });
+        }
+        geometry_in_window(
+            l,
+            k,
+            iso,
+            keep,
+            crossed,
+            positions,
+            map,
+            &window[..],
+            z0,
+            out,
+            grad,
+        )
+    })
+}
+
+thread_local! {
+    /// The dense window of [`geometry_layer`], kept per thread between layers and extractions
+    /// (entries of slots without a crossed edge are stale and never read).
+    pub(crate) static LAYER_WINDOW: std::cell::RefCell<Vec<CrossedPoint>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn geometry_in_window(
+    l: &Layout,
+    k: usize,
+    iso: f32,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    positions: &[[f32; 3]],
+    map: Option<&[u32]>,
+    window: &[CrossedPoint],
+    z0: usize,
+    out: &mut [u32],
+    mut grad: Option<&mut [[f32; 3]]>,
+) -> (usize, usize) {
+    let v = &l.s.values;
+    let plane = l.s.dims[0] * l.s.dims[1];
+    let mut processed = 0;
+    let mut w = 0;
+    let mut tet = |anchor: usize, ti: usize, tpl: &TetTemplate| {
+        let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
+        let val = idx.map(|i| v[i]);
+        let mut tris = [[0u32; 3]; 2];
+        // The window starts at slot 0 of plane z0.
+        let id = |o: usize, d: u8| {
+            let entry = window[idx[o] - z0 * plane];
+            debug_assert_eq!(entry, crossed.get(idx[o]));
+            entry.id(d)
+        };
+        let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
+        processed += usize::from(n > 0);
+        match map {
+            None => {
+                // The gradient of the tetrahedron, for the quotient test's (c).
+                let g = if n > 0 && grad.is_some() {
+                    l.gradient(anchor, ti)
+                } else {
+                    [0.0; 3]
+                };
+                for t in &tris[..n] {
+                    if let Some(grad) = grad.as_deref_mut() {
+                        grad[w / 3] = g;
+                    }
+                    out[w..w + 3].copy_from_slice(t);
+                    w += 3;
+                }
+            }
+            Some(map) => {
+                // Clustered: the vertices of the groups' quotient; a triangle with two corners
+                // in one group collapsed and is dropped.
+                for t in &tris[..n] {
+                    let q = t.map(|i| map[i as usize]);
+                    if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
+                        out[w..w + 3].copy_from_slice(&q);
+                        w += 3;
+                    }
+                }
+            }
+        }
+    };
+    for_each_group(l, k, keep, crossed, |anchor, _, g| {
+        let first = match l.lattice {
+            Lattice::BodyCentred => 4 * g,
+            Lattice::Simple => 0,
+        };
+        let count = match l.lattice {
+            Lattice::BodyCentred => 4,
+            Lattice::Simple => l.tets.len(),
+        };
+        for ti in first..first + count {
+            tet(anchor, ti, &l.tets[ti]);
+        }
+    });
+    debug_assert!(
+        w == out.len() || (map.is_some() && w <= out.len()),
+        "layer {k}: triangles counted and written differ"
+    );
+    (processed, w / 3)
+}
+
+/// Emission: the final triangles, written straight into `mesh.indices`. With clustering and
+/// the whole box, the listed plain MT triangles ([`plain_triangles`]) mapped through the
+/// output vertices (`buf.vertex_of`), in order, the collapsed ones dropped; otherwise the
+/// geometry pass ([`emit_layers`]).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn emit(
+    layout: &Layout,
+    samples: &Samples,
+    settings: &ExtractSettings,
+    propose: bool,
+    plain_processed: usize,
+    buf: &mut MtBuffers,
+    mesh: &mut Mesh,
+    pool: &rayon::ThreadPool,
+    stats: &mut Stats,
+) {
+    let (iso, lattice, clustering) = (settings.iso, settings.lattice, settings.clustering);
+    let crossed = &buf.crossed;
+    let keep = settings.keep_cells;
+    if propose && keep.is_none() && !buf.plain.is_empty() {
+        // The plain triangles are at hand (the quotient test read them): map them through the
+        // groups, in order, dropping the collapsed ones.
+        let (plain, map) = (&buf.plain[..], &buf.vertex_of[..]);
+        const CHUNK: usize = 3 << 14;
+        let mapped = |t: &[u32]| {
+            let q = [t[0], t[1], t[2]].map(|i| map[i as usize]);
+            (q[0] != q[1] && q[1] != q[2] && q[0] != q[2]).then_some(q)
+        };
+        let counts: Vec<usize> = pool.install(|| {
+            plain
+                .par_chunks(CHUNK)
+                .map(|c| c.chunks_exact(3).filter(|t| mapped(t).is_some()).count())
+                .collect()
+        });
+        let kept: usize = counts.iter().sum();
+        let indices = &mut mesh.indices;
+        indices.clear();
+        indices.resize(3 * kept, 0);
+        let mut parts = Vec::with_capacity(counts.len());
+        let mut rest = &mut indices[..];
+        for &n in &counts {
+            let (head, tail) = rest.split_at_mut(3 * n);
+            parts.push(head);
+            rest = tail;
+        }
+        pool.install(|| {
+            plain
+                .par_chunks(CHUNK)
+                .zip(parts.into_par_iter())
+                .for_each(|(c, out)| {
+                    for (q, o) in c
+                        .chunks_exact(3)
+                        .filter_map(mapped)
+                        .zip(out.chunks_exact_mut(3))
+                    {
+                        o.copy_from_slice(&q);
+                    }
+                })
+        });
+        stats.tetrahedra_processed += plain_processed;
+        stats.discarded += plain.len() / 3 - kept;
+    } else {
+        emit_layers(layout, iso, keep, crossed, propose, buf, mesh, pool, stats);
+    }
+    if clustering == Clustering::IntegratedUnchecked {
+        // Without the test a vertex may lose all its triangles.
+        mesh.drop_unused_vertices(&mut buf.scratch);
+    }
+    let [nx, ny, nz] = samples.cells;
+    stats.tetrahedra_total = match lattice {
+        Lattice::BodyCentred => 4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1)),
+        Lattice::Simple => 6 * nx * ny * nz,
+    };
+}

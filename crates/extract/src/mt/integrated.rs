@@ -1,0 +1,361 @@
+//! Clustering between the vertex pass and the emission: the proposals become groups, and each
+//! crossing gets its output vertex.
+//!
+//! The proposals are a partition of the crossings into groups ([`crate::cluster`]: a point's
+//! islands, each sheet's own crossings cut into parts joined by mesh edges; with integrated
+//! clustering also the lone crossings, given to a neighbouring island). Integrated clustering
+//! then lists plain MT's triangles once ([`super::emission::plain_triangles`]), keeps the groups
+//! that pass the exact quotient test, repairing failures by splitting groups in parallel rounds,
+//! and settles its additions the same way ([`crate::quotient`], [`crate::repair`],
+//! [`crate::additions`]); integrated-unchecked keeps every proposal. Every crossing then maps to
+//! an output vertex: its group's (the mean of its crossings) or its own.
+//!
+//! ```text
+//!   proposals -> group tables -> plain triangles -> settle islands -> variants -> lone passes
+//!             -> sliver passes -> output vertices (one per kept group or lone crossing)
+//! ```
+
+use super::*;
+
+/// Passes of lone crossings after the islands settle (each: give, then test and repair).
+pub(crate) const LONE_PASSES: usize = 3;
+
+/// Passes over the slivers left after the lone passes (each: propose, then test and repair).
+pub(crate) const SLIVER_PASSES: usize = 2;
+
+/// The group tables of the proposals in `buf.candidates`, every group kept: each crossing's
+/// group, each group's leader (lowest crossing id) and vertex position (the mean of its
+/// crossings); and `buf.edge_of`, every crossing's owner slot and edge.
+pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::ThreadPool) {
+    use crate::quotient::NONE;
+    let crossings = buf.cpos.len();
+    let MtBuffers {
+        candidates,
+        cpos,
+        groups: g,
+        crossed,
+        edge_of,
+        ..
+    } = buf;
+    let count = candidates.len();
+    g.group_of.clear();
+    g.group_of.resize(crossings, NONE);
+    for (gi, c) in candidates.iter().enumerate() {
+        for id in c.ids() {
+            g.group_of[id as usize] = gi as u32;
+        }
+    }
+    let cpos = &*cpos;
+    pool.install(|| {
+        candidates
+            .par_iter()
+            .map(|c| {
+                let mut sum = glam::Vec3::ZERO;
+                for id in c.ids() {
+                    sum += glam::Vec3::from(cpos[id as usize]);
+                }
+                (sum / c.size() as f32).to_array()
+            })
+            .collect_into_vec(&mut g.centroid)
+    });
+    g.leader.clear();
+    g.leader.extend(candidates.iter().map(|c| c.leader()));
+    g.active.clear();
+    g.active.resize(count, 1);
+    g.lone.clear();
+    g.lone_start.clear();
+    g.lone_start.resize(count + 1, 0);
+    g.lone_len.clear();
+    g.lone_len.resize(count, 0);
+    g.base_len.clear();
+    g.base_len.resize(count, 0);
+    g.refused.clear();
+    g.refused.resize(crossings, NONE);
+    // Every crossing's edge: plane by plane, points in slot order, edges in bit order, which
+    // is the order of the ids.
+    let plane = layout.s.dims[0] * layout.s.dims[1];
+    let crossed = &*crossed;
+    let per_plane: Vec<Vec<(u32, u8)>> = pool.install(|| {
+        (0..layout.s.dims[2])
+            .into_par_iter()
+            .map(|z| {
+                let mut out = Vec::new();
+                let mut r = crossed.rank_in(z, 0);
+                for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
+                    let entry = crossed.points[r];
+                    r += 1;
+                    let mut own = entry.owned;
+                    while own != 0 {
+                        out.push(((z * plane + local) as u32, own.trailing_zeros() as u8));
+                        own &= own - 1;
+                    }
+                });
+                out
+            })
+            .collect()
+    });
+    edge_of.clear();
+    edge_of.reserve(crossings);
+    for part in per_plane {
+        edge_of.extend_from_slice(&part);
+    }
+    debug_assert_eq!(edge_of.len(), crossings);
+}
+
+/// The clustering steps between the vertex pass and the emission (`propose`): the proposals
+/// under the tile rule, the group tables, and with integrated (checked) clustering plain MT's
+/// triangle list, the islands' quotient tests and repair ([`crate::repair`]), then the
+/// additions ([`crate::additions`]); at the end every crossing's output vertex
+/// (`buf.vertex_of`) and the vertex positions (`mesh.positions`; the crossings' own move to
+/// `buf.cpos`). `keys`: the tile rule's keys, when tiled. Counts the tetrahedra that the
+/// triangle list read into `plain_processed`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn cluster(
+    buf: &mut MtBuffers,
+    layout: &Layout,
+    iso: f32,
+    clustering: Clustering,
+    rules: Rules,
+    keys: Option<&[u64]>,
+    mesh: &mut Mesh,
+    stats: &mut Stats,
+    plain_processed: &mut usize,
+    pool: &rayon::ThreadPool,
+) {
+    let tiled = keys.is_some();
+    let keys = keys.unwrap_or(&[]);
+    // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
+    std::mem::swap(&mut mesh.positions, &mut buf.cpos);
+    if tiled {
+        // Tile rule: a group only inside one tile. With integrated clustering a candidate
+        // across tiles is dropped (its crossings may still join a group of their tile as
+        // lone crossings); integrated-unchecked keeps it without one crossing when that
+        // leaves two or more of one tile (the first such crossing in bit order), as the
+        // dissertation's commit did.
+        let t = layout.t;
+        let mut kept = Vec::with_capacity(buf.candidates.len());
+        let mut ids = Vec::with_capacity(14);
+        for c in buf.candidates.drain(..) {
+            ids.clear();
+            ids.extend(c.ids());
+            if crate::tiles::same_tile(keys, &ids) {
+                kept.push(c);
+                continue;
+            }
+            let without_one = (rules == Rules::Dissertation && ids.len() > 2)
+                .then(|| {
+                    let mut d = c.dirs;
+                    (0..ids.len()).find_map(|i| {
+                        let bit = d & d.wrapping_neg();
+                        d &= d - 1;
+                        let rest: Vec<u32> =
+                            (0..ids.len()).filter(|&j| j != i).map(|j| ids[j]).collect();
+                        crate::tiles::same_tile(keys, &rest).then(|| c.restrict(c.dirs & !bit))
+                    })
+                })
+                .flatten();
+            match without_one {
+                Some(r) if t.is_connected(r.dirs) || rules == Rules::Dissertation => kept.push(r),
+                _ => stats.clusters_rejected_prefilter += 1,
+            }
+        }
+        buf.candidates = kept;
+    }
+    let step = std::time::Instant::now();
+    build_groups(buf, layout, pool);
+    let checked = clustering == Clustering::Integrated;
+    if checked {
+        // Plain MT's triangles and every crossing's triangles: the stars of the tests.
+        *plain_processed = plain_triangles(
+            layout,
+            iso,
+            &buf.crossed,
+            &buf.cpos,
+            pool,
+            &mut buf.plain,
+            &mut buf.plain_grad,
+            &mut buf.inc_start,
+            &mut buf.inc,
+        );
+    } else {
+        buf.plain.clear();
+        buf.plain_grad.clear();
+        buf.inc_start.clear();
+        buf.inc.clear();
+    }
+    let mut islands = buf.candidates.len();
+    if !checked {
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+    }
+    if checked {
+        let fixed = crate::quotient::Fixed {
+            l: layout,
+            cpos: &buf.cpos,
+            groups: &buf.candidates,
+            tris: &buf.plain,
+            grad: &buf.plain_grad,
+            inc_start: &buf.inc_start,
+            inc: &buf.inc,
+            keys: tiled.then_some(keys),
+        };
+        let groups = &mut buf.groups;
+        groups.relabel(&fixed, pool);
+        // Crossings in no island join a neighbouring island: part of the proposal.
+        crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
+        groups.base_len.fill(0);
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+        let all = (0..islands as u32).collect();
+        let settled =
+            crate::repair::settle(&fixed, groups, all, crate::repair::Phase::Islands, pool);
+        stats.repair_rounds = settled.rounds;
+        stats.t_tests_s += settled.t_tests_s;
+        stats.t_repair_s += settled.t_repair_s;
+    }
+    // Split islands of three or more come back without one crossing: their variants are
+    // appended to the candidates (not kept), and each split island takes its first variant
+    // that passes.
+    let mut variant_of = Vec::new();
+    if checked {
+        let step = std::time::Instant::now();
+        let t = layout.t;
+        variant_of.push(islands as u32);
+        for gi in 0..islands {
+            if buf.groups.active[gi] == 0 {
+                let c = buf.candidates[gi];
+                crate::additions::variants(&c, t, &mut buf.candidates);
+                variant_of.push(buf.candidates.len() as u32);
+            }
+        }
+        buf.groups.extend_to(buf.candidates.len());
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+    }
+    // The fixed tables of the tests, over the candidates as they are.
+    macro_rules! fixed {
+        () => {
+            crate::quotient::Fixed {
+                l: layout,
+                cpos: &buf.cpos,
+                groups: &buf.candidates,
+                tris: &buf.plain,
+                grad: &buf.plain_grad,
+                inc_start: &buf.inc_start,
+                inc: &buf.inc,
+                keys: tiled.then_some(keys),
+            }
+        };
+    }
+    if checked {
+        let fixed = fixed!();
+        let groups = &mut buf.groups;
+        let dirty = crate::additions::revive(&fixed, groups, &variant_of, pool);
+        let settled =
+            crate::repair::settle(&fixed, groups, dirty, crate::repair::Phase::Islands, pool);
+        stats.repair_rounds += settled.rounds;
+        stats.t_tests_s += settled.t_tests_s;
+        stats.t_repair_s += settled.t_repair_s;
+        // Crossings left alone (in no island, or in one that split) join the nearest kept
+        // group; a group that fails with them gives them back, and they try another group
+        // in the next pass.
+        let no_new = crate::repair::Phase::Additions {
+            born: fixed.groups.len() as u32,
+        };
+        for _ in 0..LONE_PASSES {
+            let step = std::time::Instant::now();
+            let dirty = crate::additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
+            stats.t_groups_s += step.elapsed().as_secs_f64();
+            if dirty.is_empty() {
+                break;
+            }
+            let settled = crate::repair::settle(&fixed, groups, dirty, no_new, pool);
+            stats.repair_rounds += settled.rounds;
+            stats.t_tests_s += settled.t_tests_s;
+            stats.t_repair_s += settled.t_repair_s;
+        }
+    }
+    // Slivers left between the groups: a crossing left alone at one joins the group across
+    // its shortest edge, or pairs with the crossing there (a new group).
+    for _ in 0..SLIVER_PASSES {
+        if !checked {
+            break;
+        }
+        let step = std::time::Instant::now();
+        let props = {
+            let fixed = fixed!();
+            crate::additions::sliver_proposals(&fixed, &buf.groups, &buf.edge_of, pool)
+        };
+        if props.lones.is_empty() && props.pairs.is_empty() {
+            break;
+        }
+        let born = buf.candidates.len();
+        for &(x, y) in &props.pairs {
+            let (slot, dir) = buf.edge_of[x as usize];
+            buf.candidates.push(Candidate {
+                first: x,
+                members: 1,
+                dirs: 1 << dir,
+                slot,
+            });
+            let _ = y;
+        }
+        islands += props.pairs.len();
+        stats.clusters_proposed += props.pairs.len();
+        let fixed = fixed!();
+        let groups = &mut buf.groups;
+        groups.add_pairs(&fixed, born, &props.pairs);
+        let mut dirty = crate::additions::attach(&fixed, groups, props.lones, true, pool);
+        let new: Vec<u32> = (born as u32..fixed.groups.len() as u32).collect();
+        dirty.extend(crate::additions::around(&fixed, groups, &new, pool));
+        dirty.sort_unstable();
+        dirty.dedup();
+        stats.t_groups_s += step.elapsed().as_secs_f64();
+        let phase = crate::repair::Phase::Additions { born: born as u32 };
+        let settled = crate::repair::settle(&fixed, groups, dirty, phase, pool);
+        stats.repair_rounds += settled.rounds;
+        stats.t_tests_s += settled.t_tests_s;
+        stats.t_repair_s += settled.t_repair_s;
+    }
+    let fixed = fixed!();
+    let groups = &buf.groups;
+    stats.lone_absorbed = (0..buf.candidates.len())
+        .filter(|&gi| groups.active[gi] != 0)
+        .map(|gi| usize::from(groups.lone_len[gi]))
+        .sum();
+    let step = std::time::Instant::now();
+    let q = crate::quotient::Quotient::new(&fixed, groups);
+    vertex_map(&q, &mut buf.vertex_of, &mut mesh.positions);
+    // An island is kept whole, or as one of its variants (at most one of them is kept).
+    stats.clusters_committed = groups.active.iter().filter(|&&a| a != 0).count();
+    stats.clusters_rejected_check = islands - stats.clusters_committed;
+    stats.t_vertices_s += step.elapsed().as_secs_f64();
+}
+
+/// The output vertices: one per crossing outside the kept groups and one per kept group, in
+/// order of their lowest crossing id; `vertex_of` maps every crossing to its vertex.
+pub(crate) fn vertex_map(
+    q: &crate::quotient::Quotient,
+    vertex_of: &mut Vec<u32>,
+    positions: &mut Vec<[f32; 3]>,
+) {
+    use crate::quotient::NONE;
+    let n = q.cpos.len();
+    let g = q.g;
+    vertex_of.clear();
+    vertex_of.resize(n, 0);
+    positions.clear();
+    for x in 0..n {
+        let h = g.group_of[x];
+        if h != NONE && g.active[h as usize] != 0 {
+            let leader = g.leader[h as usize] as usize;
+            if leader == x {
+                vertex_of[x] = positions.len() as u32;
+                positions.push(g.centroid[h as usize]);
+            } else {
+                // The leader has the lowest id of the group: numbered already.
+                vertex_of[x] = vertex_of[leader];
+            }
+        } else {
+            vertex_of[x] = positions.len() as u32;
+            positions.push(q.cpos[x]);
+        }
+    }
+}

@@ -1,0 +1,644 @@
+//! The lattice in storage terms, shared by every pass: neighbour deltas per parity, the
+//! tetrahedron templates and their anchors (`TetGroup`), the border table, each template's
+//! gradient coefficients, and the tetrahedron case table (`CASES`, `tet_triangles`).
+//!
+//! ```text
+//!        v3                 a tetrahedron's corners v0..v3 (offsets from its anchor), its six
+//!       /|\                 edges (`TET_EDGES`) and, for the corners inside, the cycle of
+//!      / | \                crossed edges (`CASES`): a triangle, or a quad split along its
+//!    v0--|--v2              shorter diagonal, oriented along the field's gradient
+//!      \ | /
+//!       \|/
+//!        v1
+//! ```
+
+use super::*;
+
+/// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
+pub(crate) const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+
+/// Case table: for the corners inside (bit i: f(v_i) < T), a directed cycle of crossed edges whose
+/// right-hand normal points toward increasing f for a positively oriented tetrahedron. Length 3
+/// (triangle) or 4 (quad, split along its shorter diagonal); `u8::MAX` pads. Checked against
+/// geometry by `case_table_orients_triangles_along_the_gradient`.
+pub(crate) const CASES: [[u8; 4]; 16] = {
+    const X: u8 = u8::MAX;
+    [
+        [X, X, X, X],
+        [0, 1, 2, X],
+        [0, 4, 3, X],
+        [1, 2, 4, 3],
+        [1, 3, 5, X],
+        [0, 3, 5, 2],
+        [0, 4, 5, 1],
+        [2, 4, 5, X],
+        [2, 5, 4, X],
+        [0, 1, 5, 4],
+        [0, 2, 5, 3],
+        [1, 5, 3, X],
+        [1, 3, 4, 2],
+        [0, 3, 4, X],
+        [0, 2, 1, X],
+        [X, X, X, X],
+    ]
+};
+
+/// The triangles of one tetrahedron (none, one, or two from a quad split along its shorter
+/// diagonal) as crossing ids, oriented by the case table: the one definition that the emission
+/// and the quotient test share, so that the test sees exactly the triangles that are written.
+/// `val`: the corner values; `dir[i][j]`: neighbour index of corner j from corner i; `id(o, d)`:
+/// the id of the crossing owned by corner `o` on its edge to neighbour `d`.
+#[inline(always)]
+pub(crate) fn tet_triangles(
+    val: [f32; 4],
+    iso: f32,
+    dir: &[[u8; 4]; 4],
+    id: impl Fn(usize, u8) -> u32,
+    positions: &[[f32; 3]],
+    out: &mut [[u32; 3]; 2],
+) -> usize {
+    let case = (val[0] < iso) as usize
+        | ((val[1] < iso) as usize) << 1
+        | ((val[2] < iso) as usize) << 2
+        | ((val[3] < iso) as usize) << 3;
+    if case == 0 || case == 15 {
+        return 0;
+    }
+    let cycle = &CASES[case];
+    let n = if cycle[3] == u8::MAX { 3 } else { 4 };
+    let mut ids = [0u32; 4];
+    for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
+        let (a, b) = TET_EDGES[e as usize];
+        let (o, d) = if owns(val[a], val[b], iso) {
+            (a, dir[a][b])
+        } else {
+            (b, dir[b][a])
+        };
+        *slot = id(o, d);
+    }
+    if n == 3 {
+        out[0] = [ids[0], ids[1], ids[2]];
+        1
+    } else {
+        // Split along the shorter diagonal, chosen by a table index rather than a branch (the
+        // choice is data-dependent and mispredicts half the time).
+        const SPLITS: [[usize; 6]; 2] = [[1, 2, 3, 1, 3, 0], [0, 1, 2, 0, 2, 3]];
+        let p = |i: u32| glam::Vec3::from(positions[i as usize]);
+        let short02 =
+            p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
+        let s = &SPLITS[usize::from(short02)];
+        out[0] = [ids[s[0] & 3], ids[s[1] & 3], ids[s[2] & 3]];
+        out[1] = [ids[s[3] & 3], ids[s[4] & 3], ids[s[5] & 3]];
+        2
+    }
+}
+
+/// Whether the end with value `f` (inside iff `f < iso`) owns the crossing shared with `g`.
+#[inline(always)]
+pub(crate) fn owns(f: f32, g: f32, iso: f32) -> bool {
+    let (df, dg) = ((f - iso).abs(), (g - iso).abs());
+    df < dg || (df == dg && f < iso)
+}
+
+/// A tetrahedron with storage-index deltas from a reference point and edge directions.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TetTemplate {
+    /// Lattice offsets of the corners from the anchor.
+    pub(crate) off: [Offset; 4],
+    pub(crate) delta: [isize; 4],
+    /// `dir[i][j]`: neighbour index of corner j seen from corner i.
+    pub(crate) dir: [[u8; 4]; 4],
+}
+
+/// The tetrahedra visited together (a body-centred face's 4 around the centres A and B, with 6
+/// distinct points; a cube's 6, with 8 corners) and the number of triangles they give for each
+/// inside/outside pattern of those points, derived from the case table: the geometry pass counts
+/// a layer's triangles from the anchors' crossed edges before it writes them.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct TetGroup {
+    /// Storage deltas of its distinct points from the anchor (point 0, in every tetrahedron of
+    /// the group).
+    pub(crate) points: [isize; 8],
+    /// Neighbour index of each point seen from the anchor (`u8::MAX` for the anchor itself).
+    pub(crate) dirs: [u8; 8],
+    pub(crate) len: usize,
+    /// Triangles of its tetrahedra when the points with bit i set in the index are inside.
+    /// A tetrahedron gives as many triangles with its sides swapped, so this is also the count
+    /// when bit i says "point i is on the other side from the anchor", i.e. the anchor's
+    /// crossed edges: no sample value needs reading.
+    pub(crate) triangles: Vec<u8>,
+}
+
+impl TetGroup {
+    /// The group of templates `tets` (corners given by their storage deltas).
+    pub(crate) fn new(tets: &[TetTemplate]) -> Self {
+        let mut group = Self {
+            len: 1,
+            dirs: [u8::MAX; 8],
+            ..Self::default()
+        };
+        let mut corners = Vec::with_capacity(tets.len());
+        for tpl in tets {
+            // The anchor: the reference point of the templates.
+            let a = tpl.delta.iter().position(|&d| d == 0);
+            let a = a.expect("every tetrahedron of a group has the anchor as a corner");
+            let mut c = [0usize; 4];
+            for (i, &d) in tpl.delta.iter().enumerate() {
+                c[i] = match group.points[..group.len].iter().position(|&p| p == d) {
+                    Some(j) => j,
+                    None => {
+                        group.points[group.len] = d;
+                        group.dirs[group.len] = tpl.dir[a][i];
+                        group.len += 1;
+                        group.len - 1
+                    }
+                };
+            }
+            corners.push(c);
+        }
+        group.triangles = (0..1usize << group.len)
+            .map(|code| {
+                corners
+                    .iter()
+                    .map(|c| {
+                        let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i);
+                        case_triangles(case)
+                    })
+                    .sum()
+            })
+            .collect();
+        group
+    }
+}
+
+/// Triangles a tetrahedron gives in `case` (bit i: corner i inside): none, one, or two (a quad).
+pub(crate) fn case_triangles(case: usize) -> u8 {
+    match CASES[case] {
+        [u8::MAX, ..] => 0,
+        [_, _, _, u8::MAX] => 1,
+        _ => 2,
+    }
+}
+
+/// The lattice in storage terms: neighbour deltas per parity and tetrahedron templates.
+pub(crate) struct Layout<'a> {
+    pub(crate) s: &'a Samples,
+    pub(crate) lattice: Lattice,
+    pub(crate) t: &'static LatticeTables,
+    /// Storage-index delta of neighbour d, for even (`[0]`) and odd (`[1]`) points.
+    pub(crate) delta: [[isize; 14]; 2],
+    pub(crate) tets: Vec<TetTemplate>,
+    /// The tetrahedra visited together: per face axis (body-centred) or the cube (simple).
+    pub(crate) groups: Vec<TetGroup>,
+    /// Existence (bit 16), valid-neighbour mask (bits 0..14) and inner-edge mask (bits 17..31,
+    /// [`Layout::inner_dirs`]) of a point by the boundary class of each coordinate ([`boundary_class`]) and its parity; empty for grids too small
+    /// for the classes to be apart (then computed point by point).
+    pub(crate) border_table: Vec<u32>,
+    /// The tetrahedra around a point of each parity (`[0]` even, `[1]` odd): 24 on both
+    /// lattices ([`StarTet`]).
+    pub(crate) around: [Vec<StarTet>; 2],
+    /// Per template: `[d2 x d3, d3 x d1, d1 x d2]` for its edge vectors `d_i` from corner 0 on
+    /// the lattice (the gradient of the linear interpolant is their sum weighted by the value
+    /// differences, up to the positive determinant).
+    pub(crate) grad_coef: Vec<[glam::DVec3; 3]>,
+}
+
+/// One of the tetrahedra around a lattice point (which edges of the point have all their
+/// tetrahedra: [`Layout::inner_dirs`]): corners in the positive orientation of the lattice's
+/// templates (so the case table orients its triangles), relative to the point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StarTet {
+    /// Lattice offsets of the corners from the point (one of them is `[0, 0, 0]`).
+    pub(crate) off: [Offset; 4],
+    /// Storage-index deltas of the corners from the point (the tests rebuild plain MT from
+    /// these tetrahedra, which checks the table against the geometry pass).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(crate) delta: [isize; 4],
+    /// `dir[i][j]`: neighbour index of corner j seen from corner i (as `delta`).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(crate) dir: [[u8; 4]; 4],
+    /// The point's neighbour bits of the tetrahedron's other three corners (its edges from the
+    /// point).
+    pub(crate) from_point: u16,
+}
+
+/// Boundary classes per axis: the coordinates -1..=3, max-3..=max+1, and everything between.
+pub(crate) const CLASSES: usize = 11;
+
+/// The class of lattice coordinate `c` on an axis whose largest coordinate is `max`: points of
+/// one class see the same neighbours exist (offsets reach at most 2 lattice units).
+#[inline(always)]
+pub(crate) fn boundary_class(c: i32, max: i32) -> usize {
+    if c <= 3 {
+        (c + 1).max(0) as usize
+    } else if c >= max - 3 {
+        (5 + (c - (max - 3))).min(9) as usize
+    } else {
+        10
+    }
+}
+
+impl<'a> Layout<'a> {
+    pub(crate) fn new(s: &'a Samples, lattice: Lattice) -> Self {
+        let t = LatticeTables::get(lattice);
+        let idx = |p: Offset| -> isize {
+            match lattice {
+                Lattice::BodyCentred => s.bcdl_index(p) as isize,
+                Lattice::Simple => {
+                    s.simple_index(p[0] as usize, p[1] as usize, p[2] as usize) as isize
+                }
+            }
+        };
+        // Reference points far enough from the border for every offset to stay in storage.
+        let refs: [Offset; 2] = match lattice {
+            Lattice::BodyCentred => [[2, 2, 2], [3, 3, 3]],
+            Lattice::Simple => [[1, 1, 1], [1, 1, 1]],
+        };
+        let mut delta = [[0isize; 14]; 2];
+        for (par, r) in refs.iter().enumerate() {
+            for (d, o) in t.offsets.iter().enumerate() {
+                delta[par][d] = idx(add(*r, *o)) - idx(*r);
+            }
+        }
+        // Templates: body-centred relative to the centre A below a face (odd point); simple
+        // relative to the cube's corner 0.
+        let r = refs[1];
+        let tets = t
+            .tetrahedra
+            .iter()
+            .map(|tet| {
+                let mut tpl = TetTemplate {
+                    off: *tet,
+                    delta: [0; 4],
+                    dir: [[0; 4]; 4],
+                };
+                for i in 0..4 {
+                    tpl.delta[i] = idx(add(r, tet[i])) - idx(r);
+                    for j in 0..4 {
+                        if i != j {
+                            let o = [
+                                tet[j][0] - tet[i][0],
+                                tet[j][1] - tet[i][1],
+                                tet[j][2] - tet[i][2],
+                            ];
+                            tpl.dir[i][j] = t.direction(o).map_or(u8::MAX, |d| d as u8);
+                        }
+                    }
+                }
+                tpl
+            })
+            .collect::<Vec<_>>();
+        // Groups: a body-centred face's 4 tetrahedra (the table lists them by face axis), a
+        // cube's 6.
+        let groups = match lattice {
+            Lattice::BodyCentred => tets.chunks(4).map(TetGroup::new).collect(),
+            Lattice::Simple => vec![TetGroup::new(&tets)],
+        };
+        let around = [0, 1].map(|par| star_tets(lattice, t, refs[par], &idx));
+        // Lattice units per world unit along each axis: half cubes on the body-centred lattice.
+        let unit = match lattice {
+            Lattice::BodyCentred => s.spacing.as_dvec3() * 0.5,
+            Lattice::Simple => s.spacing.as_dvec3(),
+        };
+        let grad_coef = tets
+            .iter()
+            .map(|tpl| {
+                let d = [1, 2, 3].map(|i| {
+                    let o = [0, 1, 2].map(|a| f64::from(tpl.off[i][a] - tpl.off[0][a]));
+                    glam::DVec3::from(o) * unit
+                });
+                [d[1].cross(d[2]), d[2].cross(d[0]), d[0].cross(d[1])]
+            })
+            .collect();
+        let mut layout = Self {
+            s,
+            lattice,
+            t,
+            delta,
+            tets,
+            groups,
+            border_table: Vec::new(),
+            around,
+            grad_coef,
+        };
+        layout.border_table = layout.build_border_table();
+        layout
+    }
+
+    /// The table behind [`Layout::border_info`]: one representative point per class triple
+    /// and parity (the coordinate itself for the border classes, 4 or 5 for the middle one).
+    pub(crate) fn build_border_table(&self) -> Vec<u32> {
+        // The middle class needs coordinates of either parity clear of both border classes.
+        if (0..3).any(|a| self.max_coord(a) < 10) {
+            return Vec::new();
+        }
+        let mut table = vec![0u32; CLASSES * CLASSES * CLASSES * 2];
+        let rep = |class: usize, odd: i32, max: i32| -> Option<i32> {
+            let c = match class {
+                0..=4 => class as i32 - 1,
+                5..=9 => max - 3 + (class as i32 - 5),
+                _ => 4 + odd,
+            };
+            ((c & 1) == odd || self.lattice == Lattice::Simple).then_some(c)
+        };
+        for cx in 0..CLASSES {
+            for cy in 0..CLASSES {
+                for cz in 0..CLASSES {
+                    for odd in 0..2 {
+                        let (Some(x), Some(y), Some(z)) = (
+                            rep(cx, odd, self.max_coord(0)),
+                            rep(cy, odd, self.max_coord(1)),
+                            rep(cz, odd, self.max_coord(2)),
+                        ) else {
+                            continue;
+                        };
+                        let p = [x, y, z];
+                        let exists = match self.lattice {
+                            Lattice::BodyCentred => self.s.bcdl_exists(p),
+                            Lattice::Simple => true,
+                        };
+                        let entry = if exists {
+                            (1 << 16)
+                                | u32::from(self.valid_neighbours(p))
+                                | u32::from(self.inner_dirs_of(p)) << 17
+                        } else {
+                            0
+                        };
+                        table[((cx * CLASSES + cy) * CLASSES + cz) * 2 + odd as usize] = entry;
+                    }
+                }
+            }
+        }
+        table
+    }
+
+    /// Whether point `p` exists, and its valid-neighbour mask (0 if it does not exist).
+    #[inline]
+    pub(crate) fn border_info(&self, p: Offset) -> (bool, u16) {
+        if self.border_table.is_empty() {
+            let exists = match self.lattice {
+                Lattice::BodyCentred => self.s.bcdl_exists(p),
+                Lattice::Simple => true,
+            };
+            return (exists, if exists { self.valid_neighbours(p) } else { 0 });
+        }
+        let class = |a: usize| boundary_class(p[a], self.max_coord(a));
+        let odd = match self.lattice {
+            Lattice::BodyCentred => (p[0] & 1) as usize,
+            Lattice::Simple => 0,
+        };
+        let e = self.border_table[((class(0) * CLASSES + class(1)) * CLASSES + class(2)) * 2 + odd];
+        (e >> 16 != 0, e as u16)
+    }
+
+    /// Lattice coordinates of storage slot (sx, sy) of plane z.
+    #[inline]
+    pub(crate) fn coords(&self, sx: usize, sy: usize, z: usize) -> Offset {
+        match self.lattice {
+            Lattice::Simple => [sx as i32, sy as i32, z as i32],
+            Lattice::BodyCentred => {
+                let zz = z as i32 - 1;
+                let odd = zz & 1;
+                [2 * sx as i32 - odd, 2 * sy as i32 - odd, zz]
+            }
+        }
+    }
+
+    /// Lattice coordinates of storage slot `slot`.
+    #[inline]
+    pub(crate) fn coords_of(&self, slot: usize) -> Offset {
+        let [dx, dy, _] = self.s.dims;
+        let (z, local) = (slot / (dx * dy), slot % (dx * dy));
+        self.coords(local % dx, local / dx, z)
+    }
+
+    /// Whether lattice point `p` exists (the simple lattice: inside the box).
+    #[inline]
+    pub(crate) fn exists(&self, p: Offset) -> bool {
+        match self.lattice {
+            Lattice::BodyCentred => self.s.bcdl_exists(p),
+            Lattice::Simple => (0..3).all(|a| p[a] >= 0 && p[a] <= self.max_coord(a)),
+        }
+    }
+
+    /// Whether the tetrahedron `tet` around point `p` is one of the extraction's: all its
+    /// corners exist and at most one is a ghost (two ghosts are never joined by an edge), as for
+    /// the faces the geometry pass visits (body-centred), or inside the box (simple).
+    #[inline]
+    pub(crate) fn has_tet(&self, p: Offset, tet: &StarTet) -> bool {
+        let mut ghosts = 0;
+        for o in &tet.off {
+            let q = add(p, *o);
+            if !self.exists(q) {
+                return false;
+            }
+            ghosts += usize::from(self.lattice == Lattice::BodyCentred && self.is_ghost(q));
+        }
+        ghosts <= 1
+    }
+
+    /// Lattice coordinates of storage slot (sx, sy) of plane z, and whether the point exists.
+    #[inline]
+    pub(crate) fn point(&self, sx: usize, sy: usize, z: usize) -> (Offset, bool) {
+        let p = self.coords(sx, sy, z);
+        match self.lattice {
+            Lattice::Simple => (p, true),
+            Lattice::BodyCentred => (p, self.s.bcdl_exists(p)),
+        }
+    }
+
+    pub(crate) fn position(&self, p: Offset) -> glam::Vec3 {
+        match self.lattice {
+            Lattice::BodyCentred => self.s.bcdl_position(p),
+            Lattice::Simple => self
+                .s
+                .simple_position(p[0] as usize, p[1] as usize, p[2] as usize),
+        }
+    }
+
+    /// The storage planes geometry layer `k` reads (inclusive): body-centred faces perpendicular
+    /// to z are anchored in plane 2k and reach 2k + 2, those perpendicular to x and y are
+    /// anchored in plane 2k + 2 and reach 2k + 1 ..= 2k + 3; cubes of layer k span planes k and
+    /// k + 1.
+    pub(crate) fn layer_planes(&self, k: usize) -> (usize, usize) {
+        let last = self.s.dims[2] - 1;
+        match self.lattice {
+            Lattice::BodyCentred => (2 * k, (2 * k + 3).min(last)),
+            Lattice::Simple => (k, (k + 1).min(last)),
+        }
+    }
+
+    /// Largest lattice coordinate per axis.
+    pub(crate) fn max_coord(&self, a: usize) -> i32 {
+        match self.lattice {
+            Lattice::BodyCentred => 2 * self.s.cells[a] as i32,
+            Lattice::Simple => self.s.cells[a] as i32,
+        }
+    }
+
+    /// Whether all 14 neighbours of `p` are regular lattice points (no border, no ghosts).
+    #[inline]
+    pub(crate) fn is_regular(&self, p: Offset) -> bool {
+        let margin = match self.lattice {
+            Lattice::BodyCentred => 2 + (p[0] & 1),
+            Lattice::Simple => 1,
+        };
+        (0..3).all(|a| p[a] >= margin && p[a] <= self.max_coord(a) - margin)
+    }
+
+    /// The gradient of the linear interpolant of the field on template tetrahedron `tet` at
+    /// `anchor` (up to a positive factor, rounded to `f32`), from the sample positions (ghosts
+    /// on the box face included).
+    pub(crate) fn gradient(&self, anchor: usize, ti: usize) -> [f32; 3] {
+        let tet = &self.tets[ti];
+        let f = tet
+            .delta
+            .map(|d| f64::from(self.s.values[(anchor as isize + d) as usize]));
+        // Away from the ghosts (clamped onto the box faces) the corners sit on the lattice:
+        // the edge vectors, and so the coefficients, are the template's.
+        let p = match self.lattice {
+            Lattice::Simple => None,
+            Lattice::BodyCentred => Some(self.coords_of(anchor)),
+        };
+        let clamped = p.is_some_and(|p| {
+            tet.off
+                .iter()
+                .any(|o| (0..3).any(|a| p[a] + o[a] < 0 || p[a] + o[a] > self.max_coord(a)))
+        });
+        if !clamped {
+            let c = &self.grad_coef[ti];
+            let g = c[0] * (f[1] - f[0]) + c[1] * (f[2] - f[0]) + c[2] * (f[3] - f[0]);
+            return g.as_vec3().to_array();
+        }
+        let p = self.coords_of(anchor);
+        let pos = tet.off.map(|o| {
+            self.position([p[0] + o[0], p[1] + o[1], p[2] + o[2]])
+                .as_dvec3()
+        });
+        let (d1, d2, d3) = (pos[1] - pos[0], pos[2] - pos[0], pos[3] - pos[0]);
+        // D^-1 = [d2 x d3, d3 x d1, d1 x d2] / det, det > 0 for the lattice's tetrahedra.
+        let g = d2.cross(d3) * (f[1] - f[0])
+            + d3.cross(d1) * (f[2] - f[0])
+            + d1.cross(d2) * (f[3] - f[0]);
+        g.as_vec3().to_array()
+    }
+
+    /// Neighbour bits of the lattice edges at `p` that have every tetrahedron around them (a
+    /// crossing there is an inner vertex of plain MT; at the box faces some are missing).
+    pub(crate) fn inner_dirs(&self, p: Offset) -> u16 {
+        if self.is_regular(p) {
+            return FULL;
+        }
+        if self.border_table.is_empty() {
+            return self.inner_dirs_of(p);
+        }
+        // Like `border_info`: the boundary class of each coordinate decides.
+        let class = |a: usize| boundary_class(p[a], self.max_coord(a));
+        let odd = match self.lattice {
+            Lattice::BodyCentred => (p[0] & 1) as usize,
+            Lattice::Simple => 0,
+        };
+        let e = self.border_table[((class(0) * CLASSES + class(1)) * CLASSES + class(2)) * 2 + odd];
+        (e >> 17) as u16 & FULL
+    }
+
+    /// [`Layout::inner_dirs`] from the tetrahedra around `p` (what the border table stores).
+    pub(crate) fn inner_dirs_of(&self, p: Offset) -> u16 {
+        let mut missing = 0u16;
+        for tet in &self.around[(p[0] & 1) as usize] {
+            if !self.has_tet(p, tet) {
+                missing |= tet.from_point;
+            }
+        }
+        FULL & !missing
+    }
+
+    /// Neighbour bits of the lattice edges at `p` that belong to some tetrahedron.
+    pub(crate) fn valid_neighbours(&self, p: Offset) -> u16 {
+        if self.is_regular(p) {
+            return FULL;
+        }
+        let mut mask = 0;
+        for (d, o) in self.t.offsets.iter().enumerate() {
+            let q = add(p, *o);
+            let ok = match self.lattice {
+                Lattice::Simple => (0..3).all(|a| q[a] >= 0 && q[a] <= self.max_coord(a)),
+                // Ghost centres connect to real points only.
+                Lattice::BodyCentred => {
+                    self.s.bcdl_exists(q) && !(self.is_ghost(p) && self.is_ghost(q))
+                }
+            };
+            if ok {
+                mask |= 1 << d;
+            }
+        }
+        mask
+    }
+
+    pub(crate) fn is_ghost(&self, p: Offset) -> bool {
+        (0..3).any(|a| p[a] < 0 || p[a] > self.max_coord(a))
+    }
+}
+
+/// The tetrahedra around lattice point `r` (which must be a lattice point of its parity), from
+/// the lattice's templates translated over the cells near it; `idx` gives storage indices.
+pub(crate) fn star_tets(
+    lattice: Lattice,
+    t: &LatticeTables,
+    r: Offset,
+    idx: &dyn Fn(Offset) -> isize,
+) -> Vec<StarTet> {
+    let mut out = Vec::with_capacity(24);
+    for x in -2..=2 {
+        for y in -2..=2 {
+            for z in -2..=2 {
+                let base = match lattice {
+                    // Templates are relative to a cell centre (odd point).
+                    Lattice::BodyCentred => {
+                        let c = |v: i32, k: i32| 2 * ((v - 1).div_euclid(2) + k) + 1;
+                        [c(r[0], x), c(r[1], y), c(r[2], z)]
+                    }
+                    Lattice::Simple => [r[0] + x, r[1] + y, r[2] + z],
+                };
+                for tet in &t.tetrahedra {
+                    let abs = tet.map(|o| add(base, o));
+                    if !abs.contains(&r) {
+                        continue;
+                    }
+                    let off = abs.map(|v| [v[0] - r[0], v[1] - r[1], v[2] - r[2]]);
+                    if out.iter().any(|s: &StarTet| s.off == off) {
+                        continue;
+                    }
+                    let mut dir = [[u8::MAX; 4]; 4];
+                    let mut from_point = 0u16;
+                    for i in 0..4 {
+                        for j in 0..4 {
+                            if i != j {
+                                let o = [
+                                    off[j][0] - off[i][0],
+                                    off[j][1] - off[i][1],
+                                    off[j][2] - off[i][2],
+                                ];
+                                dir[i][j] = t.direction(o).map_or(u8::MAX, |d| d as u8);
+                                if off[i] == [0; 3] {
+                                    from_point |= 1 << dir[i][j];
+                                }
+                            }
+                        }
+                    }
+                    out.push(StarTet {
+                        off,
+                        delta: abs.map(|v| idx(v) - idx(r)),
+                        dir,
+                        from_point,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+pub(crate) fn add(a: Offset, b: Offset) -> Offset {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
