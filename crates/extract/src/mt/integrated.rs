@@ -122,49 +122,15 @@ pub(crate) fn cluster(
     plain_processed: &mut usize,
     pool: &rayon::ThreadPool,
 ) {
-    let tiled = keys.is_some();
-    let keys = keys.unwrap_or(&[]);
     // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
     std::mem::swap(&mut mesh.positions, &mut buf.cpos);
-    if tiled {
-        // Tile rule: a group only inside one tile. With integrated clustering a candidate
-        // across tiles is dropped (its crossings may still join a group of their tile as
-        // lone crossings); integrated-unchecked keeps it without one crossing when that
-        // leaves two or more of one tile (the first such crossing in bit order), as the
-        // dissertation's commit did.
-        let t = layout.t;
-        let mut kept = Vec::with_capacity(buf.candidates.len());
-        let mut ids = Vec::with_capacity(14);
-        for c in buf.candidates.drain(..) {
-            ids.clear();
-            ids.extend(c.ids());
-            if crate::tiles::same_tile(keys, &ids) {
-                kept.push(c);
-                continue;
-            }
-            let without_one = (rules == Rules::Dissertation && ids.len() > 2)
-                .then(|| {
-                    let mut d = c.dirs;
-                    (0..ids.len()).find_map(|i| {
-                        let bit = d & d.wrapping_neg();
-                        d &= d - 1;
-                        let rest: Vec<u32> =
-                            (0..ids.len()).filter(|&j| j != i).map(|j| ids[j]).collect();
-                        crate::tiles::same_tile(keys, &rest).then(|| c.restrict(c.dirs & !bit))
-                    })
-                })
-                .flatten();
-            match without_one {
-                Some(r) if t.is_connected(r.dirs) || rules == Rules::Dissertation => kept.push(r),
-                _ => stats.clusters_rejected_prefilter += 1,
-            }
-        }
-        buf.candidates = kept;
+    if let Some(keys) = keys {
+        tile_rule(&mut buf.candidates, layout, keys, rules, stats);
     }
     let step = std::time::Instant::now();
     build_groups(buf, layout, pool);
-    let checked = clustering == Clustering::Integrated;
-    if checked {
+    let mut islands = buf.candidates.len();
+    if clustering == Clustering::Integrated {
         // Plain MT's triangles and every crossing's triangles: the stars of the tests.
         *plain_processed = plain_triangles(
             layout,
@@ -177,117 +143,211 @@ pub(crate) fn cluster(
             &mut buf.inc_start,
             &mut buf.inc,
         );
+        // The groups' state changes while the fixed tables (in `buf`) are read.
+        let mut groups = std::mem::take(&mut buf.groups);
+        settle_islands(buf, &mut groups, layout, keys, islands, step, pool, stats);
+        let variant_of = add_variants(buf, &mut groups, layout, islands, stats);
+        revive_and_give_lones(buf, &mut groups, layout, keys, &variant_of, pool, stats);
+        islands += sliver_passes(buf, &mut groups, layout, keys, pool, stats);
+        buf.groups = groups;
     } else {
         buf.plain.clear();
         buf.plain_grad.clear();
         buf.inc_start.clear();
         buf.inc.clear();
-    }
-    let mut islands = buf.candidates.len();
-    if !checked {
         stats.t_groups_s += step.elapsed().as_secs_f64();
     }
-    if checked {
-        let fixed = crate::quotient::Fixed {
-            l: layout,
-            cpos: &buf.cpos,
-            groups: &buf.candidates,
-            tris: &buf.plain,
-            grad: &buf.plain_grad,
-            inc_start: &buf.inc_start,
-            inc: &buf.inc,
-            keys: tiled.then_some(keys),
-        };
-        let groups = &mut buf.groups;
-        groups.relabel(&fixed, pool);
-        // Crossings in no island join a neighbouring island: part of the proposal.
-        crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
-        groups.base_len.fill(0);
-        stats.t_groups_s += step.elapsed().as_secs_f64();
-        let all = (0..islands as u32).collect();
-        let settled =
-            crate::repair::settle(&fixed, groups, all, crate::repair::Phase::Islands, pool);
-        stats.repair_rounds = settled.rounds;
-        stats.t_tests_s += settled.t_tests_s;
-        stats.t_repair_s += settled.t_repair_s;
+    let step = std::time::Instant::now();
+    let groups = &buf.groups;
+    stats.lone_absorbed = (0..buf.candidates.len())
+        .filter(|&gi| groups.active[gi] != 0)
+        .map(|gi| usize::from(groups.lone_len[gi]))
+        .sum();
+    let mut vertex_of = std::mem::take(&mut buf.vertex_of);
+    let fixed = fixed(buf, layout, keys);
+    let q = crate::quotient::Quotient::new(&fixed, groups);
+    vertex_map(&q, &mut vertex_of, &mut mesh.positions);
+    // An island is kept whole, or as one of its variants (at most one of them is kept).
+    stats.clusters_committed = groups.active.iter().filter(|&&a| a != 0).count();
+    stats.clusters_rejected_check = islands - stats.clusters_committed;
+    stats.t_vertices_s += step.elapsed().as_secs_f64();
+    buf.vertex_of = vertex_of;
+}
+
+/// The fixed tables of the quotient tests, over the candidates as they are now.
+fn fixed<'a>(
+    buf: &'a MtBuffers,
+    layout: &'a Layout<'a>,
+    keys: Option<&'a [u64]>,
+) -> crate::quotient::Fixed<'a> {
+    crate::quotient::Fixed {
+        l: layout,
+        cpos: &buf.cpos,
+        groups: &buf.candidates,
+        tris: &buf.plain,
+        grad: &buf.plain_grad,
+        inc_start: &buf.inc_start,
+        inc: &buf.inc,
+        keys,
     }
-    // Split islands of three or more come back without one crossing: their variants are
-    // appended to the candidates (not kept), and each split island takes its first variant
-    // that passes.
-    let mut variant_of = Vec::new();
-    if checked {
+}
+
+/// Adds the timings and rounds of one settling step to `stats`.
+fn count(stats: &mut Stats, settled: crate::repair::Settled) {
+    stats.repair_rounds += settled.rounds;
+    stats.t_tests_s += settled.t_tests_s;
+    stats.t_repair_s += settled.t_repair_s;
+}
+
+/// Tile rule: a group only inside one tile. With integrated clustering a candidate across
+/// tiles is dropped (its crossings may still join a group of their tile as lone crossings);
+/// integrated-unchecked keeps it without one crossing when that leaves two or more of one tile
+/// (the first such crossing in bit order), as the dissertation's commit did.
+fn tile_rule(
+    candidates: &mut Vec<Candidate>,
+    layout: &Layout,
+    keys: &[u64],
+    rules: Rules,
+    stats: &mut Stats,
+) {
+    let t = layout.t;
+    let mut kept = Vec::with_capacity(candidates.len());
+    let mut ids = Vec::with_capacity(14);
+    for c in candidates.drain(..) {
+        ids.clear();
+        ids.extend(c.ids());
+        if crate::tiles::same_tile(keys, &ids) {
+            kept.push(c);
+            continue;
+        }
+        let without_one = (rules == Rules::Dissertation && ids.len() > 2)
+            .then(|| {
+                let mut d = c.dirs;
+                (0..ids.len()).find_map(|i| {
+                    let bit = d & d.wrapping_neg();
+                    d &= d - 1;
+                    let rest: Vec<u32> =
+                        (0..ids.len()).filter(|&j| j != i).map(|j| ids[j]).collect();
+                    crate::tiles::same_tile(keys, &rest).then(|| c.restrict(c.dirs & !bit))
+                })
+            })
+            .flatten();
+        match without_one {
+            Some(r) if t.is_connected(r.dirs) || rules == Rules::Dissertation => kept.push(r),
+            _ => stats.clusters_rejected_prefilter += 1,
+        }
+    }
+    *candidates = kept;
+}
+
+/// The islands: every crossing's quotient vertex, the lone crossings of the proposal (crossings
+/// in no island join a neighbouring one), then the quotient tests and repair rounds of all
+/// `islands`. The group tables' time, from `step` on, counts until the tests start.
+#[allow(clippy::too_many_arguments)]
+fn settle_islands(
+    buf: &MtBuffers,
+    groups: &mut crate::quotient::Groups,
+    layout: &Layout,
+    keys: Option<&[u64]>,
+    islands: usize,
+    step: std::time::Instant,
+    pool: &rayon::ThreadPool,
+    stats: &mut Stats,
+) {
+    let fixed = fixed(buf, layout, keys);
+    groups.relabel(&fixed, pool);
+    crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
+    groups.base_len.fill(0);
+    stats.t_groups_s += step.elapsed().as_secs_f64();
+    let all = (0..islands as u32).collect();
+    let settled = crate::repair::settle(&fixed, groups, all, crate::repair::Phase::Islands, pool);
+    stats.repair_rounds = 0;
+    count(stats, settled);
+}
+
+/// Split islands of three or more come back without one crossing: their variants are appended
+/// to the candidates (not kept). Returns where each split island's variants start (and, last,
+/// where they end).
+fn add_variants(
+    buf: &mut MtBuffers,
+    groups: &mut crate::quotient::Groups,
+    layout: &Layout,
+    islands: usize,
+    stats: &mut Stats,
+) -> Vec<u32> {
+    let step = std::time::Instant::now();
+    let mut variant_of = vec![islands as u32];
+    for gi in 0..islands {
+        if groups.active[gi] == 0 {
+            let c = buf.candidates[gi];
+            crate::additions::variants(&c, layout.t, &mut buf.candidates);
+            variant_of.push(buf.candidates.len() as u32);
+        }
+    }
+    groups.extend_to(buf.candidates.len());
+    stats.t_groups_s += step.elapsed().as_secs_f64();
+    variant_of
+}
+
+/// Each split island takes its first variant that passes; then crossings left alone (in no
+/// island, or in one that split) join the nearest kept group, in [`LONE_PASSES`] passes: a group
+/// that fails with them gives them back, and they try another group in the next pass.
+#[allow(clippy::too_many_arguments)]
+fn revive_and_give_lones(
+    buf: &MtBuffers,
+    groups: &mut crate::quotient::Groups,
+    layout: &Layout,
+    keys: Option<&[u64]>,
+    variant_of: &[u32],
+    pool: &rayon::ThreadPool,
+    stats: &mut Stats,
+) {
+    let fixed = fixed(buf, layout, keys);
+    let dirty = crate::additions::revive(&fixed, groups, variant_of, pool);
+    let settled = crate::repair::settle(&fixed, groups, dirty, crate::repair::Phase::Islands, pool);
+    count(stats, settled);
+    let no_new = crate::repair::Phase::Additions {
+        born: fixed.groups.len() as u32,
+    };
+    for _ in 0..LONE_PASSES {
         let step = std::time::Instant::now();
-        let t = layout.t;
-        variant_of.push(islands as u32);
-        for gi in 0..islands {
-            if buf.groups.active[gi] == 0 {
-                let c = buf.candidates[gi];
-                crate::additions::variants(&c, t, &mut buf.candidates);
-                variant_of.push(buf.candidates.len() as u32);
-            }
-        }
-        buf.groups.extend_to(buf.candidates.len());
+        let dirty = crate::additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
         stats.t_groups_s += step.elapsed().as_secs_f64();
-    }
-    // The fixed tables of the tests, over the candidates as they are.
-    macro_rules! fixed {
-        () => {
-            crate::quotient::Fixed {
-                l: layout,
-                cpos: &buf.cpos,
-                groups: &buf.candidates,
-                tris: &buf.plain,
-                grad: &buf.plain_grad,
-                inc_start: &buf.inc_start,
-                inc: &buf.inc,
-                keys: tiled.then_some(keys),
-            }
-        };
-    }
-    if checked {
-        let fixed = fixed!();
-        let groups = &mut buf.groups;
-        let dirty = crate::additions::revive(&fixed, groups, &variant_of, pool);
-        let settled =
-            crate::repair::settle(&fixed, groups, dirty, crate::repair::Phase::Islands, pool);
-        stats.repair_rounds += settled.rounds;
-        stats.t_tests_s += settled.t_tests_s;
-        stats.t_repair_s += settled.t_repair_s;
-        // Crossings left alone (in no island, or in one that split) join the nearest kept
-        // group; a group that fails with them gives them back, and they try another group
-        // in the next pass.
-        let no_new = crate::repair::Phase::Additions {
-            born: fixed.groups.len() as u32,
-        };
-        for _ in 0..LONE_PASSES {
-            let step = std::time::Instant::now();
-            let dirty = crate::additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
-            stats.t_groups_s += step.elapsed().as_secs_f64();
-            if dirty.is_empty() {
-                break;
-            }
-            let settled = crate::repair::settle(&fixed, groups, dirty, no_new, pool);
-            stats.repair_rounds += settled.rounds;
-            stats.t_tests_s += settled.t_tests_s;
-            stats.t_repair_s += settled.t_repair_s;
-        }
-    }
-    // Slivers left between the groups: a crossing left alone at one joins the group across
-    // its shortest edge, or pairs with the crossing there (a new group).
-    for _ in 0..SLIVER_PASSES {
-        if !checked {
+        if dirty.is_empty() {
             break;
         }
+        count(
+            stats,
+            crate::repair::settle(&fixed, groups, dirty, no_new, pool),
+        );
+    }
+}
+
+/// Slivers left between the groups, in [`SLIVER_PASSES`] passes: a crossing left alone at one
+/// joins the group across its shortest edge, or pairs with the crossing there (a new group,
+/// appended to the candidates). Returns the number of pairs proposed.
+fn sliver_passes(
+    buf: &mut MtBuffers,
+    groups: &mut crate::quotient::Groups,
+    layout: &Layout,
+    keys: Option<&[u64]>,
+    pool: &rayon::ThreadPool,
+    stats: &mut Stats,
+) -> usize {
+    let mut pairs = 0;
+    for _ in 0..SLIVER_PASSES {
         let step = std::time::Instant::now();
-        let props = {
-            let fixed = fixed!();
-            crate::additions::sliver_proposals(&fixed, &buf.groups, &buf.edge_of, pool)
-        };
+        let props = crate::additions::sliver_proposals(
+            &fixed(buf, layout, keys),
+            groups,
+            &buf.edge_of,
+            pool,
+        );
         if props.lones.is_empty() && props.pairs.is_empty() {
             break;
         }
         let born = buf.candidates.len();
-        for &(x, y) in &props.pairs {
+        for &(x, _) in &props.pairs {
             let (slot, dir) = buf.edge_of[x as usize];
             buf.candidates.push(Candidate {
                 first: x,
@@ -295,12 +355,10 @@ pub(crate) fn cluster(
                 dirs: 1 << dir,
                 slot,
             });
-            let _ = y;
         }
-        islands += props.pairs.len();
+        pairs += props.pairs.len();
         stats.clusters_proposed += props.pairs.len();
-        let fixed = fixed!();
-        let groups = &mut buf.groups;
+        let fixed = fixed(buf, layout, keys);
         groups.add_pairs(&fixed, born, &props.pairs);
         let mut dirty = crate::additions::attach(&fixed, groups, props.lones, true, pool);
         let new: Vec<u32> = (born as u32..fixed.groups.len() as u32).collect();
@@ -309,24 +367,12 @@ pub(crate) fn cluster(
         dirty.dedup();
         stats.t_groups_s += step.elapsed().as_secs_f64();
         let phase = crate::repair::Phase::Additions { born: born as u32 };
-        let settled = crate::repair::settle(&fixed, groups, dirty, phase, pool);
-        stats.repair_rounds += settled.rounds;
-        stats.t_tests_s += settled.t_tests_s;
-        stats.t_repair_s += settled.t_repair_s;
+        count(
+            stats,
+            crate::repair::settle(&fixed, groups, dirty, phase, pool),
+        );
     }
-    let fixed = fixed!();
-    let groups = &buf.groups;
-    stats.lone_absorbed = (0..buf.candidates.len())
-        .filter(|&gi| groups.active[gi] != 0)
-        .map(|gi| usize::from(groups.lone_len[gi]))
-        .sum();
-    let step = std::time::Instant::now();
-    let q = crate::quotient::Quotient::new(&fixed, groups);
-    vertex_map(&q, &mut buf.vertex_of, &mut mesh.positions);
-    // An island is kept whole, or as one of its variants (at most one of them is kept).
-    stats.clusters_committed = groups.active.iter().filter(|&&a| a != 0).count();
-    stats.clusters_rejected_check = islands - stats.clusters_committed;
-    stats.t_vertices_s += step.elapsed().as_secs_f64();
+    pairs
 }
 
 /// The output vertices: one per crossing outside the kept groups and one per kept group, in
