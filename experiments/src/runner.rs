@@ -1469,18 +1469,28 @@ fn append_synced(path: &Path, bytes: &[u8]) -> Result<u64> {
 mod tests {
     use super::*;
 
+    /// A dissertation table in `dir` with an unclustered (100 triangles) and an integrated (25
+    /// triangles) row of object code `object` at 50^3.
+    fn dissertation_table(dir: &Path, object: &str) -> PathBuf {
+        let bench = dir.join("benchmark.csv");
+        std::fs::write(
+            &bench,
+            format!(
+                "id,rx,ry,rz,n_tetrahedra,n_vertices,n_triangles,n_discarded,f_discard,ar_mean,\
+                 ar_sd,t_total_s,t_sampling_s,t_vertex_s,t_geometry_s,b_lattice,b_edges,b_vertices,\
+                 b_indices\n\
+                 {object}_bu,50,50,50,9,52,100,0,0,2,1,1,1,1,1,1,1,1,1\n\
+                 {object}_bi,50,50,50,9,14,25,75,75,2,1,1,1,1,1,1,1,1,1\n"
+            ),
+        )
+        .unwrap();
+        bench
+    }
+
     #[test]
     fn paper_comparison_skips_rows_at_another_resolution() {
         let dir = tempfile::tempdir().unwrap();
-        let bench = dir.path().join("benchmark.csv");
-        std::fs::write(
-            &bench,
-            "id,rx,ry,rz,n_tetrahedra,n_vertices,n_triangles,n_discarded,f_discard,ar_mean,ar_sd,\
-             t_total_s,t_sampling_s,t_vertex_s,t_geometry_s,b_lattice,b_edges,b_vertices,b_indices\n\
-             ss_bu,50,50,50,9,52,100,0,0,2,1,1,1,1,1,1,1,1,1\n\
-             ss_bi,50,50,50,9,14,25,75,75,2,1,1,1,1,1,1,1,1,1\n",
-        )
-        .unwrap();
+        let bench = dissertation_table(dir.path(), "ss");
         let summary = |res: &str| Table {
             header: ["id", "rx", "ry", "rz", "triangles", "vertices"]
                 .map(String::from)
@@ -1514,15 +1524,7 @@ mod tests {
     #[test]
     fn unchecked_rows_compare_with_the_dissertations_integrated_rows() {
         let dir = tempfile::tempdir().unwrap();
-        let bench = dir.path().join("benchmark.csv");
-        std::fs::write(
-            &bench,
-            "id,rx,ry,rz,n_tetrahedra,n_vertices,n_triangles,n_discarded,f_discard,ar_mean,ar_sd,\
-             t_total_s,t_sampling_s,t_vertex_s,t_geometry_s,b_lattice,b_edges,b_vertices,b_indices\n\
-             as_bu,50,50,50,9,52,100,0,0,2,1,1,1,1,1,1,1,1,1\n\
-             as_bi,50,50,50,9,14,25,75,75,2,1,1,1,1,1,1,1,1,1\n",
-        )
-        .unwrap();
+        let bench = dissertation_table(dir.path(), "as");
         let summary = Table {
             header: ["id", "rx", "ry", "rz", "triangles"]
                 .map(String::from)

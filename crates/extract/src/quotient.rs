@@ -322,16 +322,9 @@ impl Quotient<'_> {
                     }
                     continue;
                 }
-                let q = [0, 1, 2].map(|i| {
-                    if mask >> i & 1 != 0 {
-                        me
-                    } else {
-                        self.label(t[i])
-                    }
-                });
-                if q[0] == q[1] || q[1] == q[2] || q[0] == q[2] {
+                let Some(q) = self.quotient_triangle(t, mask, me) else {
                     continue;
-                }
+                };
                 let k = mask.trailing_zeros() as usize;
                 s.src.push(q[(k + 1) % 3]);
                 s.dst.push(q[(k + 2) % 3]);
@@ -428,18 +421,9 @@ impl Quotient<'_> {
                 // Two corners in the group: collapsed.
                 continue;
             }
-            let t = self.tri(ti);
-            let q = [0, 1, 2].map(|i| {
-                if mask >> i & 1 != 0 {
-                    me
-                } else {
-                    self.label(t[i])
-                }
-            });
-            if q[0] == q[1] || q[1] == q[2] || q[0] == q[2] {
-                continue;
+            if let Some(q) = self.quotient_triangle(self.tri(ti), mask, me) {
+                s.link.extend(q.into_iter().filter(|&x| x != me));
             }
-            s.link.extend(q.into_iter().filter(|&x| x != me));
         }
         if s.link.is_empty() {
             // No triangle left: the neighbours in plain MT stand for the star.
@@ -451,6 +435,20 @@ impl Quotient<'_> {
                 }
             }
         }
+    }
+
+    /// The quotient labels of plain MT triangle `t` (corners `mask` in the group labelled `me`),
+    /// or `None` when two of them coincide (the triangle collapsed).
+    #[inline(always)]
+    fn quotient_triangle(&self, t: [u32; 3], mask: u8, me: u32) -> Option<[u32; 3]> {
+        let q = [0, 1, 2].map(|i| {
+            if mask >> i & 1 != 0 {
+                me
+            } else {
+                self.label(t[i])
+            }
+        });
+        (q[0] != q[1] && q[1] != q[2] && q[0] != q[2]).then_some(q)
     }
 
     /// Test (c) for one triangle: `t` its MT crossings, `q` its quotient labels (in the same

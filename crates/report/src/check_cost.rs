@@ -279,13 +279,16 @@ pub fn summary_sentence(run: &Run) -> Option<String> {
     text.push_str(". ");
     let unchecked: Vec<&Configuration> = trios.iter().filter_map(|t| t.modes[1]).collect();
     let broken: Vec<&&Configuration> = unchecked.iter().filter(|c| has_defects(c)).collect();
-    let euler_changed = trios
-        .iter()
-        .filter(|t| match (t.modes[0], t.modes[1]) {
-            (Some(n), Some(u)) => n.euler != u.euler || n.components != u.components,
-            _ => false,
-        })
-        .count();
+    // Meshes of mode `i` whose Euler characteristic or components differ from plain MT's.
+    let topology_changed = |i: usize| {
+        trios
+            .iter()
+            .filter(|t| match (t.modes[0], t.modes[i]) {
+                (Some(n), Some(c)) => n.euler != c.euler || n.components != c.components,
+                _ => false,
+            })
+            .count()
+    };
     let sum = |f: fn(&Configuration) -> f64| -> f64 { broken.iter().map(|c| f(c)).sum() };
     text.push_str(&format!(
         "Without the check, {} of {} meshes have defects ({} non-manifold edges, {} duplicate \
@@ -296,18 +299,12 @@ pub fn summary_sentence(run: &Run) -> Option<String> {
         count(sum(|c| c.defects.non_manifold_edges)),
         count(sum(|c| c.defects.duplicate_triangles.unwrap_or(0.0))),
         count(sum(|c| c.defects.boundary_edges_interior)),
-        euler_changed
+        topology_changed(1)
     ));
     let checked: Vec<&Configuration> = trios.iter().filter_map(|t| t.modes[2]).collect();
     if !checked.is_empty() {
         let checked_broken = checked.iter().filter(|c| has_defects(c)).count();
-        let checked_changed = trios
-            .iter()
-            .filter(|t| match (t.modes[0], t.modes[2]) {
-                (Some(n), Some(i)) => n.euler != i.euler || n.components != i.components,
-                _ => false,
-            })
-            .count();
+        let checked_changed = topology_changed(2);
         text.push_str(&format!(
             "; with it, {checked_broken} of {} have defects and {checked_changed} change the \
              topology",

@@ -66,6 +66,13 @@ impl TextTable {
             out.push_str(note);
             out.push_str("\n\n");
         }
+        out.push_str(&self.blocks_markdown());
+        out
+    }
+
+    /// The blocks alone, each under its caption (a level-3 heading) when it has one.
+    pub fn blocks_markdown(&self) -> String {
+        let mut out = String::new();
         for block in &self.blocks {
             if let Some(caption) = &block.caption {
                 out.push_str(&format!("### {caption}\n\n"));

@@ -430,13 +430,7 @@ pub fn readme(input: &ReadmeInput) -> String {
             out.push_str(&sentence);
             out.push_str("\n\n");
         }
-        for block in &table.blocks {
-            if let Some(caption) = &block.caption {
-                out.push_str(&format!("### {caption}\n\n"));
-            }
-            out.push_str(&markdown_block(block));
-            out.push('\n');
-        }
+        out.push_str(&table.blocks_markdown());
         if let Some(link) = table_link(input.tables, "check_cost") {
             out.push_str(&format!("Table: {link}.\n\n"));
         }
