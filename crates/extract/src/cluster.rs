@@ -219,6 +219,18 @@ mod tests {
     use super::*;
     use crate::Lattice;
 
+    /// `propose` at a point with id 0 and slot 0 whose 14 neighbours exist and whose edges are
+    /// all inner.
+    fn propose_inner(
+        t: &LatticeTables,
+        owned: u16,
+        crossed: u16,
+        rules: Rules,
+        out: &mut Vec<Candidate>,
+    ) -> ProposalCounts {
+        propose(t, 0, 0, FULL, FULL, owned, crossed, rules, out)
+    }
+
     #[test]
     fn islands_of_two_or_more_are_proposed_once_each() {
         let t = LatticeTables::get(Lattice::BodyCentred);
@@ -279,30 +291,10 @@ mod tests {
         assert_eq!(t.islands(crossed).count(), 1, "one sheet");
         let owned = (1 << 0) | (1 << 1);
         let mut out = Vec::new();
-        propose(
-            t,
-            0,
-            0,
-            FULL,
-            FULL,
-            owned,
-            crossed,
-            Rules::Islands,
-            &mut out,
-        );
+        propose_inner(t, owned, crossed, Rules::Islands, &mut out);
         assert!(out.is_empty(), "two parts of one crossing each: {out:?}");
         // The dissertation's rules propose the sheet's crossings as one cluster.
-        propose(
-            t,
-            0,
-            0,
-            FULL,
-            FULL,
-            owned,
-            crossed,
-            Rules::Dissertation,
-            &mut out,
-        );
+        propose_inner(t, owned, crossed, Rules::Dissertation, &mut out);
         assert_eq!(out.len(), 1);
         // A connected island loses its crossings on the mesh boundary (not inner), keeping
         // the rest when two or more are left.
@@ -347,17 +339,7 @@ mod tests {
         let t = LatticeTables::get(Lattice::Simple);
         let owned = 0x07FF; // 11 crossings
         let mut out = Vec::new();
-        let c = propose(
-            t,
-            0,
-            0,
-            FULL,
-            FULL,
-            owned,
-            owned,
-            Rules::Dissertation,
-            &mut out,
-        );
+        let c = propose_inner(t, owned, owned, Rules::Dissertation, &mut out);
         assert!(out.is_empty());
         assert_eq!(c.rejected, c.proposed);
         assert!(c.proposed >= 1);
@@ -370,17 +352,7 @@ mod tests {
         let t = LatticeTables::get(Lattice::BodyCentred);
         let owned = 0x3FC0;
         let mut out = Vec::new();
-        let c = propose(
-            t,
-            0,
-            0,
-            FULL,
-            FULL,
-            owned,
-            owned,
-            Rules::Dissertation,
-            &mut out,
-        );
+        let c = propose_inner(t, owned, owned, Rules::Dissertation, &mut out);
         assert_eq!(c.proposed, 1);
         assert_eq!(c.rejected, 1);
         assert!(out.is_empty());

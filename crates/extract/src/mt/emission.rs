@@ -81,8 +81,8 @@ pub(crate) fn emit_layers(
 /// layer), into `tris` (three crossing ids each), with each triangle's source tetrahedron
 /// gradient (of the linear interpolant on its source tetrahedron, up to a positive factor) in
 /// `grad`; then every crossing's triangles as a CSR
-/// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order). The quotient test reads
-/// a group's star from these instead of from the lattice.
+/// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order; `inc_cursor` is working
+/// memory). The quotient test reads a group's star from these instead of from the lattice.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plain_triangles(
     layout: &Layout,
@@ -94,6 +94,7 @@ pub(crate) fn plain_triangles(
     grad: &mut Vec<[f32; 3]>,
     inc_start: &mut Vec<u32>,
     inc: &mut Vec<u32>,
+    inc_cursor: &mut Vec<u32>,
 ) -> usize {
     let counts = layer_counts(layout, None, crossed, pool);
     let layers = counts.len();
@@ -121,8 +122,7 @@ pub(crate) fn plain_triangles(
             .sum()
     });
     // Incidence in triangle order, so the table is deterministic.
-    let mut cursor = Vec::new();
-    crate::merge::incidence(cpos.len(), tris, inc_start, inc, &mut cursor);
+    crate::merge::incidence(cpos.len(), tris, inc_start, inc, inc_cursor);
     processed
 }
 

@@ -142,6 +142,7 @@ pub(crate) fn cluster(
             &mut buf.plain_grad,
             &mut buf.inc_start,
             &mut buf.inc,
+            &mut buf.inc_cursor,
         );
         // The groups' state changes while the fixed tables (in `buf`) are read.
         let mut groups = std::mem::take(&mut buf.groups);

@@ -66,6 +66,8 @@ pub struct MtBuffers {
     plain_grad: Vec<[f32; 3]>,
     inc_start: Vec<u32>,
     inc: Vec<u32>,
+    /// Working memory of the incidence table's fill.
+    inc_cursor: Vec<u32>,
     /// Output vertex of each crossing, with clustering.
     vertex_of: Vec<u32>,
     /// Working memory of the vertex compaction (integrated-unchecked).
@@ -91,6 +93,7 @@ impl MtBuffers {
             + self.plain_grad.len() * 12
             + self.inc_start.len() * 4
             + self.inc.len() * 4
+            + self.inc_cursor.len() * 4
             + self.vertex_of.len() * 4
     }
 }
@@ -225,15 +228,14 @@ fn allocate(samples: &Samples, buf: &mut MtBuffers, stats: &mut Stats) -> Result
 /// The tile rule's key of every crossing (chunked extraction with clustering or collapse), in
 /// `keys`; empty otherwise.
 fn tile_keys(samples: &Samples, settings: &ExtractSettings, buf: &MtBuffers, keys: &mut Vec<u64>) {
-    let clustering = settings.clustering;
-    let propose = matches!(
-        clustering,
-        Clustering::Integrated | Clustering::IntegratedUnchecked
-    );
     let plane = samples.dims[0] * samples.dims[1];
     let planes = samples.dims[2];
+    let grouped = matches!(
+        settings.clustering,
+        Clustering::Integrated | Clustering::IntegratedUnchecked | Clustering::Postprocessed
+    );
     if let Some(tiling) = &settings.tiles {
-        if propose || clustering == Clustering::Postprocessed {
+        if grouped {
             let crossed = &buf.crossed;
             crate::tiles::crossing_keys(
                 samples,
@@ -268,6 +270,7 @@ fn release_tables(buf: &mut MtBuffers, pool: &rayon::ThreadPool) -> usize {
         buf.plain_grad = Vec::new();
         buf.inc_start = Vec::new();
         buf.inc = Vec::new();
+        buf.inc_cursor = Vec::new();
         buf.edge_of = Vec::new();
         buf.groups = crate::quotient::Groups::default();
         pool.broadcast(|_| LAYER_WINDOW.with_borrow_mut(|w| *w = Vec::new()));
