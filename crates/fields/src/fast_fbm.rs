@@ -213,13 +213,26 @@ impl FastFbm {
         let mut result = [0.0f32; N];
         let mut signal = [0.0f32; N];
         for (k, (&w, o)) in self.weights.iter().zip(octaves).enumerate() {
-            let small = px.iter().fold(o.small, |ok, v| ok & (v.abs() < SMALL));
-            if small {
+            let near = |v: f64| o.small && v.abs() < SMALL;
+            if px.iter().all(|&v| near(v)) {
                 octave_row(&self.perms8[k], &px, &o.part, &mut signal, &mut cache[k]);
             } else {
-                // Far out (or not finite): the exact kernel, point by point, so a point's value
-                // never depends on its neighbours.
+                // Some lane far out (or not finite): each point takes its own kernel, so its
+                // value never depends on the other points of its chunk.
                 for i in 0..N {
+                    if near(px[i]) {
+                        // The lanes are independent: this lane's value, alone.
+                        let mut one = [0.0f32; N];
+                        octave_row(
+                            &self.perms8[k],
+                            &[px[i]; N],
+                            &o.part,
+                            &mut one,
+                            &mut cache[k],
+                        );
+                        signal[i] = one[0];
+                        continue;
+                    }
                     let mut exact = [0.0f64; LANES];
                     perlin_lanes(
                         &self.perms8[k],
@@ -603,6 +616,28 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_far_point_does_not_change_its_neighbours_values() {
+        // One chunk of lanes with near points and points whose octave coordinates pass 2^30
+        // (from the third octave on here): each point's value is its own, in a row, in
+        // `get_points` and alone, for the AVX2 and the portable build.
+        let fast = FastFbm::new(5, 4, 1.5);
+        let xs = [0.3, -0.7, 2.0e8, 0.45, 1.25, -3.0e8, 0.05, 0.9, 0.61];
+        let (y, z) = (0.25, -0.4);
+        let mut row = [0.0f32; 9];
+        let mut portable = [0.0f32; 9];
+        let mut points = [0.0f32; 9];
+        fast.get_row(&xs, y, z, &mut row);
+        fast.get_row_portable(&xs, y, z, &mut portable);
+        fast.get_points(&xs, &[y; 9], &[z; 9], &mut points);
+        for (i, &x) in xs.iter().enumerate() {
+            let alone = fast.get([x, y, z]).to_bits();
+            assert_eq!(row[i].to_bits(), alone, "row, x {x}");
+            assert_eq!(portable[i].to_bits(), alone, "portable row, x {x}");
+            assert_eq!(points[i].to_bits(), alone, "points, x {x}");
         }
     }
 
