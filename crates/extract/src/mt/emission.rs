@@ -95,6 +95,7 @@ pub(crate) fn plain_triangles(
     inc_start: &mut Vec<u32>,
     inc: &mut Vec<u32>,
     inc_cursor: &mut Vec<u32>,
+    inc_parts: &mut Vec<Vec<u32>>,
 ) -> usize {
     let counts = layer_counts(layout, None, crossed, pool);
     let layers = counts.len();
@@ -122,7 +123,15 @@ pub(crate) fn plain_triangles(
             .sum()
     });
     // Incidence in triangle order, so the table is deterministic.
-    crate::merge::incidence(cpos.len(), tris, inc_start, inc, inc_cursor);
+    crate::merge::incidence_parallel(
+        cpos.len(),
+        tris,
+        inc_start,
+        inc,
+        inc_cursor,
+        inc_parts,
+        pool,
+    );
     processed
 }
 

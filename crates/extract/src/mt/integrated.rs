@@ -75,30 +75,45 @@ pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::T
     // is the order of the ids.
     let plane = layout.s.dims[0] * layout.s.dims[1];
     let crossed = &*crossed;
-    let per_plane: Vec<Vec<(u32, u8)>> = pool.install(|| {
-        (0..layout.s.dims[2])
-            .into_par_iter()
-            .map(|z| {
-                let mut out = Vec::new();
-                let mut r = crossed.rank_in(z, 0);
-                for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
-                    let entry = crossed.points[r];
-                    r += 1;
-                    let mut own = entry.owned;
-                    while own != 0 {
-                        out.push(((z * plane + local) as u32, own.trailing_zeros() as u8));
-                        own &= own - 1;
-                    }
-                });
-                out
-            })
-            .collect()
-    });
+    // Ids are numbered plane by plane: a plane's first id is the `first` of its first crossed
+    // point (or of the next plane's, when it has none), so each plane fills its own slice.
+    let planes = layout.s.dims[2];
+    let starts: Vec<usize> = (0..planes)
+        .map(|z| {
+            let r = crossed.rank_in(z, 0);
+            crossed
+                .points
+                .get(r)
+                .map_or(crossings, |p| p.first as usize)
+        })
+        .chain([crossings])
+        .collect();
     edge_of.clear();
-    edge_of.reserve(crossings);
-    for part in per_plane {
-        edge_of.extend_from_slice(&part);
+    edge_of.resize(crossings, (0, 0));
+    let mut parts = Vec::with_capacity(planes);
+    let mut rest = &mut edge_of[..];
+    for z in 0..planes {
+        let (head, tail) = rest.split_at_mut(starts[z + 1] - starts[z]);
+        parts.push(head);
+        rest = tail;
     }
+    pool.install(|| {
+        parts.into_par_iter().enumerate().for_each(|(z, out)| {
+            let mut r = crossed.rank_in(z, 0);
+            let mut k = 0;
+            for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
+                let entry = crossed.points[r];
+                r += 1;
+                let mut own = entry.owned;
+                while own != 0 {
+                    out[k] = ((z * plane + local) as u32, own.trailing_zeros() as u8);
+                    k += 1;
+                    own &= own - 1;
+                }
+            });
+            debug_assert_eq!(k, out.len());
+        })
+    });
     debug_assert_eq!(edge_of.len(), crossings);
 }
 
@@ -143,6 +158,7 @@ pub(crate) fn cluster(
             &mut buf.inc_start,
             &mut buf.inc,
             &mut buf.inc_cursor,
+            &mut buf.inc_parts,
         );
         // The groups' state changes while the fixed tables (in `buf`) are read.
         let mut groups = std::mem::take(&mut buf.groups);

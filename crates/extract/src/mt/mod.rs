@@ -68,6 +68,8 @@ pub struct MtBuffers {
     inc: Vec<u32>,
     /// Working memory of the incidence table's fill.
     inc_cursor: Vec<u32>,
+    /// The parallel incidence table's per-part counts and cursors.
+    inc_parts: Vec<Vec<u32>>,
     /// Output vertex of each crossing, with clustering.
     vertex_of: Vec<u32>,
     /// Working memory of the vertex compaction (integrated-unchecked).
@@ -94,6 +96,7 @@ impl MtBuffers {
             + self.inc_start.len() * 4
             + self.inc.len() * 4
             + self.inc_cursor.len() * 4
+            + self.inc_parts.iter().map(|p| p.len() * 4).sum::<usize>()
             + self.vertex_of.len() * 4
     }
 }
@@ -271,6 +274,7 @@ fn release_tables(buf: &mut MtBuffers, pool: &rayon::ThreadPool) -> usize {
         buf.inc_start = Vec::new();
         buf.inc = Vec::new();
         buf.inc_cursor = Vec::new();
+        buf.inc_parts = Vec::new();
         buf.edge_of = Vec::new();
         buf.groups = crate::quotient::Groups::default();
         pool.broadcast(|_| LAYER_WINDOW.with_borrow_mut(|w| *w = Vec::new()));
