@@ -229,10 +229,13 @@ pub(crate) fn incidence_parallel(
             .enumerate()
             .map(|(p, counts)| {
                 let corners = &indices[3 * bounds[p]..3 * bounds[p + 1]];
-                let lo = corners.iter().copied().min().unwrap_or(0) as usize;
-                let hi = corners.iter().copied().max().map_or(0, |v| v as usize + 1);
+                // The id range in one pass (parts hold at least one triangle).
+                let (lo, hi) = corners
+                    .iter()
+                    .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+                let (lo, hi) = (lo as usize, hi as usize + 1);
                 counts.clear();
-                counts.resize(hi.saturating_sub(lo), 0);
+                counts.resize(hi - lo, 0);
                 for &v in corners {
                     counts[v as usize - lo] += 1;
                 }

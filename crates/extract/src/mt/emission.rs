@@ -81,8 +81,8 @@ pub(crate) fn emit_layers(
 /// layer), into `tris` (three crossing ids each), with each triangle's source tetrahedron
 /// gradient (of the linear interpolant on its source tetrahedron, up to a positive factor) in
 /// `grad`; then every crossing's triangles as a CSR
-/// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order; `inc_cursor` is working
-/// memory). The quotient test reads a group's star from these instead of from the lattice.
+/// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order, built in parallel by
+/// [`crate::merge::incidence_parallel`]; `inc_cursor` and `inc_parts` are its working memory). The quotient test reads a group's star from these instead of from the lattice.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plain_triangles(
     layout: &Layout,

@@ -114,7 +114,6 @@ pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::T
             debug_assert_eq!(k, out.len());
         })
     });
-    debug_assert_eq!(edge_of.len(), crossings);
 }
 
 /// The clustering steps between the vertex pass and the emission (`propose`): the proposals
