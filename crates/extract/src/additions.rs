@@ -265,43 +265,117 @@ pub(crate) fn attach(
     want_dirty: bool,
     pool: &rayon::ThreadPool,
 ) -> Vec<u32> {
-    found.sort_unstable_by_key(|&(h, l)| (h, l.id));
-    // The new lone table: each kept group's lones so far, then its new ones.
+    pool.install(|| found.par_sort_unstable_by_key(|&(h, l)| (h, l.id)));
+    // The new lone table, built in parallel over runs of `RUN` groups: each run's new lone
+    // count (pass 1), prefix sums for where each run's lones start, then each run writes its
+    // groups' entries (pass 2). The same table as one pass over the groups in order.
+    const RUN: usize = 1 << 12;
     let count = f.groups.len();
-    let mut lone = Vec::with_capacity(g.lone.len() + found.len());
-    let mut lone_start = Vec::with_capacity(count + 1);
-    let mut changed = Vec::new();
-    let mut next = found.iter().peekable();
-    for gi in 0..count {
-        lone_start.push(lone.len() as u32);
-        let start = g.lone_start[gi] as usize;
-        let kept = if g.active[gi] != 0 {
-            g.lone_len[gi] as usize
+    let runs = count.div_ceil(RUN);
+    // Each run's part of `found` (sorted by group).
+    let part: Vec<usize> = (0..=runs)
+        .map(|r| found.partition_point(|&(h, _)| (h as usize) < (r * RUN).min(count)))
+        .collect();
+    let Groups {
+        active,
+        group_of,
+        lone: old_lone,
+        lone_start: old_start,
+        lone_len,
+        base_len,
+        ..
+    } = &mut *g;
+    let (active, old_lone, old_start) = (&*active, &*old_lone, &*old_start);
+    // The lones group `gi` keeps, before its new ones.
+    let kept = |gi: usize| {
+        if active[gi] != 0 {
+            usize::from(lone_len[gi])
         } else {
             0
-        };
-        lone.extend_from_slice(&g.lone[start..start + kept]);
-        g.base_len[gi] = kept as u8;
-        let mut len = kept;
-        while let Some(&&(h, l)) = next.peek() {
-            if h as usize != gi {
-                break;
-            }
-            next.next();
-            if len < MAX_LONES {
-                lone.push(l);
-                g.group_of[l.id as usize] = h;
-                len += 1;
-            }
         }
-        g.lone_len[gi] = len as u8;
-        if len > kept {
-            changed.push(gi as u32);
+    };
+    let totals: Vec<usize> = pool.install(|| {
+        (0..runs)
+            .into_par_iter()
+            .map(|r| {
+                let mut total = 0;
+                let mut next = found[part[r]..part[r + 1]].iter().peekable();
+                for gi in r * RUN..((r + 1) * RUN).min(count) {
+                    let mut new = 0;
+                    while next.next_if(|&&(h, _)| h as usize == gi).is_some() {
+                        new += 1;
+                    }
+                    let k = kept(gi);
+                    total += k + new.min(MAX_LONES.saturating_sub(k));
+                }
+                total
+            })
+            .collect()
+    });
+    let mut lone = vec![Lone { id: 0 }; totals.iter().sum()];
+    let mut lone_start = vec![0u32; count + 1];
+    let mut parts = Vec::with_capacity(runs);
+    let (mut rest, mut first) = (&mut lone[..], 0usize);
+    for &t in &totals {
+        let (head, tail) = rest.split_at_mut(t);
+        parts.push((first, head));
+        first += t;
+        rest = tail;
+    }
+    lone_start[count] = first as u32;
+    // Per run: the groups that took lones, and the lones taken (crossing, group).
+    type Taken = (Vec<u32>, Vec<(u32, u32)>);
+    let taken: Vec<Taken> = pool.install(|| {
+        parts
+            .into_par_iter()
+            .zip(lone_start[..count].par_chunks_mut(RUN))
+            .zip(lone_len[..count].par_chunks_mut(RUN))
+            .zip(base_len[..count].par_chunks_mut(RUN))
+            .enumerate()
+            .map(|(r, ((((first, out), starts), lens), bases))| {
+                let (mut changed, mut joined) = (Vec::new(), Vec::new());
+                let mut w = 0;
+                let mut next = found[part[r]..part[r + 1]].iter().peekable();
+                for (j, ((start, len), base)) in starts.iter_mut().zip(lens).zip(bases).enumerate()
+                {
+                    let gi = r * RUN + j;
+                    *start = (first + w) as u32;
+                    let k = if active[gi] != 0 {
+                        usize::from(*len)
+                    } else {
+                        0
+                    };
+                    let from = old_start[gi] as usize;
+                    out[w..w + k].copy_from_slice(&old_lone[from..from + k]);
+                    w += k;
+                    *base = k as u8;
+                    let mut n = k;
+                    while let Some(&(h, l)) = next.next_if(|&&(h, _)| h as usize == gi) {
+                        if n < MAX_LONES {
+                            out[w] = l;
+                            w += 1;
+                            joined.push((l.id, h));
+                            n += 1;
+                        }
+                    }
+                    *len = n as u8;
+                    if n > k {
+                        changed.push(gi as u32);
+                    }
+                }
+                debug_assert_eq!(w, out.len());
+                (changed, joined)
+            })
+            .collect()
+    });
+    for (_, joined) in &taken {
+        for &(x, h) in joined {
+            group_of[x as usize] = h;
         }
     }
-    lone_start.push(lone.len() as u32);
     g.lone = lone;
     g.lone_start = lone_start;
+    let changed: Vec<u32> = taken.into_iter().flat_map(|(c, _)| c).collect();
     for &gi in &changed {
         g.refresh(f, gi as usize);
         g.set_vertices(f, gi as usize);

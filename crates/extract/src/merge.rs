@@ -272,8 +272,8 @@ pub(crate) fn incidence_parallel(
             *next += n;
         }
     }
-    inc.clear();
-    inc.resize(indices.len() - indices.len() % 3, 0);
+    // Every slot is written below: a reused table is not cleared first.
+    crate::mt::overwritten(inc, indices.len() - indices.len() % 3, 0, pool);
     let out = SharedSlots {
         ptr: inc.as_mut_ptr(),
         len: inc.len(),

@@ -166,9 +166,21 @@ impl FastFbm {
 
     #[inline(always)]
     fn row(&self, xs: &[f64], y: f64, z: f64, out: &mut [f32]) {
+        // The per-row tables sized to the octaves (a row of a few points, as sparse sampling
+        // gives, would otherwise spend most of its time clearing tables for 32 octaves).
+        match self.weights.len() {
+            0..=4 => self.row_tables::<4>(xs, y, z, out),
+            5..=8 => self.row_tables::<8>(xs, y, z, out),
+            _ => self.row_tables::<32>(xs, y, z, out),
+        }
+    }
+
+    /// [`FastFbm::row`] with tables for `K` octaves (at least the number of octaves).
+    #[inline(always)]
+    fn row_tables<const K: usize>(&self, xs: &[f64], y: f64, z: f64, out: &mut [f32]) {
         // What the row's octaves share: y and z, scaled as the crate scales them, and their
         // cells, offsets and fades.
-        let mut octaves = [RowOctave::EMPTY; 32];
+        let mut octaves = [RowOctave::EMPTY; K];
         let (mut py, mut pz) = (y * self.frequency, z * self.frequency);
         for o in octaves.iter_mut().take(self.weights.len()) {
             let small = py.abs() < SMALL && pz.abs() < SMALL;
@@ -188,11 +200,20 @@ impl FastFbm {
         let octaves = &octaves[..self.weights.len()];
         // Per octave, the last cell met along the row and its faces: consecutive chunks of a
         // row share a cell at their boundary.
-        let mut cache = [(i32::MIN, [0.0f32; 4]); 32];
+        let mut cache = [(i32::MIN, [0.0f32; 4]); K];
         for (xc, oc) in xs.chunks(LANES).zip(out.chunks_mut(LANES)) {
             // A short chunk repeats its last point in the spare lanes (each lane's value
-            // depends on its own point alone).
+            // depends on its own point alone, whatever the number of lanes); one of at most
+            // half the lanes takes half of them.
             let last = xc[xc.len() - 1];
+            if xc.len() <= LANES / 2 {
+                let x: [f64; LANES / 2] =
+                    std::array::from_fn(|i| xc.get(i).copied().unwrap_or(last));
+                let mut v = [0.0f32; LANES / 2];
+                self.lanes(&x, octaves, &mut v, &mut cache);
+                oc.copy_from_slice(&v[..oc.len()]);
+                continue;
+            }
             let x: [f64; LANES] = std::array::from_fn(|i| xc.get(i).copied().unwrap_or(last));
             let mut v = [0.0f32; LANES];
             self.lanes(&x, octaves, &mut v, &mut cache);

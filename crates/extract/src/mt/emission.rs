@@ -40,8 +40,7 @@ pub(crate) fn emit_layers(
     let Mesh {
         positions, indices, ..
     } = mesh;
-    indices.clear();
-    indices.resize(3 * triangles, 0);
+    overwritten(indices, 3 * triangles, 0, pool);
     let mut parts = Vec::with_capacity(layers);
     let mut rest = &mut indices[..];
     for &n in &counts {
@@ -100,10 +99,8 @@ pub(crate) fn plain_triangles(
     let counts = layer_counts(layout, None, crossed, pool);
     let layers = counts.len();
     let total: usize = counts.iter().sum();
-    tris.clear();
-    tris.resize(3 * total, 0);
-    grad.clear();
-    grad.resize(total, [0.0; 3]);
+    overwritten(tris, 3 * total, 0, pool);
+    overwritten(grad, total, [0.0; 3], pool);
     let mut parts = Vec::with_capacity(layers);
     let (mut rest, mut rest_src) = (&mut tris[..], &mut grad[..]);
     for &n in &counts {
@@ -416,8 +413,7 @@ pub(crate) fn emit(
         });
         let kept: usize = counts.iter().sum();
         let indices = &mut mesh.indices;
-        indices.clear();
-        indices.resize(3 * kept, 0);
+        overwritten(indices, 3 * kept, 0, pool);
         let mut parts = Vec::with_capacity(counts.len());
         let mut rest = &mut indices[..];
         for &n in &counts {

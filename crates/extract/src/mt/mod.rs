@@ -204,6 +204,22 @@ pub fn extract(
     Ok(())
 }
 
+/// Sets `v` to length `n` for a pass that then writes every element: elements kept from an
+/// earlier extraction are not cleared (a reused buffer costs no memset), new ones are zeroed in
+/// parallel (first touches of fresh memory included).
+pub(crate) fn overwritten<T: Copy + Send + Sync>(
+    v: &mut Vec<T>,
+    n: usize,
+    zero: T,
+    pool: &rayon::ThreadPool,
+) {
+    v.truncate(n);
+    let more = n - v.len();
+    if more > 0 {
+        pool.install(|| v.par_extend(rayon::iter::repeat_n(zero, more)));
+    }
+}
+
 /// Allocation: the per-slot tables sized to the sample array (timed as allocation).
 fn allocate(samples: &Samples, buf: &mut MtBuffers, stats: &mut Stats) -> Result<(), ExtractError> {
     let t = std::time::Instant::now();
