@@ -135,6 +135,9 @@ pub enum BenchMethod {
     MtBcdlNone,
     /// RMT (integrated clustering) on the body-centred lattice.
     RmtBcdlIntegrated,
+    /// Integrated clustering without the exact check (the dissertation's rules) on the
+    /// body-centred lattice: the cost of the method apart from the cost of the guarantee.
+    RmtBcdlUnchecked,
     /// Plain marching tetrahedra on the simple cubic lattice.
     MtSimpleNone,
     /// RMT (integrated clustering) on the simple cubic lattice.
@@ -149,9 +152,10 @@ pub enum BenchMethod {
 
 impl BenchMethod {
     /// Every method, in report order.
-    pub const ALL: [BenchMethod; 7] = [
+    pub const ALL: [BenchMethod; 8] = [
         BenchMethod::MtBcdlNone,
         BenchMethod::RmtBcdlIntegrated,
+        BenchMethod::RmtBcdlUnchecked,
         BenchMethod::MtSimpleNone,
         BenchMethod::RmtSimpleIntegrated,
         BenchMethod::Mc,
@@ -164,6 +168,7 @@ impl BenchMethod {
         match self {
             BenchMethod::MtBcdlNone => "mt_bcdl_none",
             BenchMethod::RmtBcdlIntegrated => "rmt_bcdl_integrated",
+            BenchMethod::RmtBcdlUnchecked => "rmt_bcdl_unchecked",
             BenchMethod::MtSimpleNone => "mt_simple_none",
             BenchMethod::RmtSimpleIntegrated => "rmt_simple_integrated",
             BenchMethod::Mc => "mc",
@@ -180,6 +185,11 @@ impl BenchMethod {
             BenchMethod::RmtBcdlIntegrated => {
                 (Lattice::BodyCentred, Clustering::Integrated, Method::Mt)
             }
+            BenchMethod::RmtBcdlUnchecked => (
+                Lattice::BodyCentred,
+                Clustering::IntegratedUnchecked,
+                Method::Mt,
+            ),
             BenchMethod::MtSimpleNone => (Lattice::Simple, Clustering::None, Method::Mt),
             BenchMethod::RmtSimpleIntegrated => {
                 (Lattice::Simple, Clustering::Integrated, Method::Mt)
@@ -198,8 +208,24 @@ impl BenchMethod {
     pub fn body_centred(self) -> bool {
         matches!(
             self,
-            BenchMethod::MtBcdlNone | BenchMethod::RmtBcdlIntegrated
+            BenchMethod::MtBcdlNone
+                | BenchMethod::RmtBcdlIntegrated
+                | BenchMethod::RmtBcdlUnchecked
         )
+    }
+
+    /// Plain MT on the same lattice, for the MT methods: the reference of
+    /// [`BenchRow::vertex_geometry_over_plain`].
+    pub fn plain(self) -> Option<BenchMethod> {
+        match self {
+            BenchMethod::MtBcdlNone
+            | BenchMethod::RmtBcdlIntegrated
+            | BenchMethod::RmtBcdlUnchecked => Some(BenchMethod::MtBcdlNone),
+            BenchMethod::MtSimpleNone | BenchMethod::RmtSimpleIntegrated => {
+                Some(BenchMethod::MtSimpleNone)
+            }
+            BenchMethod::Mc | BenchMethod::FastSurfaceNets | BenchMethod::IsomeshMc => None,
+        }
     }
 }
 
@@ -287,6 +313,9 @@ pub struct BenchRow {
     pub triangles: usize,
     /// Median seconds of the vertex plus geometry passes (our methods only).
     pub vertex_geometry_median_s: Option<f64>,
+    /// `vertex_geometry_median_s` over plain MT's on the same lattice, field, size and threads
+    /// (the MT methods only): the measure of the clustering cost targets.
+    pub vertex_geometry_over_plain: Option<f64>,
     /// `t_allocation_s / t_total_s` of the second pre-sampled call on a reused extractor (our
     /// methods only).
     pub second_call_allocation_share: Option<f64>,
@@ -667,6 +696,10 @@ pub fn run_bench(
                         sample_points: points,
                         triangles: triangles[ti][mi],
                         vertex_geometry_median_s: ours.then(|| median(&passes[ti][mi])),
+                        vertex_geometry_over_plain: m.plain().and_then(|p| {
+                            let pi = methods.iter().position(|&x| x == p)?;
+                            Some(median(&passes[ti][mi]) / median(&passes[ti][pi]))
+                        }),
                         second_call_allocation_share: share[ti][mi],
                     });
                 }
@@ -687,7 +720,7 @@ pub fn format_table(report: &BenchReport) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<9} {:>4} {:>3} {:<22} {:>10} {:>10} {:>8} {:>7} {:>8} {:>10} {:>7} {:>9}",
+        "{:<9} {:>4} {:>3} {:<22} {:>10} {:>10} {:>8} {:>7} {:>8} {:>10} {:>6} {:>7} {:>9}",
         "field",
         "n",
         "thr",
@@ -698,6 +731,7 @@ pub fn format_table(report: &BenchReport) -> String {
         "x_fsn",
         "x_fsn/pt",
         "vg_ms",
+        "vg_xmt",
         "alloc2",
         "triangles"
     );
@@ -705,6 +739,9 @@ pub fn format_table(report: &BenchReport) -> String {
         let vg = r
             .vertex_geometry_median_s
             .map_or("-".to_string(), |v| format!("{:.3}", v * 1e3));
+        let over_plain = r
+            .vertex_geometry_over_plain
+            .map_or("-".to_string(), |v| format!("{v:.2}"));
         let cpu = r
             .cpu_median_s
             .map_or("-".to_string(), |v| format!("{:.3}", v * 1e3));
@@ -718,7 +755,7 @@ pub fn format_table(report: &BenchReport) -> String {
         };
         let _ = writeln!(
             s,
-            "{:<9} {:>4} {:>3} {:<22} {:>10.3} {:>10} {:>8.2} {:>7.2} {:>8.2} {:>10} {:>7} {:>9}",
+            "{:<9} {:>4} {:>3} {:<22} {:>10.3} {:>10} {:>8.2} {:>7.2} {:>8.2} {:>10} {:>6} {:>7} {:>9}",
             r.field,
             r.n,
             thr,
@@ -729,6 +766,7 @@ pub fn format_table(report: &BenchReport) -> String {
             r.ratio_to_fast_surface_nets,
             r.point_ratio_to_fast_surface_nets,
             vg,
+            over_plain,
             alloc,
             r.triangles
         );
@@ -742,7 +780,8 @@ pub fn format_table(report: &BenchReport) -> String {
         s,
         "{} repetitions, medians; cpu = CPU time of all threads; * = single-threaded peer; \
          x_fsn = time over fast-surface-nets'; x_fsn/pt = ns/point over fast-surface-nets' ns per \
-         grid point (the target's measure); vg = vertex + geometry passes (wall); alloc2 = \
+         grid point (the target's measure); vg = vertex + geometry passes (wall); vg_xmt = vg over \
+         plain MT's on the same lattice; alloc2 = \
          allocation share of a second call; load average before {}, after {}",
         report.reps,
         load(report.load_average_before),
@@ -893,6 +932,31 @@ mod tests {
             assert!((r.ns_per_point - r.median_s * 1e9 / points as f64).abs() < 1e-9);
             let ours = !matches!(r.method, "fast_surface_nets" | "isomesh_mc");
             assert_eq!(r.vertex_geometry_median_s.is_some(), ours);
+            // Vertex + geometry over plain MT's on the same lattice (MT methods only).
+            let plain = match r.method {
+                "mt_bcdl_none" | "rmt_bcdl_integrated" | "rmt_bcdl_unchecked" => {
+                    Some("mt_bcdl_none")
+                }
+                "mt_simple_none" | "rmt_simple_integrated" => Some("mt_simple_none"),
+                _ => None,
+            };
+            assert_eq!(
+                r.vertex_geometry_over_plain.is_some(),
+                plain.is_some(),
+                "{r:?}"
+            );
+            if let (Some(plain), Some(ratio)) = (plain, r.vertex_geometry_over_plain) {
+                let p = report
+                    .results
+                    .iter()
+                    .find(|f| {
+                        f.method == plain && (f.field, f.n, f.threads) == (r.field, r.n, r.threads)
+                    })
+                    .expect("a plain MT row per field, size and thread count");
+                let expected =
+                    r.vertex_geometry_median_s.unwrap() / p.vertex_geometry_median_s.unwrap();
+                assert!((ratio - expected).abs() < 1e-9 * expected, "{r:?}");
+            }
             assert_eq!(r.second_call_allocation_share.is_some(), ours);
             assert_eq!(r.threads_used, if ours { r.threads } else { 1 });
             if cfg!(target_os = "linux") {
@@ -934,6 +998,8 @@ mod tests {
         ] {
             assert!(!first[key].is_null(), "{key} missing in {first}");
         }
-        assert!(format_table(&report).contains("rmt_bcdl_integrated"));
+        let table = format_table(&report);
+        assert!(table.contains("rmt_bcdl_integrated") && table.contains("rmt_bcdl_unchecked"));
+        assert!(table.contains("vg_xmt"));
     }
 }
