@@ -390,6 +390,146 @@ pub(crate) fn attach(
 mod tests {
     use super::*;
 
+    /// The lone table as the serial pass built it before the parallel runs: each group in
+    /// order, its kept lones, then its new ones up to [`MAX_LONES`]. Returns the groups that
+    /// took some.
+    fn attach_serial(count: usize, g: &mut Groups, mut found: Vec<(u32, Lone)>) -> Vec<u32> {
+        found.sort_unstable_by_key(|&(h, l)| (h, l.id));
+        let mut lone = Vec::new();
+        let mut lone_start = Vec::new();
+        let mut changed = Vec::new();
+        let mut next = found.iter().peekable();
+        for gi in 0..count {
+            lone_start.push(lone.len() as u32);
+            let start = g.lone_start[gi] as usize;
+            let kept = if g.active[gi] != 0 {
+                usize::from(g.lone_len[gi])
+            } else {
+                0
+            };
+            lone.extend_from_slice(&g.lone[start..start + kept]);
+            g.base_len[gi] = kept as u8;
+            let mut len = kept;
+            while let Some(&(h, l)) = next.next_if(|&&(h, _)| h as usize == gi) {
+                if len < MAX_LONES {
+                    lone.push(l);
+                    g.group_of[l.id as usize] = h;
+                    len += 1;
+                }
+            }
+            g.lone_len[gi] = len as u8;
+            if len > kept {
+                changed.push(gi as u32);
+            }
+        }
+        lone_start.push(lone.len() as u32);
+        g.lone = lone;
+        g.lone_start = lone_start;
+        changed
+    }
+
+    #[test]
+    fn parallel_lone_table_equals_the_serial_one_for_any_thread_count() {
+        use crate::{Clustering, ExtractSettings, Grid, Lattice, Samples};
+        let settings = ExtractSettings::new(
+            Grid::cube(2, 1.0),
+            Lattice::BodyCentred,
+            Clustering::Integrated,
+        );
+        let mut samples = Samples::default();
+        samples.prepare(&settings);
+        let layout = crate::mt::Layout::new(&samples, Lattice::BodyCentred);
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        // Enough groups for several runs of the parallel table, and at most `MAX_LONES` lones
+        // kept or offered per group, sometimes more offered than fit.
+        for (count, offered) in [(20_000usize, 30_000usize), (9_000, 2_000), (5, 40), (0, 0)] {
+            // Crossings 0..count are the groups' cores (singletons), the rest lone candidates.
+            let crossings = count + 6 * count + offered + 1;
+            let cores: Vec<Candidate> = (0..count as u32)
+                .map(|gi| Candidate {
+                    first: gi,
+                    members: 1,
+                    dirs: 1,
+                    slot: 0,
+                })
+                .collect();
+            let cpos: Vec<[f32; 3]> = (0..crossings).map(|x| [x as f32, 0.0, 1.0]).collect();
+            let f = Fixed {
+                l: &layout,
+                cpos: &cpos,
+                groups: &cores,
+                tris: &[],
+                grad: &[],
+                inc_start: &[],
+                inc: &[],
+                keys: None,
+            };
+            // The state before: some groups kept, each with a few lones already.
+            let mut g = Groups {
+                group_of: vec![NONE; crossings],
+                vlabel: vec![0; crossings],
+                vpos: vec![[0.0; 3]; crossings],
+                ..Groups::default()
+            };
+            let mut free = count as u32;
+            for gi in 0..count {
+                g.group_of[gi] = gi as u32;
+                g.active.push(u8::from(next() % 4 != 0));
+                g.leader.push(gi as u32);
+                g.centroid.push([0.0; 3]);
+                g.lone_start.push(g.lone.len() as u32);
+                let len = (next() % (MAX_LONES as u64 + 1)) as u8;
+                for _ in 0..len {
+                    g.group_of[free as usize] = gi as u32;
+                    g.lone.push(Lone { id: free });
+                    free += 1;
+                }
+                g.lone_len.push(len);
+                g.base_len.push(0);
+            }
+            g.lone_start.push(g.lone.len() as u32);
+            // The offers: crossings in no group yet, each to a random group, in any order.
+            let found: Vec<(u32, Lone)> = if count == 0 {
+                Vec::new()
+            } else {
+                (0..offered as u32)
+                    .map(|k| ((next() % count as u64) as u32, Lone { id: free + k }))
+                    .collect()
+            };
+            let mut expected = g.clone();
+            let expected_changed = attach_serial(count, &mut expected, found.clone());
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("a thread pool");
+                let mut got = g.clone();
+                let changed = attach(&f, &mut got, found.clone(), false, &pool);
+                assert_eq!(
+                    changed, expected_changed,
+                    "{count} groups, {threads} threads"
+                );
+                assert_eq!(got.lone, expected.lone, "{count} groups, {threads} threads");
+                assert_eq!(got.lone_start, expected.lone_start);
+                assert_eq!(got.lone_len, expected.lone_len);
+                assert_eq!(got.base_len, expected.base_len);
+                assert_eq!(got.group_of, expected.group_of);
+            }
+            if count > 0 {
+                assert!(
+                    !expected_changed.is_empty(),
+                    "the test offers lones that fit"
+                );
+            }
+        }
+    }
+
     #[test]
     fn variants_drop_one_crossing_then_keep_pairs_all_connected() {
         use crate::cluster::compress;
