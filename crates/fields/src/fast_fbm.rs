@@ -204,8 +204,15 @@ impl FastFbm {
         for (xc, oc) in xs.chunks(LANES).zip(out.chunks_mut(LANES)) {
             // A short chunk repeats its last point in the spare lanes (each lane's value
             // depends on its own point alone, whatever the number of lanes); one of at most
-            // half the lanes takes half of them.
+            // half the lanes takes half of them, and a single point one lane.
             let last = xc[xc.len() - 1];
+            if xc.len() == 1 {
+                // A single point (a lone sample, a gradient's probe): one lane.
+                let mut v = [0.0f32; 1];
+                self.lanes(&[last], octaves, &mut v, &mut cache);
+                oc[0] = v[0];
+                continue;
+            }
             if xc.len() <= LANES / 2 {
                 let x: [f64; LANES / 2] =
                     std::array::from_fn(|i| xc.get(i).copied().unwrap_or(last));
@@ -611,15 +618,17 @@ mod tests {
     fn rows_of_any_length_give_each_point_its_own_value() {
         let fast = FastFbm::new(7, 4, 1.5);
         let xs: Vec<f64> = (0..37).map(|i| -1.0 + 0.057 * i as f64).collect();
-        for len in [1, 3, 8, 9, 37] {
+        // Rows of one lane, of half the lanes and of full chunks, with every kind of tail, in
+        // the AVX2 and the portable build.
+        for len in [1, 2, 3, 4, 5, 8, 9, 12, 13, 37] {
             let mut out = vec![0.0f32; len];
+            let mut portable = vec![0.0f32; len];
             fast.get_row(&xs[..len], 0.25, -0.4, &mut out);
-            for (x, v) in xs.iter().zip(&out) {
-                assert_eq!(
-                    v.to_bits(),
-                    fast.get([*x, 0.25, -0.4]).to_bits(),
-                    "x {x}, {len}"
-                );
+            fast.get_row_portable(&xs[..len], 0.25, -0.4, &mut portable);
+            for ((x, v), p) in xs.iter().zip(&out).zip(&portable) {
+                let single = fast.get([*x, 0.25, -0.4]).to_bits();
+                assert_eq!(v.to_bits(), single, "x {x}, {len}");
+                assert_eq!(p.to_bits(), single, "x {x}, {len}, portable");
             }
         }
     }
