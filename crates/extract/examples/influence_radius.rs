@@ -109,8 +109,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
         .map(|p| layout.bcdl_position(p))
         .collect();
-    // The perturbations: a field, a point near its surface, and how far its value moves.
-    let mut moves: Vec<(Box<dyn ScalarField>, Vec3, f32)> = Vec::with_capacity(count);
+    // The perturbations: a field (index into `fields`), a point near its surface, and how far
+    // its value moves.
+    let mut fields: Vec<Box<dyn ScalarField>> = Vec::new();
+    if !random {
+        fields.push(Box::new(asteroid));
+    }
+    let mut moves: Vec<(usize, Vec3, f32)> = Vec::with_capacity(count);
+    // A random field of `family`, unquantised, on `[-1, 1]^3`.
+    let unquantised = |family| RandomField {
+        family,
+        quantum: 0.0,
+        centre: Vec3::ZERO,
+        half: 1.0,
+    };
     while moves.len() < count {
         let pick = |r: u64| points[(r % points.len() as u64) as usize];
         if random {
@@ -119,25 +131,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let (which, field_seed) = (next() % 6, next());
             let mut unit = || (next() % 2001) as f32 / 1000.0 - 1.0;
             let field = match which {
-                0 => RandomField {
-                    family: RandomFamily::Sheet(
-                        Vec3::new(unit(), unit(), unit()),
-                        0.5 * unit(),
-                        h * (0.55 + 0.45 * unit()),
-                    ),
-                    quantum: 0.0,
-                    centre: Vec3::ZERO,
-                    half: 1.0,
-                },
-                1 => RandomField {
-                    family: RandomFamily::Stairs(
-                        Vec3::new(unit(), unit(), unit()) * (2.0 / h),
-                        0.5 * unit(),
-                    ),
-                    quantum: 0.0,
-                    centre: Vec3::ZERO,
-                    half: 1.0,
-                },
+                0 => unquantised(RandomFamily::Sheet(
+                    Vec3::new(unit(), unit(), unit()),
+                    0.5 * unit(),
+                    h * (0.55 + 0.45 * unit()),
+                )),
+                1 => unquantised(RandomFamily::Stairs(
+                    Vec3::new(unit(), unit(), unit()) * (2.0 / h),
+                    0.5 * unit(),
+                )),
                 _ => RandomField::from_seed(field_seed),
             };
             let mut near: Vec<f32> = points.iter().map(|&p| field.sample(p).abs()).collect();
@@ -149,17 +151,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             if let Some(at) = at {
                 let f = field.sample(at);
                 let scale = (next() % 4) as f32 / 2.0 - 1.0;
-                moves.push((Box::new(field), at, f * scale - f));
+                moves.push((fields.len(), at, f * scale - f));
+                fields.push(Box::new(field));
             }
         } else {
             let at = pick(next());
-            if asteroid.sample(at).abs() < h {
+            if fields[0].sample(at).abs() < h {
                 let delta = h * ((next() % 2001) as f32 / 1000.0 - 1.0);
-                moves.push((
-                    Box::new(Asteroid::new(Vec3::ZERO, AsteroidParams::default())),
-                    at,
-                    delta,
-                ));
+                moves.push((0, at, delta));
             }
         }
     }
@@ -178,22 +177,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut mesh = Mesh::default();
         let mut radii = Vec::with_capacity(count);
         let mut unchanged = 0;
-        let mut base = HashSet::new();
-        for (k, (field, at, delta)) in moves.iter().enumerate() {
-            if k == 0 || random {
-                extractor.extract(field.as_ref(), &settings, &mut mesh)?;
+        let (mut base, mut base_of) = (HashSet::new(), None);
+        for &(fi, at, delta) in &moves {
+            let field = fields[fi].as_ref();
+            if base_of != Some(fi) {
+                extractor.extract(field, &settings, &mut mesh)?;
                 base = triangles(&mesh);
+                base_of = Some(fi);
             }
             let moved = Moved {
-                inner: field.as_ref(),
-                at: *at,
-                delta: *delta,
+                inner: field,
+                at,
+                delta,
             };
             extractor.extract(&moved, &settings, &mut mesh)?;
             let now = triangles(&mesh);
             let radius = base
                 .symmetric_difference(&now)
-                .map(|k| centroid(k).distance(*at) / h)
+                .map(|k| centroid(k).distance(at) / h)
                 .fold(None, |m: Option<f32>, r| Some(m.map_or(r, |m| m.max(r))));
             match radius {
                 Some(r) => radii.push(r),

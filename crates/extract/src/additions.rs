@@ -266,9 +266,10 @@ pub(crate) fn attach(
     pool: &rayon::ThreadPool,
 ) -> Vec<u32> {
     pool.install(|| found.par_sort_unstable_by_key(|&(h, l)| (h, l.id)));
-    // The new lone table, built in parallel over runs of `RUN` groups: each run's new lone
-    // count (pass 1), prefix sums for where each run's lones start, then each run writes its
-    // groups' entries (pass 2). The same table as one pass over the groups in order.
+    // The new lone table, built in parallel over runs of `RUN` groups: each run sets its
+    // groups' base lengths (the lones they keep) and counts its lones (pass 1), prefix sums
+    // give where each run's lones start, then each run writes its groups' entries (pass 2).
+    // The same table as one pass over the groups in order.
     const RUN: usize = 1 << 12;
     let count = f.groups.len();
     let runs = count.div_ceil(RUN);
@@ -286,26 +287,23 @@ pub(crate) fn attach(
         ..
     } = &mut *g;
     let (active, old_lone, old_start) = (&*active, &*old_lone, &*old_start);
-    // The lones group `gi` keeps, before its new ones.
-    let kept = |gi: usize| {
-        if active[gi] != 0 {
-            usize::from(lone_len[gi])
-        } else {
-            0
-        }
-    };
     let totals: Vec<usize> = pool.install(|| {
-        (0..runs)
-            .into_par_iter()
-            .map(|r| {
+        base_len[..count]
+            .par_chunks_mut(RUN)
+            .enumerate()
+            .map(|(r, bases)| {
                 let mut total = 0;
                 let mut next = found[part[r]..part[r + 1]].iter().peekable();
-                for gi in r * RUN..((r + 1) * RUN).min(count) {
+                for (j, base) in bases.iter_mut().enumerate() {
+                    let gi = r * RUN + j;
+                    // A kept group keeps its lones so far; the others start over.
+                    let k = if active[gi] != 0 { lone_len[gi] } else { 0 };
+                    *base = k;
                     let mut new = 0;
                     while next.next_if(|&&(h, _)| h as usize == gi).is_some() {
                         new += 1;
                     }
-                    let k = kept(gi);
+                    let k = usize::from(k);
                     total += k + new.min(MAX_LONES.saturating_sub(k));
                 }
                 total
@@ -330,7 +328,7 @@ pub(crate) fn attach(
             .into_par_iter()
             .zip(lone_start[..count].par_chunks_mut(RUN))
             .zip(lone_len[..count].par_chunks_mut(RUN))
-            .zip(base_len[..count].par_chunks_mut(RUN))
+            .zip(base_len[..count].par_chunks(RUN))
             .enumerate()
             .map(|(r, ((((first, out), starts), lens), bases))| {
                 let (mut changed, mut joined) = (Vec::new(), Vec::new());
@@ -340,15 +338,10 @@ pub(crate) fn attach(
                 {
                     let gi = r * RUN + j;
                     *start = (first + w) as u32;
-                    let k = if active[gi] != 0 {
-                        usize::from(*len)
-                    } else {
-                        0
-                    };
+                    let k = usize::from(*base);
                     let from = old_start[gi] as usize;
                     out[w..w + k].copy_from_slice(&old_lone[from..from + k]);
                     w += k;
-                    *base = k as u8;
                     let mut n = k;
                     while let Some(&(h, l)) = next.next_if(|&&(h, _)| h as usize == gi) {
                         if n < MAX_LONES {

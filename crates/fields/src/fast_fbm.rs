@@ -202,30 +202,32 @@ impl FastFbm {
         // row share a cell at their boundary.
         let mut cache = [(i32::MIN, [0.0f32; 4]); K];
         for (xc, oc) in xs.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            // A short chunk repeats its last point in the spare lanes (each lane's value
-            // depends on its own point alone, whatever the number of lanes); one of at most
-            // half the lanes takes half of them, and a single point one lane.
-            let last = xc[xc.len() - 1];
-            if xc.len() == 1 {
-                // A single point (a lone sample, a gradient's probe): one lane.
-                let mut v = [0.0f32; 1];
-                self.lanes(&[last], octaves, &mut v, &mut cache);
-                oc[0] = v[0];
-                continue;
+            // A short chunk takes fewer lanes (each lane's value depends on its own point
+            // alone, whatever the number of lanes): one for a single point, half of them for
+            // at most half a chunk.
+            match xc.len() {
+                1 => self.chunk::<1>(xc, octaves, oc, &mut cache),
+                n if n <= LANES / 2 => self.chunk::<{ LANES / 2 }>(xc, octaves, oc, &mut cache),
+                _ => self.chunk::<LANES>(xc, octaves, oc, &mut cache),
             }
-            if xc.len() <= LANES / 2 {
-                let x: [f64; LANES / 2] =
-                    std::array::from_fn(|i| xc.get(i).copied().unwrap_or(last));
-                let mut v = [0.0f32; LANES / 2];
-                self.lanes(&x, octaves, &mut v, &mut cache);
-                oc.copy_from_slice(&v[..oc.len()]);
-                continue;
-            }
-            let x: [f64; LANES] = std::array::from_fn(|i| xc.get(i).copied().unwrap_or(last));
-            let mut v = [0.0f32; LANES];
-            self.lanes(&x, octaves, &mut v, &mut cache);
-            oc.copy_from_slice(&v[..oc.len()]);
         }
+    }
+
+    /// All octaves at the (at most `N`) points `xc` of one row, into `out`; spare lanes repeat
+    /// the last point.
+    #[inline(always)]
+    fn chunk<const N: usize>(
+        &self,
+        xc: &[f64],
+        octaves: &[RowOctave],
+        out: &mut [f32],
+        cache: &mut [(i32, [f32; 4])],
+    ) {
+        let last = xc[xc.len() - 1];
+        let x: [f64; N] = std::array::from_fn(|i| xc.get(i).copied().unwrap_or(last));
+        let mut v = [0.0f32; N];
+        self.lanes(&x, octaves, &mut v, cache);
+        out.copy_from_slice(&v[..out.len()]);
     }
 
     /// All octaves at `N` points of one row.
