@@ -227,9 +227,13 @@ impl Extractor {
         settings.check()?;
         let mut stats = Stats::default();
         let pool = self.pool(settings.threads)?;
-        self.samples
-            .sample_with(field, settings, &pool, &mut stats, self.sampling)?;
-        self.mesh_samples(Some(field), settings, mesh, &mut stats)?;
+        // The whole extraction runs on the pool: its parallel passes (a few dozen, many small)
+        // then start inline on a worker instead of each being handed to the pool and back.
+        pool.install(|| -> Result<(), ExtractError> {
+            self.samples
+                .sample_with(field, settings, &pool, &mut stats, self.sampling)?;
+            self.mesh_samples(Some(field), settings, mesh, &mut stats)
+        })?;
         stats.t_total_s = start.elapsed().as_secs_f64();
         Ok(stats)
     }
@@ -248,7 +252,9 @@ impl Extractor {
         self.samples.check_layout(settings)?;
         stats.sample_points = self.samples.point_count();
         stats.bytes_lattice = self.samples.bytes();
-        self.mesh_samples(None, settings, mesh, &mut stats)?;
+        // On the pool, as in `extract`.
+        let pool = self.pool(settings.threads)?;
+        pool.install(|| self.mesh_samples(None, settings, mesh, &mut stats))?;
         stats.t_total_s = start.elapsed().as_secs_f64();
         Ok(stats)
     }

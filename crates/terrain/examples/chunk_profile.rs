@@ -36,7 +36,22 @@ fn main() -> Result<()> {
     let origin = Vec3::new(0.0, -32.0 * h, 0.0);
     let settings = WorldSettings::new(cells, origin, h, Lattice::BodyCentred, clustering);
     let world = World::new(&SvobodaTerrain::new(SvobodaParams::default()), settings)?;
+    // The chunks are extracted on a one-thread pool, from inside it, as `World::remesh_dirty`
+    // does: the extractor's parallel passes then run inline, with no hand-off between threads.
+    let pool = std::sync::Arc::new(rayon::ThreadPoolBuilder::new().num_threads(1).build()?);
     let mut ex = Extractor::new();
+    ex.set_pool(pool.clone());
+    pool.install(|| profile(&world, &mut ex, clustering, reps, count))
+}
+
+/// Times `count` surface chunks of `world`, `reps` times each, and prints their stage times.
+fn profile(
+    world: &World,
+    ex: &mut Extractor,
+    clustering: Clustering,
+    reps: usize,
+    count: usize,
+) -> Result<()> {
     let mut mesh = Mesh::default();
     let mut shown = 0;
     let (mut all_v, mut all_g, mut all_t) = (0.0, 0.0, 0.0);
@@ -47,7 +62,7 @@ fn main() -> Result<()> {
             break;
         }
         let first = world
-            .extract_chunk(i, &mut ex, &mut mesh)
+            .extract_chunk(i, ex, &mut mesh)
             .with_context(|| format!("chunk {i}"))?;
         if first.triangles == 0 {
             continue;
@@ -57,7 +72,7 @@ fn main() -> Result<()> {
         let mut steps: [Vec<f64>; 4] = Default::default();
         for _ in 0..reps {
             let st = world
-                .extract_chunk(i, &mut ex, &mut mesh)
+                .extract_chunk(i, ex, &mut mesh)
                 .with_context(|| format!("chunk {i}"))?;
             v.push(st.t_vertex_s);
             g.push(st.t_geometry_s);
