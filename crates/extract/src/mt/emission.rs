@@ -132,40 +132,49 @@ pub(crate) fn plain_triangles(
     processed
 }
 
-/// Calls `visit(anchor, rank, group)` for each body-centred face (group: its axis) or cube
-/// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot) has a
-/// crossed edge and, in a chunk, its cell is kept. The anchor's entry is `crossed.points[rank]`. The count and the geometry pass both walk the
-/// layer with it, so they see the same groups.
-pub(crate) fn for_each_group(
+/// Calls `visit(anchor, rank, group, inner)` for each body-centred face (group: its axis) or
+/// cube (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot)
+/// has a crossed edge and, in a chunk, its cell is kept. The anchor's entry is
+/// `crossed.points[rank]`. `inner`: every corner of the anchor's tetrahedra lies in the box
+/// ([`Layout::reach`]), so none is a ghost clamped onto a face (always so on the simple
+/// lattice); computed only with `INNER` (else `false`), which the listing of plain MT's
+/// triangles with their gradients asks for. The count and the geometry pass both walk the layer
+/// with it, so they see the same groups.
+pub(crate) fn for_each_group<const INNER: bool>(
     l: &Layout,
     k: usize,
     keep: Option<CellRange>,
     crossed: &CrossedIndex,
-    mut visit: impl FnMut(usize, usize, usize),
+    mut visit: impl FnMut(usize, usize, usize, bool),
 ) {
     let [nx, ny, nz] = l.s.cells;
     let plane = l.s.dims[0] * l.s.dims[1];
     // The anchors of one row are consecutive storage slots: scan their bits, visit only the
-    // crossed ones (`cell(n)`: the cell of the n-th, to test against the kept cells).
-    let mut row =
-        |start: usize, z: usize, len: usize, g: usize, cell: &dyn Fn(usize) -> [usize; 3]| {
-            let local = start - z * plane;
-            let mut rank = crossed.rank_in(z, local);
-            for_each_bit(crossed.plane_bits(z), local, len, |n| {
-                let r = rank;
-                rank += 1;
-                if keep.is_some_and(|range| !range.contains(cell(n))) {
-                    return;
-                }
-                visit(start + n, r, g);
-            });
-        };
+    // crossed ones (`cell(n)`: the cell of the n-th, to test against the kept cells; `inner`:
+    // the n-th anchor's tetrahedra inside the box).
+    let mut row = |start: usize,
+                   z: usize,
+                   len: usize,
+                   g: usize,
+                   cell: &dyn Fn(usize) -> [usize; 3],
+                   inner: std::ops::Range<usize>| {
+        let local = start - z * plane;
+        let mut rank = crossed.rank_in(z, local);
+        for_each_bit(crossed.plane_bits(z), local, len, |n| {
+            let r = rank;
+            rank += 1;
+            if keep.is_some_and(|range| !range.contains(cell(n))) {
+                return;
+            }
+            visit(start + n, r, g, INNER && inner.contains(&n));
+        });
+    };
     match l.lattice {
         Lattice::Simple => {
             // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface
             // in the cube.
             for j in 0..ny {
-                row(l.s.simple_index(0, j, k), k, nx, 0, &|i| [i, j, k]);
+                row(l.s.simple_index(0, j, k), k, nx, 0, &|i| [i, j, k], 0..nx);
             }
         }
         Lattice::BodyCentred => {
@@ -174,6 +183,17 @@ pub(crate) fn for_each_group(
             // a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a face anchor
             // moves by one storage slot.
             let ki = k as i32;
+            let reach = l.reach;
+            let within = |c: i32, a: usize| c >= reach[a] && c + reach[a] <= l.max_coord(a);
+            // The anchors `first + (2 n, 0, 0)` whose tetrahedra stay in the box.
+            let inner = |first: Offset| {
+                if !(INNER && within(first[1], 1) && within(first[2], 2)) {
+                    return 0..0;
+                }
+                let lo = ((reach[0] - first[0]).max(0) as usize).div_ceil(2);
+                let hi = (l.max_coord(0) - reach[0] - first[0]).div_euclid(2) + 1;
+                lo..(hi.max(0) as usize).max(lo)
+            };
             let mut faces = |first: Offset, len: usize, axis: usize| {
                 // Storage plane (see `Samples::bcdl_index`); the anchor cell is above the face
                 // along `axis` (clamped into the grid).
@@ -184,7 +204,7 @@ pub(crate) fn for_each_group(
                     c[axis] = (((a[axis] + 1) / 2) as usize).min(l.s.cells[axis] - 1);
                     c
                 };
-                row(l.s.bcdl_index(first), z, len, axis, &cell);
+                row(l.s.bcdl_index(first), z, len, axis, &cell, inner(first));
             };
             for j in 0..ny as i32 {
                 faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
@@ -229,7 +249,7 @@ pub(crate) fn count_layer(
     crossed: &CrossedIndex,
 ) -> usize {
     let mut n = 0;
-    for_each_group(l, k, keep, crossed, |_, rank, g| {
+    for_each_group::<false>(l, k, keep, crossed, |_, rank, g, _| {
         let group = &l.groups[g];
         let mask = usize::from(crossed.points[rank].crossed);
         let mut code = 0;
@@ -274,19 +294,37 @@ pub(crate) fn geometry_layer(
                 r += 1;
             });
         }
-        geometry_in_window(
-            l,
-            k,
-            iso,
-            keep,
-            crossed,
-            positions,
-            map,
-            &window[..],
-            z0,
-            out,
-            grad,
-        )
+        // The listing with gradients reads whether an anchor is inner; the other walks do not
+        // compute it.
+        if grad.is_some() {
+            geometry_in_window::<true>(
+                l,
+                k,
+                iso,
+                keep,
+                crossed,
+                positions,
+                map,
+                &window[..],
+                z0,
+                out,
+                grad,
+            )
+        } else {
+            geometry_in_window::<false>(
+                l,
+                k,
+                iso,
+                keep,
+                crossed,
+                positions,
+                map,
+                &window[..],
+                z0,
+                out,
+                grad,
+            )
+        }
     })
 }
 
@@ -297,9 +335,10 @@ thread_local! {
         const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`.
+/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`;
+/// `GRAD`: gradients are written (`grad` is given), which reads whether an anchor is inner.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn geometry_in_window(
+pub(crate) fn geometry_in_window<const GRAD: bool>(
     l: &Layout,
     k: usize,
     iso: f32,
@@ -316,7 +355,7 @@ pub(crate) fn geometry_in_window(
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
     let mut w = 0;
-    let mut tet = |anchor: usize, ti: usize, tpl: &TetTemplate| {
+    let mut tet = |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
         let mut tris = [[0u32; 3]; 2];
@@ -332,7 +371,7 @@ pub(crate) fn geometry_in_window(
             None => {
                 // The gradient of the tetrahedron, for the quotient test's (c).
                 let g = if n > 0 && grad.is_some() {
-                    l.gradient(anchor, ti)
+                    l.gradient(anchor, ti, inner, val)
                 } else {
                     [0.0; 3]
                 };
@@ -357,7 +396,7 @@ pub(crate) fn geometry_in_window(
             }
         }
     };
-    for_each_group(l, k, keep, crossed, |anchor, _, g| {
+    for_each_group::<GRAD>(l, k, keep, crossed, |anchor, _, g, inner| {
         let first = match l.lattice {
             Lattice::BodyCentred => 4 * g,
             Lattice::Simple => 0,
@@ -367,7 +406,7 @@ pub(crate) fn geometry_in_window(
             Lattice::Simple => l.tets.len(),
         };
         for ti in first..first + count {
-            tet(anchor, ti, &l.tets[ti]);
+            tet(anchor, ti, &l.tets[ti], inner);
         }
     });
     debug_assert!(

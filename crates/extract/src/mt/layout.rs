@@ -201,6 +201,10 @@ pub(crate) struct Layout<'a> {
     /// the lattice (the gradient of the linear interpolant is their sum weighted by the value
     /// differences, up to the positive determinant).
     pub(crate) grad_coef: Vec<[glam::DVec3; 3]>,
+    /// Per axis, the largest distance (lattice units) from a template's anchor to its
+    /// corners: an anchor at least this far inside the box on every axis has all its
+    /// tetrahedra's corners in the box (none is a ghost).
+    pub(crate) reach: Offset,
 }
 
 /// One of the tetrahedra around a lattice point (which edges of the point have all their
@@ -310,11 +314,18 @@ impl<'a> Layout<'a> {
                 [d[1].cross(d[2]), d[2].cross(d[0]), d[0].cross(d[1])]
             })
             .collect();
+        let reach = [0, 1, 2].map(|a| {
+            tets.iter()
+                .flat_map(|tpl| tpl.off.iter().map(move |o| o[a].abs()))
+                .max()
+                .unwrap_or(0)
+        });
         let mut layout = Self {
             s,
             lattice,
             t,
             delta,
+            reach,
             tets,
             groups,
             border_table: Vec::new(),
@@ -489,16 +500,24 @@ impl<'a> Layout<'a> {
     /// The gradient of the linear interpolant of the field on template tetrahedron `tet` at
     /// `anchor` (up to a positive factor, rounded to `f32`), from the sample positions (ghosts
     /// on the box face included).
-    pub(crate) fn gradient(&self, anchor: usize, ti: usize) -> [f32; 3] {
+    ///
+    /// `val`: the field at the corners (in template order); `inner`: every corner is known to
+    /// lie in the box ([`Layout::reach`]), so no ghost is among them and the anchor's
+    /// coordinates are not needed.
+    pub(crate) fn gradient(
+        &self,
+        anchor: usize,
+        ti: usize,
+        inner: bool,
+        val: [f32; 4],
+    ) -> [f32; 3] {
         let tet = &self.tets[ti];
-        let f = tet
-            .delta
-            .map(|d| f64::from(self.s.values[(anchor as isize + d) as usize]));
+        let f = val.map(f64::from);
         // Away from the ghosts (clamped onto the box faces) the corners sit on the lattice:
         // the edge vectors, and so the coefficients, are the template's.
         let p = match self.lattice {
-            Lattice::Simple => None,
-            Lattice::BodyCentred => Some(self.coords_of(anchor)),
+            Lattice::BodyCentred if !inner => Some(self.coords_of(anchor)),
+            _ => None,
         };
         let clamped = p.is_some_and(|p| {
             tet.off

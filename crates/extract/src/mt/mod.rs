@@ -561,6 +561,8 @@ mod tests {
             .build()
             .expect("a pool of one thread");
         let mut triangles = 0;
+        // Anchors visited as not inner / inner.
+        let mut flags = [0usize; 2];
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             for cells in [[3, 2, 4], [9, 8, 6], [13, 11, 12]] {
                 let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
@@ -596,11 +598,21 @@ mod tests {
                     let mut total = 0;
                     for k in 0..layers {
                         let mut direct = 0;
-                        for_each_group(&l, k, keep, &buf.crossed, |anchor, _, g| {
+                        for_each_group::<true>(&l, k, keep, &buf.crossed, |anchor, _, g, inner| {
                             let tets = match lattice {
                                 Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
                                 Lattice::Simple => &l.tets[..],
                             };
+                            // `inner` promises every corner in the box (no ghost).
+                            let p = l.coords_of(anchor);
+                            let in_box = tets.iter().all(|tpl| {
+                                tpl.off.iter().all(|o| {
+                                    (0..3)
+                                        .all(|a| p[a] + o[a] >= 0 && p[a] + o[a] <= l.max_coord(a))
+                                })
+                            });
+                            assert!(!inner || in_box, "{lattice:?} {cells:?} anchor {p:?}");
+                            flags[usize::from(inner)] += 1;
                             for tpl in tets {
                                 let case = (0..4).fold(0, |case, i| {
                                     let slot = (anchor as isize + tpl.delta[i]) as usize;
@@ -623,6 +635,10 @@ mod tests {
         assert!(
             triangles > 1000,
             "only {triangles} triangles: the fields miss the grids"
+        );
+        assert!(
+            flags[0] > 50 && flags[1] > 50,
+            "anchors by inner: {flags:?}"
         );
     }
 
