@@ -242,8 +242,39 @@ pub(crate) fn boundary_class(c: i32, max: i32) -> usize {
     }
 }
 
+/// The border table of the last extraction ([`Layout::border_table`]), kept between
+/// extractions: it depends only on the lattice and the cells per axis, and building it costs
+/// about a fifth of a 32^3 chunk's extraction without clustering.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct BorderCache {
+    key: Option<(Lattice, [usize; 3])>,
+    table: Vec<u32>,
+}
+
 impl<'a> Layout<'a> {
+    /// The layout of `s` on `lattice`, its border table built anew.
+    #[cfg(test)]
     pub(crate) fn new(s: &'a Samples, lattice: Lattice) -> Self {
+        let mut layout = Self::without_border_table(s, lattice);
+        layout.border_table = layout.build_border_table();
+        layout
+    }
+
+    /// [`Layout::new`], the border table taken from `cache` when it was built for the same
+    /// lattice and cells (else built and kept there).
+    pub(crate) fn cached(s: &'a Samples, lattice: Lattice, cache: &mut BorderCache) -> Self {
+        let mut layout = Self::without_border_table(s, lattice);
+        let key = Some((lattice, s.cells));
+        if cache.key != key {
+            cache.table = layout.build_border_table();
+            cache.key = key;
+        }
+        layout.border_table.clone_from(&cache.table);
+        layout
+    }
+
+    /// Everything of the layout but its border table (left empty).
+    fn without_border_table(s: &'a Samples, lattice: Lattice) -> Self {
         let t = LatticeTables::get(lattice);
         let idx = |p: Offset| -> isize {
             match lattice {
@@ -320,7 +351,7 @@ impl<'a> Layout<'a> {
                 .max()
                 .unwrap_or(0)
         });
-        let mut layout = Self {
+        Self {
             s,
             lattice,
             t,
@@ -331,9 +362,7 @@ impl<'a> Layout<'a> {
             border_table: Vec::new(),
             around,
             grad_coef,
-        };
-        layout.border_table = layout.build_border_table();
-        layout
+        }
     }
 
     /// The table behind [`Layout::border_info`]: one representative point per class triple

@@ -79,6 +79,8 @@ pub struct MtBuffers {
     inside: Vec<u64>,
     /// [`crate::BufferPolicy::Lean`]: free every table when its last reader is done.
     pub(crate) lean: bool,
+    /// The layout's border table of the last extraction.
+    border: BorderCache,
 }
 
 impl MtBuffers {
@@ -117,7 +119,7 @@ pub fn extract(
     mesh: &mut Mesh,
     stats: &mut Stats,
 ) -> Result<(), ExtractError> {
-    let layout = Layout::new(samples, settings.lattice);
+    let layout = Layout::cached(samples, settings.lattice, &mut buf.border);
     let clustering = settings.clustering;
     let propose = matches!(
         clustering,
@@ -640,6 +642,35 @@ mod tests {
             flags[0] > 50 && flags[1] > 50,
             "anchors by inner: {flags:?}"
         );
+    }
+
+    #[test]
+    fn a_cached_border_table_is_the_one_built_for_the_same_lattice_and_cells() {
+        let mut cache = BorderCache::default();
+        let mut built = 0;
+        for (lattice, cells) in [
+            (Lattice::BodyCentred, [12, 14, 16]),
+            (Lattice::BodyCentred, [12, 14, 16]),
+            (Lattice::BodyCentred, [16, 14, 12]),
+            (Lattice::Simple, [16, 14, 12]),
+            (Lattice::BodyCentred, [16, 14, 12]),
+            (Lattice::BodyCentred, [3, 4, 5]),
+            (Lattice::Simple, [20, 12, 11]),
+        ] {
+            let settings = ExtractSettings::new(
+                crate::Grid::new(cells, glam::Vec3::ZERO, glam::Vec3::ONE),
+                lattice,
+                Clustering::None,
+            );
+            let mut samples = Samples::default();
+            samples.prepare(&settings);
+            let fresh = Layout::new(&samples, lattice).border_table;
+            let cached = Layout::cached(&samples, lattice, &mut cache).border_table;
+            assert_eq!(cached, fresh, "{lattice:?} {cells:?}");
+            built += usize::from(!fresh.is_empty());
+        }
+        // Six of the seven grids are large enough for the classes to have a table.
+        assert_eq!(built, 6);
     }
 
     #[test]
