@@ -82,6 +82,9 @@ pub(crate) fn emit_layers(
 /// `grad`; then every crossing's triangles as a CSR
 /// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order, built in parallel by
 /// [`crate::merge::incidence_parallel`]; `inc_cursor` and `inc_parts` are its working memory). The quotient test reads a group's star from these instead of from the lattice.
+/// With `keep` (a chunk) also, per triangle, whether its anchor's cell is kept (`kept`), so
+/// that the emission maps the chunk's own triangles from the list too; returns the tetrahedra
+/// with a triangle (of the kept cells, with `keep`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plain_triangles(
     layout: &Layout,
@@ -89,8 +92,10 @@ pub(crate) fn plain_triangles(
     crossed: &CrossedIndex,
     cpos: &[[f32; 3]],
     pool: &rayon::ThreadPool,
+    keep: Option<CellRange>,
     tris: &mut Vec<u32>,
     grad: &mut Vec<[f32; 3]>,
+    kept: &mut Vec<u8>,
     inc_start: &mut Vec<u32>,
     inc: &mut Vec<u32>,
     inc_cursor: &mut Vec<u32>,
@@ -101,21 +106,28 @@ pub(crate) fn plain_triangles(
     let total: usize = counts.iter().sum();
     overwritten(tris, 3 * total, 0, pool);
     overwritten(grad, total, [0.0; 3], pool);
+    overwritten(kept, if keep.is_some() { total } else { 0 }, 0, pool);
     let mut parts = Vec::with_capacity(layers);
-    let (mut rest, mut rest_src) = (&mut tris[..], &mut grad[..]);
+    let (mut rest, mut rest_src, mut rest_kept) = (&mut tris[..], &mut grad[..], &mut kept[..]);
     for &n in &counts {
         let (head, tail) = rest.split_at_mut(3 * n);
         let (head_src, tail_src) = rest_src.split_at_mut(n);
-        parts.push((head, head_src));
+        let (head_kept, tail_kept) = rest_kept.split_at_mut(if keep.is_some() { n } else { 0 });
+        parts.push((head, head_src, head_kept));
         rest = tail;
         rest_src = tail_src;
+        rest_kept = tail_kept;
     }
     let processed: usize = pool.install(|| {
         parts
             .into_par_iter()
             .enumerate()
-            .map(|(k, (out, src))| {
-                geometry_layer(layout, k, iso, None, crossed, cpos, None, out, Some(src)).0
+            .map(|(k, (out, grad, kept))| {
+                let list = ListOut {
+                    grad,
+                    kept: keep.map(|range| (range, kept)),
+                };
+                geometry_layer(layout, k, iso, None, crossed, cpos, None, out, Some(list)).0
             })
             .sum()
     });
@@ -198,12 +210,8 @@ pub(crate) fn for_each_group<const INNER: bool>(
                 // Storage plane (see `Samples::bcdl_index`); the anchor cell is above the face
                 // along `axis` (clamped into the grid).
                 let z = (first[2] + 1) as usize;
-                let cell = |n: usize| {
-                    let a = [first[0] + 2 * n as i32, first[1], first[2]];
-                    let mut c = a.map(|x| ((x - 1) / 2) as usize);
-                    c[axis] = (((a[axis] + 1) / 2) as usize).min(l.s.cells[axis] - 1);
-                    c
-                };
+                let cell =
+                    |n: usize| l.anchor_cell([first[0] + 2 * n as i32, first[1], first[2]], axis);
                 row(l.s.bcdl_index(first), z, len, axis, &cell, inner(first));
             };
             for j in 0..ny as i32 {
@@ -275,7 +283,7 @@ pub(crate) fn geometry_layer(
     positions: &[[f32; 3]],
     map: Option<&[u32]>,
     out: &mut [u32],
-    grad: Option<&mut [[f32; 3]]>,
+    list: Option<ListOut<'_>>,
 ) -> (usize, usize) {
     let plane = l.s.dims[0] * l.s.dims[1];
     // The crossed points of the storage planes this layer reads, copied into a dense window (one
@@ -296,7 +304,7 @@ pub(crate) fn geometry_layer(
         }
         // The listing with gradients reads whether an anchor is inner; the other walks do not
         // compute it.
-        if grad.is_some() {
+        if list.is_some() {
             geometry_in_window::<true>(
                 l,
                 k,
@@ -308,7 +316,7 @@ pub(crate) fn geometry_layer(
                 &window[..],
                 z0,
                 out,
-                grad,
+                list,
             )
         } else {
             geometry_in_window::<false>(
@@ -322,7 +330,7 @@ pub(crate) fn geometry_layer(
                 &window[..],
                 z0,
                 out,
-                grad,
+                list,
             )
         }
     })
@@ -335,8 +343,20 @@ thread_local! {
         const { std::cell::RefCell::new(Vec::new()) };
 }
 
+/// What the listing of plain MT's triangles ([`plain_triangles`]) writes beside them, per
+/// triangle of a layer.
+pub(crate) struct ListOut<'s> {
+    /// The gradient of its tetrahedron.
+    pub(crate) grad: &'s mut [[f32; 3]],
+    /// In a chunk: the kept cells, and per triangle 1 when its anchor's cell is one of them
+    /// (the triangles the chunk emits), else 0.
+    pub(crate) kept: Option<(CellRange, &'s mut [u8])>,
+}
+
 /// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`;
-/// `GRAD`: gradients are written (`grad` is given), which reads whether an anchor is inner.
+/// `GRAD`: the plain triangles are listed (`list` is given), which reads whether an anchor is
+/// inner. Returns the tetrahedra with a triangle (when listing in a chunk, those of kept
+/// cells) and the triangles written.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn geometry_in_window<const GRAD: bool>(
     l: &Layout,
@@ -349,13 +369,19 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
     window: &[CrossedPoint],
     z0: usize,
     out: &mut [u32],
-    mut grad: Option<&mut [[f32; 3]]>,
+    mut list: Option<ListOut<'_>>,
 ) -> (usize, usize) {
     let v = &l.s.values;
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
     let mut w = 0;
-    let mut tet = |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool| {
+    // Listing in a chunk: every anchor is walked, and each one's cell is tested against the
+    // kept cells (`marked`).
+    let marked = list
+        .as_ref()
+        .and_then(|list| list.kept.as_ref().map(|k| k.0));
+    let mut kept_anchor = true;
+    let mut tet = |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool, kept: bool| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
         let mut tris = [[0u32; 3]; 2];
@@ -366,18 +392,21 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
             entry.id(d)
         };
         let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
-        processed += usize::from(n > 0);
+        processed += usize::from(n > 0 && kept);
         match map {
             None => {
                 // The gradient of the tetrahedron, for the quotient test's (c).
-                let g = if n > 0 && grad.is_some() {
+                let g = if n > 0 && list.is_some() {
                     l.gradient(anchor, ti, inner, val)
                 } else {
                     [0.0; 3]
                 };
                 for t in &tris[..n] {
-                    if let Some(grad) = grad.as_deref_mut() {
-                        grad[w / 3] = g;
+                    if let Some(list) = list.as_mut() {
+                        list.grad[w / 3] = g;
+                        if let Some((_, flags)) = list.kept.as_mut() {
+                            flags[w / 3] = u8::from(kept);
+                        }
                     }
                     out[w..w + 3].copy_from_slice(t);
                     w += 3;
@@ -397,6 +426,9 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
         }
     };
     for_each_group::<GRAD>(l, k, keep, crossed, |anchor, _, g, inner| {
+        if let Some(range) = marked {
+            kept_anchor = range.contains(l.anchor_cell(l.coords_of(anchor), g));
+        }
         let first = match l.lattice {
             Lattice::BodyCentred => 4 * g,
             Lattice::Simple => 0,
@@ -406,7 +438,7 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
             Lattice::Simple => l.tets.len(),
         };
         for ti in first..first + count {
-            tet(anchor, ti, &l.tets[ti], inner);
+            tet(anchor, ti, &l.tets[ti], inner, kept_anchor);
         }
     });
     debug_assert!(
@@ -416,10 +448,10 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
     (processed, w / 3)
 }
 
-/// Emission: the final triangles, written straight into `mesh.indices`. With clustering and
-/// the whole box, the listed plain MT triangles ([`plain_triangles`]) mapped through the
-/// output vertices (`buf.vertex_of`), in order, the collapsed ones dropped; otherwise the
-/// geometry pass ([`emit_layers`]).
+/// Emission: the final triangles, written straight into `mesh.indices`. With integrated
+/// clustering, the listed plain MT triangles ([`plain_triangles`]) mapped through the output
+/// vertices (`buf.vertex_of`), in order, the collapsed ones dropped (in a chunk, only those of
+/// the kept cells); otherwise the geometry pass ([`emit_layers`]).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn emit(
     layout: &Layout,
@@ -435,24 +467,42 @@ pub(crate) fn emit(
     let (iso, lattice, clustering) = (settings.iso, settings.lattice, settings.clustering);
     let crossed = &buf.crossed;
     let keep = settings.keep_cells;
-    if propose && keep.is_none() && !buf.plain.is_empty() {
+    if propose && !buf.plain.is_empty() {
         // The plain triangles are at hand (the quotient test read them): map them through the
-        // groups, in order, dropping the collapsed ones.
+        // groups, in order, dropping the collapsed ones (and, in a chunk, those of cells not
+        // kept: the listing walked every anchor in the order the geometry pass would walk the
+        // kept ones).
         let (plain, map) = (&buf.plain[..], &buf.vertex_of[..]);
+        let kept = (keep.is_some()).then_some(&buf.plain_kept[..]);
         const CHUNK: usize = 3 << 14;
-        let mapped = |t: &[u32]| {
+        let mapped = |t: &[u32], i: usize| {
+            if kept.is_some_and(|k| k[i] == 0) {
+                return None;
+            }
             let q = [t[0], t[1], t[2]].map(|i| map[i as usize]);
             (q[0] != q[1] && q[1] != q[2] && q[0] != q[2]).then_some(q)
         };
         let counts: Vec<usize> = pool.install(|| {
             plain
                 .par_chunks(CHUNK)
-                .map(|c| c.chunks_exact(3).filter(|t| mapped(t).is_some()).count())
+                .enumerate()
+                .map(|(c, ts)| {
+                    let first = c * CHUNK / 3;
+                    ts.chunks_exact(3)
+                        .enumerate()
+                        .filter(|(i, t)| mapped(t, first + i).is_some())
+                        .count()
+                })
                 .collect()
         });
-        let kept: usize = counts.iter().sum();
+        // The plain triangles the emission stands for: all, or the kept cells' ones.
+        let listed = match kept {
+            Some(k) => k.iter().filter(|&&f| f != 0).count(),
+            None => plain.len() / 3,
+        };
+        let emitted: usize = counts.iter().sum();
         let indices = &mut mesh.indices;
-        overwritten(indices, 3 * kept, 0, pool);
+        overwritten(indices, 3 * emitted, 0, pool);
         let mut parts = Vec::with_capacity(counts.len());
         let mut rest = &mut indices[..];
         for &n in &counts {
@@ -464,10 +514,13 @@ pub(crate) fn emit(
             plain
                 .par_chunks(CHUNK)
                 .zip(parts.into_par_iter())
-                .for_each(|(c, out)| {
-                    for (q, o) in c
+                .enumerate()
+                .for_each(|(c, (ts, out))| {
+                    let first = c * CHUNK / 3;
+                    for (q, o) in ts
                         .chunks_exact(3)
-                        .filter_map(mapped)
+                        .enumerate()
+                        .filter_map(|(i, t)| mapped(t, first + i))
                         .zip(out.chunks_exact_mut(3))
                     {
                         o.copy_from_slice(&q);
@@ -475,7 +528,7 @@ pub(crate) fn emit(
                 })
         });
         stats.tetrahedra_processed += plain_processed;
-        stats.discarded += plain.len() / 3 - kept;
+        stats.discarded += listed - emitted;
     } else {
         emit_layers(layout, iso, keep, crossed, propose, buf, mesh, pool, stats);
     }

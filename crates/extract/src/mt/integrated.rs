@@ -141,6 +141,7 @@ pub(crate) fn cluster(
     clustering: Clustering,
     rules: Rules,
     keys: Option<&[u64]>,
+    keep: Option<CellRange>,
     mesh: &mut Mesh,
     stats: &mut Stats,
     plain_processed: &mut usize,
@@ -162,8 +163,10 @@ pub(crate) fn cluster(
             &buf.crossed,
             &buf.cpos,
             pool,
+            keep,
             &mut buf.plain,
             &mut buf.plain_grad,
+            &mut buf.plain_kept,
             &mut buf.inc_start,
             &mut buf.inc,
             &mut buf.inc_cursor,
@@ -179,6 +182,7 @@ pub(crate) fn cluster(
     } else {
         buf.plain.clear();
         buf.plain_grad.clear();
+        buf.plain_kept.clear();
         buf.inc_start.clear();
         buf.inc.clear();
         stats.t_groups_s += step.elapsed().as_secs_f64();

@@ -431,6 +431,22 @@ impl<'a> Layout<'a> {
         (e >> 16 != 0, e as u16)
     }
 
+    /// The cell of the geometry walk's anchor at lattice point `a` (its group `g`: on the
+    /// body-centred lattice the face axis, the cell above the face along it, clamped into the
+    /// grid; on the simple lattice the cube's corner 0 is `a` itself). Anchors outside the grid
+    /// give coordinates no cell range holds.
+    #[inline]
+    pub(crate) fn anchor_cell(&self, a: Offset, g: usize) -> [usize; 3] {
+        match self.lattice {
+            Lattice::Simple => a.map(|x| x as usize),
+            Lattice::BodyCentred => {
+                let mut c = a.map(|x| ((x - 1) / 2) as usize);
+                c[g] = (((a[g] + 1) / 2) as usize).min(self.s.cells[g] - 1);
+                c
+            }
+        }
+    }
+
     /// Lattice coordinates of storage slot (sx, sy) of plane z.
     #[inline]
     pub(crate) fn coords(&self, sx: usize, sy: usize, z: usize) -> Offset {

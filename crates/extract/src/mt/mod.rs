@@ -64,6 +64,8 @@ pub struct MtBuffers {
     /// crossing's triangles (CSR), with checked clustering: the stars of the quotient test.
     plain: Vec<u32>,
     plain_grad: Vec<[f32; 3]>,
+    /// In a chunk: per plain triangle, 1 when its anchor's cell is kept (emitted by the chunk).
+    plain_kept: Vec<u8>,
     inc_start: Vec<u32>,
     inc: Vec<u32>,
     /// Working memory of the incidence table's fill.
@@ -95,6 +97,7 @@ impl MtBuffers {
             + self.edge_of.len() * 8
             + self.plain.len() * 4
             + self.plain_grad.len() * 12
+            + self.plain_kept.len()
             + self.inc_start.len() * 4
             + self.inc.len() * 4
             + self.inc_cursor.len() * 4
@@ -158,6 +161,7 @@ pub fn extract(
             clustering,
             rules,
             keys,
+            settings.keep_cells,
             mesh,
             stats,
             &mut plain_processed,
@@ -289,6 +293,7 @@ fn release_tables(buf: &mut MtBuffers, pool: &rayon::ThreadPool) -> usize {
         buf.plane_points = Vec::new();
         buf.plain = Vec::new();
         buf.plain_grad = Vec::new();
+        buf.plain_kept = Vec::new();
         buf.inc_start = Vec::new();
         buf.inc = Vec::new();
         buf.inc_cursor = Vec::new();
@@ -642,6 +647,79 @@ mod tests {
             flags[0] > 50 && flags[1] > 50,
             "anchors by inner: {flags:?}"
         );
+    }
+
+    #[test]
+    fn a_chunk_maps_its_triangles_from_the_list_as_the_geometry_pass_walks_its_cells() {
+        // Integrated clustering in a chunk emits the kept cells' triangles from plain MT's
+        // list; the geometry pass over the kept cells, through the same vertex map, is the
+        // reference (triangles, their order, and the counters).
+        let field = rmt_fields::FnField(|p: glam::Vec3| {
+            (p.x * 5.1).sin() * (p.y * 3.7 + 0.2).cos() + (p.z * 4.3).sin() * 0.7 - 0.05
+        });
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .expect("a pool of two threads");
+        let mut compared = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for (cells, lo, hi) in [
+                ([12, 10, 14], [1, 1, 1], [11, 9, 13]),
+                ([16, 16, 16], [0, 3, 5], [9, 16, 12]),
+                ([9, 13, 11], [2, 0, 0], [9, 7, 6]),
+            ] {
+                let mut settings = crate::ExtractSettings::new(
+                    crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
+                    lattice,
+                    crate::Clustering::Integrated,
+                );
+                settings.keep_cells = Some(CellRange { lo, hi });
+                let mut stats = Stats::default();
+                let mut samples = Samples::default();
+                samples
+                    .sample(&field, &settings, &pool, &mut stats)
+                    .expect("a finite field");
+                let (mut buf, mut merge, mut mesh) = (
+                    MtBuffers::default(),
+                    MergeBuffers::default(),
+                    Mesh::default(),
+                );
+                let mut listed = Stats::default();
+                extract(
+                    &samples,
+                    &settings,
+                    &pool,
+                    &mut buf,
+                    &mut merge,
+                    &mut mesh,
+                    &mut listed,
+                )
+                .expect("extraction");
+                let l = Layout::new(&samples, lattice);
+                let mut walked = Mesh::default();
+                let mut reference = Stats::default();
+                emit_layers(
+                    &l,
+                    settings.iso,
+                    settings.keep_cells,
+                    &buf.crossed,
+                    true,
+                    &buf,
+                    &mut walked,
+                    &pool,
+                    &mut reference,
+                );
+                let what = format!("{lattice:?} {cells:?} {lo:?}..{hi:?}");
+                assert_eq!(mesh.indices, walked.indices, "{what}");
+                assert_eq!(
+                    listed.tetrahedra_processed, reference.tetrahedra_processed,
+                    "{what}"
+                );
+                assert_eq!(listed.discarded, reference.discarded, "{what}");
+                compared += mesh.indices.len() / 3;
+            }
+        }
+        assert!(compared > 500, "only {compared} triangles compared");
     }
 
     #[test]
