@@ -144,41 +144,33 @@ pub(crate) fn plain_triangles(
     processed
 }
 
-/// Calls `visit(anchor, rank, group, inner)` for each body-centred face (group: its axis) or
-/// cube (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot)
-/// has a crossed edge and, in a chunk, its cell is kept. The anchor's entry is
-/// `crossed.points[rank]`. `inner`: every corner of the anchor's tetrahedra lies in the box
-/// ([`Layout::reach`]), so none is a ghost clamped onto a face (always so on the simple
-/// lattice); computed only with `INNER` (else `false`), which the listing of plain MT's
-/// triangles with their gradients asks for. The count and the geometry pass both walk the layer
-/// with it, so they see the same groups.
-pub(crate) fn for_each_group<const INNER: bool>(
+/// Calls `visit(anchor, rank, group, p)` for each body-centred face (group: its axis) or cube
+/// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot, at
+/// lattice coordinates `p`) has a crossed edge and, in a chunk, its cell
+/// ([`Layout::anchor_cell`]) is kept. The anchor's entry is `crossed.points[rank]`. The count and
+/// the geometry pass both walk the layer with it, so they see the same groups.
+pub(crate) fn for_each_group(
     l: &Layout,
     k: usize,
     keep: Option<CellRange>,
     crossed: &CrossedIndex,
-    mut visit: impl FnMut(usize, usize, usize, bool),
+    mut visit: impl FnMut(usize, usize, usize, Offset),
 ) {
     let [nx, ny, nz] = l.s.cells;
     let plane = l.s.dims[0] * l.s.dims[1];
-    // The anchors of one row are consecutive storage slots: scan their bits, visit only the
-    // crossed ones (`cell(n)`: the cell of the n-th, to test against the kept cells; `inner`:
-    // the n-th anchor's tetrahedra inside the box).
-    let mut row = |start: usize,
-                   z: usize,
-                   len: usize,
-                   g: usize,
-                   cell: &dyn Fn(usize) -> [usize; 3],
-                   inner: std::ops::Range<usize>| {
+    // The anchors of one row are consecutive storage slots, at lattice points `first + (step n,
+    // 0, 0)`: scan their bits, visit only the crossed ones.
+    let mut row = |start: usize, z: usize, len: usize, g: usize, first: Offset, step: i32| {
         let local = start - z * plane;
         let mut rank = crossed.rank_in(z, local);
         for_each_bit(crossed.plane_bits(z), local, len, |n| {
             let r = rank;
             rank += 1;
-            if keep.is_some_and(|range| !range.contains(cell(n))) {
+            let p = [first[0] + step * n as i32, first[1], first[2]];
+            if keep.is_some_and(|range| !range.contains(l.anchor_cell(p, g))) {
                 return;
             }
-            visit(start + n, r, g, INNER && inner.contains(&n));
+            visit(start + n, r, g, p);
         });
     };
     match l.lattice {
@@ -186,33 +178,26 @@ pub(crate) fn for_each_group<const INNER: bool>(
             // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface
             // in the cube.
             for j in 0..ny {
-                row(l.s.simple_index(0, j, k), k, nx, 0, &|i| [i, j, k], 0..nx);
+                row(
+                    l.s.simple_index(0, j, k),
+                    k,
+                    nx,
+                    0,
+                    [0, j as i32, k as i32],
+                    1,
+                );
             }
         }
         Lattice::BodyCentred => {
             // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by their
             // anchor A, the centre below (B and the 4 face corners are neighbours of A: without
             // a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a face anchor
-            // moves by one storage slot.
+            // moves by one storage slot (two lattice units).
             let ki = k as i32;
-            let reach = l.reach;
-            let within = |c: i32, a: usize| c >= reach[a] && c + reach[a] <= l.max_coord(a);
-            // The anchors `first + (2 n, 0, 0)` whose tetrahedra stay in the box.
-            let inner = |first: Offset| {
-                if !(INNER && within(first[1], 1) && within(first[2], 2)) {
-                    return 0..0;
-                }
-                let lo = ((reach[0] - first[0]).max(0) as usize).div_ceil(2);
-                let hi = (l.max_coord(0) - reach[0] - first[0]).div_euclid(2) + 1;
-                lo..(hi.max(0) as usize).max(lo)
-            };
             let mut faces = |first: Offset, len: usize, axis: usize| {
-                // Storage plane (see `Samples::bcdl_index`); the anchor cell is above the face
-                // along `axis` (clamped into the grid).
+                // Storage plane (see `Samples::bcdl_index`).
                 let z = (first[2] + 1) as usize;
-                let cell =
-                    |n: usize| l.anchor_cell([first[0] + 2 * n as i32, first[1], first[2]], axis);
-                row(l.s.bcdl_index(first), z, len, axis, &cell, inner(first));
+                row(l.s.bcdl_index(first), z, len, axis, first, 2);
             };
             for j in 0..ny as i32 {
                 faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
@@ -257,7 +242,7 @@ pub(crate) fn count_layer(
     crossed: &CrossedIndex,
 ) -> usize {
     let mut n = 0;
-    for_each_group::<false>(l, k, keep, crossed, |_, rank, g, _| {
+    for_each_group(l, k, keep, crossed, |_, rank, g, _| {
         let group = &l.groups[g];
         let mask = usize::from(crossed.points[rank].crossed);
         let mut code = 0;
@@ -302,37 +287,19 @@ pub(crate) fn geometry_layer(
                 r += 1;
             });
         }
-        // The listing with gradients reads whether an anchor is inner; the other walks do not
-        // compute it.
-        if list.is_some() {
-            geometry_in_window::<true>(
-                l,
-                k,
-                iso,
-                keep,
-                crossed,
-                positions,
-                map,
-                &window[..],
-                z0,
-                out,
-                list,
-            )
-        } else {
-            geometry_in_window::<false>(
-                l,
-                k,
-                iso,
-                keep,
-                crossed,
-                positions,
-                map,
-                &window[..],
-                z0,
-                out,
-                list,
-            )
-        }
+        geometry_in_window(
+            l,
+            k,
+            iso,
+            keep,
+            crossed,
+            positions,
+            map,
+            &window[..],
+            z0,
+            out,
+            list,
+        )
     })
 }
 
@@ -353,12 +320,11 @@ pub(crate) struct ListOut<'s> {
     pub(crate) kept: Option<(CellRange, &'s mut [u8])>,
 }
 
-/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`;
-/// `GRAD`: the plain triangles are listed (`list` is given), which reads whether an anchor is
-/// inner. Returns the tetrahedra with a triangle (when listing in a chunk, those of kept
-/// cells) and the triangles written.
+/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`.
+/// Returns the tetrahedra with a triangle (when listing in a chunk, those of kept cells) and
+/// the triangles written.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn geometry_in_window<const GRAD: bool>(
+pub(crate) fn geometry_in_window(
     l: &Layout,
     k: usize,
     iso: f32,
@@ -375,12 +341,11 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
     let mut w = 0;
-    // Listing in a chunk: every anchor is walked, and each one's cell is tested against the
-    // kept cells (`marked`).
-    let marked = list
+    // Listing in a chunk: every anchor is walked, and the kept cells' ones are marked.
+    let listing = list.is_some();
+    let mark = list
         .as_ref()
         .and_then(|list| list.kept.as_ref().map(|k| k.0));
-    let mut kept_anchor = true;
     let mut tet = |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool, kept: bool| {
         let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
         let val = idx.map(|i| v[i]);
@@ -397,7 +362,7 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
             None => {
                 // The gradient of the tetrahedron, for the quotient test's (c).
                 let g = if n > 0 && list.is_some() {
-                    l.gradient(anchor, ti, inner, val)
+                    l.gradient(anchor, ti, inner)
                 } else {
                     [0.0; 3]
                 };
@@ -425,10 +390,11 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
             }
         }
     };
-    for_each_group::<GRAD>(l, k, keep, crossed, |anchor, _, g, inner| {
-        if let Some(range) = marked {
-            kept_anchor = range.contains(l.anchor_cell(l.coords_of(anchor), g));
-        }
+    for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
+        // Only the listing reads these: whether no corner is a ghost (for the gradient), and in
+        // a chunk whether the anchor's cell is kept.
+        let inner = listing && l.inner_anchor(p);
+        let kept = mark.is_none_or(|range| range.contains(l.anchor_cell(p, g)));
         let first = match l.lattice {
             Lattice::BodyCentred => 4 * g,
             Lattice::Simple => 0,
@@ -438,7 +404,7 @@ pub(crate) fn geometry_in_window<const GRAD: bool>(
             Lattice::Simple => l.tets.len(),
         };
         for ti in first..first + count {
-            tet(anchor, ti, &l.tets[ti], inner, kept_anchor);
+            tet(anchor, ti, &l.tets[ti], inner, kept);
         }
     });
     debug_assert!(

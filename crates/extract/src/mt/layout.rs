@@ -447,6 +447,14 @@ impl<'a> Layout<'a> {
         }
     }
 
+    /// Whether every corner of the tetrahedra of the anchor at lattice point `p` lies in the
+    /// box (at least [`Layout::reach`] inside on every axis): none is a ghost clamped onto a
+    /// face.
+    #[inline]
+    pub(crate) fn inner_anchor(&self, p: Offset) -> bool {
+        (0..3).all(|a| p[a] >= self.reach[a] && p[a] + self.reach[a] <= self.max_coord(a))
+    }
+
     /// Lattice coordinates of storage slot (sx, sy) of plane z.
     #[inline]
     pub(crate) fn coords(&self, sx: usize, sy: usize, z: usize) -> Offset {
@@ -546,18 +554,13 @@ impl<'a> Layout<'a> {
     /// `anchor` (up to a positive factor, rounded to `f32`), from the sample positions (ghosts
     /// on the box face included).
     ///
-    /// `val`: the field at the corners (in template order); `inner`: every corner is known to
-    /// lie in the box ([`Layout::reach`]), so no ghost is among them and the anchor's
-    /// coordinates are not needed.
-    pub(crate) fn gradient(
-        &self,
-        anchor: usize,
-        ti: usize,
-        inner: bool,
-        val: [f32; 4],
-    ) -> [f32; 3] {
+    /// `inner`: every corner is known to lie in the box ([`Layout::inner_anchor`]), so no ghost
+    /// is among them and the anchor's coordinates are not needed.
+    pub(crate) fn gradient(&self, anchor: usize, ti: usize, inner: bool) -> [f32; 3] {
         let tet = &self.tets[ti];
-        let f = val.map(f64::from);
+        let f = tet
+            .delta
+            .map(|d| f64::from(self.s.values[(anchor as isize + d) as usize]));
         // Away from the ghosts (clamped onto the box faces) the corners sit on the lattice:
         // the edge vectors, and so the coefficients, are the template's.
         let p = match self.lattice {

@@ -605,13 +605,16 @@ mod tests {
                     let mut total = 0;
                     for k in 0..layers {
                         let mut direct = 0;
-                        for_each_group::<true>(&l, k, keep, &buf.crossed, |anchor, _, g, inner| {
+                        for_each_group(&l, k, keep, &buf.crossed, |anchor, _, g, q| {
                             let tets = match lattice {
                                 Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
                                 Lattice::Simple => &l.tets[..],
                             };
-                            // `inner` promises every corner in the box (no ghost).
+                            // The walk's coordinates are the anchor's, and `inner_anchor`
+                            // promises every corner in the box (no ghost).
                             let p = l.coords_of(anchor);
+                            assert_eq!(q, p, "{lattice:?} {cells:?}");
+                            let inner = l.inner_anchor(p);
                             let in_box = tets.iter().all(|tpl| {
                                 tpl.off.iter().all(|o| {
                                     (0..3)
