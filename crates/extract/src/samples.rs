@@ -409,12 +409,11 @@ impl Samples {
 
     /// Evaluates the row segments that a band of blocks left to evaluate, as runs along
     /// storage rows: segments grouped by row (in order within a row), neighbours joined, so that a row
-    /// crossing several evaluated blocks is one run of points with the same `y` and `z`, which
-    /// row-aware fields (the asteroid's noise) evaluate faster. A point's value does not depend
-    /// on how points are grouped, so this changes no value.
+    /// crossing several evaluated blocks is one run of points with the same `y` and `z`, handed
+    /// to [`ScalarField::sample_row`] and written straight into the row's slots; row-aware
+    /// fields (the asteroid's noise) evaluate it faster. A point's value does not depend on how
+    /// points are grouped, so this changes no value.
     fn evaluate_runs(&self, field: &dyn ScalarField, slab: &mut Slab<'_>) {
-        /// Points per call of `sample_batch` (bounds the scratch memory).
-        const FLUSH: usize = 1 << 14;
         let [dx, dy, _] = self.dims;
         let plane = dx * dy;
         let z0 = slab.z0;
@@ -438,11 +437,9 @@ impl Samples {
             scratch.counts[seg.0] += 1;
         }
         std::mem::swap(&mut scratch.segments, &mut scratch.sorted);
-        scratch.points.clear();
-        scratch.slots.clear();
         let mut i = 0;
         while i < scratch.segments.len() {
-            let (key, y, mut a, mut b) = scratch.segments[i];
+            let (key, y, a, mut b) = scratch.segments[i];
             i += 1;
             while i < scratch.segments.len()
                 && scratch.segments[i].0 == key
@@ -451,51 +448,27 @@ impl Samples {
                 b = scratch.segments[i].3;
                 i += 1;
             }
-            let z = key / BLOCK;
-            let row = z * plane + y * dx;
-            while a < b {
-                let end = b.min(a + FLUSH);
-                for x in a..end {
-                    scratch.points.push(self.slot_position(x, y, z0 + z));
-                    scratch.slots.push(row + x);
-                }
-                a = end;
-                if scratch.points.len() >= FLUSH {
-                    Self::flush(field, scratch, slab.out, slab.result);
+            // One run of a storage row: the points share `y` and `z` (the same position
+            // function as dense sampling gives every coordinate).
+            let z = z0 + key / BLOCK;
+            let row = key / BLOCK * plane + y * dx;
+            let first = self.slot_position(a, y, z);
+            scratch.xs.clear();
+            scratch
+                .xs
+                .extend((a..b).map(|x| self.slot_position(x, y, z).x));
+            let out = &mut slab.out[row + a..row + b];
+            field.sample_row(&scratch.xs, first.y, first.z, out);
+            slab.result.evaluated += b - a;
+            if let Some(k) = out.iter().position(|v| !v.is_finite()) {
+                let s = row + a + k;
+                if slab.result.bad.is_none_or(|(bs, _, _)| s < bs) {
+                    let p = self.slot_position(a + k, y, z);
+                    slab.result.bad = Some((s, p, out[k]));
                 }
             }
         }
-        Self::flush(field, scratch, slab.out, slab.result);
         scratch.segments.clear();
-    }
-
-    /// Evaluates the scratch points into their slots and records the first non-finite value.
-    fn flush(
-        field: &dyn ScalarField,
-        scratch: &mut Scratch,
-        out: &mut [f32],
-        result: &mut SlabResult,
-    ) {
-        if scratch.points.is_empty() {
-            return;
-        }
-        scratch.values.clear();
-        scratch.values.resize(scratch.points.len(), 0.0);
-        field.sample_batch(&scratch.points, &mut scratch.values);
-        result.evaluated += scratch.points.len();
-        for ((&s, &v), &p) in scratch
-            .slots
-            .iter()
-            .zip(&scratch.values)
-            .zip(&scratch.points)
-        {
-            out[s] = v;
-            if !v.is_finite() && result.bad.is_none_or(|(b, _, _)| s < b) {
-                result.bad = Some((s, p, v));
-            }
-        }
-        scratch.points.clear();
-        scratch.slots.clear();
     }
 
     /// Sub-blocks (of `BLOCK / 2` cells per axis) in the block of slots `x`, `y`, planes `z`.
@@ -642,9 +615,8 @@ struct Scratch {
     /// The segments grouped by row, and the counting sort's counters.
     sorted: Vec<(usize, usize, usize, usize)>,
     counts: Vec<usize>,
-    points: Vec<Vec3>,
-    slots: Vec<usize>,
-    values: Vec<f32>,
+    /// The `x` coordinates of the run being evaluated.
+    xs: Vec<f32>,
 }
 
 /// One slab's output and working memory, passed down the blocks.

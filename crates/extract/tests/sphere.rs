@@ -315,11 +315,17 @@ fn bad_settings_and_non_finite_fields_are_errors_not_panics() {
             p.length() - 0.5
         }
     });
+    let mut dense = rmt_extract::Extractor::new();
+    dense.set_sampling(rmt_extract::Sampling::Dense);
     for lattice in LATTICES {
         let s =
             rmt_extract::ExtractSettings::new(Grid::cube(8, 1.0), lattice, Clustering::Integrated);
         let err = ex.extract(&nan, &s, &mut mesh).expect_err("NaN is refused");
         assert!(err.to_string().contains("not finite"), "{err}");
+        // Sparse sampling (evaluated in runs along rows) names the same point as dense
+        // sampling: the one at the lowest storage index.
+        let dense_err = dense.extract(&nan, &s, &mut mesh).expect_err("NaN is refused");
+        assert_eq!(err.to_string(), dense_err.to_string());
     }
 }
 

@@ -98,6 +98,30 @@ impl ScalarField for Asteroid {
         }
     }
 
+    /// [`ScalarField::sample_row`] without building points: the row's `y` and `z` offsets from
+    /// the centre once, the noise as one row of [`FastFbm`] (what `sample_batch` finds in its
+    /// points), the same operations per point, so the same bits.
+    fn sample_row(&self, xs: &[f32], y: f32, z: f32, out: &mut [f32]) {
+        const CHUNK: usize = 256;
+        let (r, a) = (self.params.radius, self.params.amplitude);
+        let c = self.centre;
+        let (qy, qz) = (y - c.y, z - c.z);
+        let mut qx = [0.0f64; CHUNK];
+        let mut noise = [0.0f32; CHUNK];
+        for (xc, oc) in xs.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            let n = xc.len();
+            for (q, &x) in qx.iter_mut().zip(xc) {
+                *q = f64::from(x - c.x);
+            }
+            self.fast
+                .get_row(&qx[..n], f64::from(qy), f64::from(qz), &mut noise[..n]);
+            for ((o, &x), &v) in oc.iter_mut().zip(xc).zip(&noise) {
+                let q = Vec3::new(x - c.x, qy, qz);
+                *o = q.length() - r + a * v;
+            }
+        }
+    }
+
     /// Radial interval plus the noise bound. With `q = p - centre`, `|q|` ranges over
     /// `[near, far]` (distances from the centre to the box) and the noise `n` over the interval
     /// of [`BatchFbm::range`] on the box of `q` (within `[-1, 1]`, see [`fbm_bound`]), widened by
@@ -203,6 +227,40 @@ mod tests {
             a.sample_batch(&pts, &mut out);
             for (p, v) in pts.iter().zip(&out) {
                 assert_eq!(v.to_bits(), a.sample(*p).to_bits(), "at {p}");
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+        /// A row gives the bits of single samples, for the asteroid's own `sample_row` and for
+        /// the trait's default (through `sample_batch`, here on a sphere), on rows of any length
+        /// (longer than the 256-point chunks included), spacing and place.
+        #[test]
+        fn rows_give_the_same_bits_as_single_samples(
+            x0 in -1.5f32..1.5,
+            step in 0.001f32..0.05,
+            len in 0usize..700,
+            y in -1.2f32..1.2,
+            z in -1.2f32..1.2,
+            seed in 0u32..1000,
+            octaves in 1usize..9,
+        ) {
+            let params = AsteroidParams { seed, octaves, ..AsteroidParams::default() };
+            let a = Asteroid::new(Vec3::new(0.1, -0.05, 0.02), params);
+            let sphere = crate::Sphere::new(Vec3::new(0.2, 0.0, -0.1), 0.7);
+            let xs: Vec<f32> = (0..len).map(|i| x0 + step * i as f32).collect();
+            let mut out = vec![f32::NAN; len];
+            a.sample_row(&xs, y, z, &mut out);
+            for (&x, v) in xs.iter().zip(&out) {
+                let p = Vec3::new(x, y, z);
+                proptest::prop_assert_eq!(v.to_bits(), a.sample(p).to_bits(), "at {}", p);
+            }
+            sphere.sample_row(&xs, y, z, &mut out);
+            for (&x, v) in xs.iter().zip(&out) {
+                let p = Vec3::new(x, y, z);
+                proptest::prop_assert_eq!(v.to_bits(), sphere.sample(p).to_bits(), "at {}", p);
             }
         }
     }

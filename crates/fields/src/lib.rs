@@ -51,6 +51,20 @@ pub trait ScalarField: Send + Sync {
         }
     }
 
+    /// Samples one row of points along `x`: `out[i] = sample(Vec3::new(xs[i], y, z))`, bit for
+    /// bit. The default builds the points and calls [`ScalarField::sample_batch`]; a field that
+    /// shares work along rows (the asteroid's noise) overrides it and skips building them.
+    fn sample_row(&self, xs: &[f32], y: f32, z: f32, out: &mut [f32]) {
+        const CHUNK: usize = 256;
+        let mut points = [Vec3::ZERO; CHUNK];
+        for (xc, oc) in xs.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            for (p, &x) in points.iter_mut().zip(xc) {
+                *p = Vec3::new(x, y, z);
+            }
+            self.sample_batch(&points[..xc.len()], oc);
+        }
+    }
+
     /// Unsigned distance from `p` to the field's true surface, when the field knows it (used to
     /// measure extraction fidelity); `None` otherwise.
     fn surface_distance(&self, _p: Vec3) -> Option<f32> {
