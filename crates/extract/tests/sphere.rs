@@ -324,7 +324,9 @@ fn bad_settings_and_non_finite_fields_are_errors_not_panics() {
         assert!(err.to_string().contains("not finite"), "{err}");
         // Sparse sampling (evaluated in runs along rows) names the same point as dense
         // sampling: the one at the lowest storage index.
-        let dense_err = dense.extract(&nan, &s, &mut mesh).expect_err("NaN is refused");
+        let dense_err = dense
+            .extract(&nan, &s, &mut mesh)
+            .expect_err("NaN is refused");
         assert_eq!(err.to_string(), dense_err.to_string());
     }
 }

@@ -368,6 +368,21 @@ mod tests {
 
     /// Plain MT of `field` on `cells` in [-1, 1]^3: the settings, samples, the pass buffers as the
     /// extraction left them, and the mesh.
+    /// A smooth field with many surface sheets in [-1, 1]^3.
+    fn wavy() -> rmt_fields::FnField<impl Fn(glam::Vec3) -> f32> {
+        rmt_fields::FnField(|p: glam::Vec3| {
+            (p.x * 6.3).sin() * (p.y * 4.1 + 0.3).cos() + (p.z * 5.7).sin() * 0.8 - 0.1
+        })
+    }
+
+    /// A pool of `threads` threads for a test.
+    fn test_pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool")
+    }
+
     fn plain_mt(
         field: &impl rmt_fields::ScalarField,
         lattice: Lattice,
@@ -403,10 +418,7 @@ mod tests {
         let field = rmt_fields::FnField(|p: glam::Vec3| {
             (p.x * 7.1).sin() + (p.y * 5.3).cos() * (p.z * 3.7 + 0.4).sin() - 0.2
         });
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .expect("a pool of two threads");
+        let pool = test_pool(2);
         let mut checked = 0;
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             for cells in [
@@ -481,10 +493,7 @@ mod tests {
         let field = rmt_fields::FnField(|p: glam::Vec3| {
             (p.x * 5.3).sin() * (p.y * 3.9 + 0.2).cos() + (p.z * 4.7).sin() * 0.7 - 0.15
         });
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .expect("a pool of one thread");
+        let pool = test_pool(1);
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             for cells in [[3, 4, 5], [9, 8, 7]] {
                 let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
@@ -560,13 +569,8 @@ mod tests {
         // The count reads only the anchor's crossed edges through the group tables; here each
         // group's tetrahedra are evaluated from the sample values instead, with and without
         // kept cells.
-        let field = rmt_fields::FnField(|p: glam::Vec3| {
-            (p.x * 6.3).sin() * (p.y * 4.1 + 0.3).cos() + (p.z * 5.7).sin() * 0.8 - 0.1
-        });
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .expect("a pool of one thread");
+        let field = wavy();
+        let pool = test_pool(1);
         let mut triangles = 0;
         // Anchors visited as not inner / inner.
         let mut flags = [0usize; 2];
@@ -657,13 +661,8 @@ mod tests {
         // Integrated clustering in a chunk emits the kept cells' triangles from plain MT's
         // list; the geometry pass over the kept cells, through the same vertex map, is the
         // reference (triangles, their order, and the counters).
-        let field = rmt_fields::FnField(|p: glam::Vec3| {
-            (p.x * 5.1).sin() * (p.y * 3.7 + 0.2).cos() + (p.z * 4.3).sin() * 0.7 - 0.05
-        });
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .expect("a pool of two threads");
+        let field = wavy();
+        let pool = test_pool(2);
         let mut compared = 0;
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             for (cells, lo, hi) in [
