@@ -48,8 +48,10 @@
 //! The points left to evaluate are not evaluated block by block: each band of blocks (the
 //! blocks sharing a range of y slots in a slab) hands its row segments to one pass that groups
 //! them by storage row (a counting sort) and joins neighbours, so a row crossing several
-//! evaluated blocks reaches [`ScalarField::sample_batch`] as one run of points with equal `y`
-//! and `z`. Fields that share work along rows (the asteroid's noise) are faster on long runs,
+//! evaluated blocks is one run of points with equal `y` and `z`, and the runs of neighbouring
+//! rows of a plane with the same slots reach [`ScalarField::sample_rows`] together (by default
+//! one [`ScalarField::sample_row`] per run). Fields that share work along rows (the asteroid's
+//! noise) are faster on long runs, a height field computes each column's height once,
 //! and since a field's value at a point does not depend on its batch, no value changes.
 
 use glam::Vec3;
@@ -409,10 +411,11 @@ impl Samples {
 
     /// Evaluates the row segments that a band of blocks left to evaluate, as runs along
     /// storage rows: segments grouped by row (in order within a row), neighbours joined, so that a row
-    /// crossing several evaluated blocks is one run of points with the same `y` and `z`, handed
-    /// to [`ScalarField::sample_row`] and written straight into the row's slots; row-aware
-    /// fields (the asteroid's noise) evaluate it faster. A point's value does not depend on how
-    /// points are grouped, so this changes no value.
+    /// crossing several evaluated blocks is one run of points with the same `y` and `z`; runs
+    /// of neighbouring rows with the same slots go together to [`ScalarField::sample_rows`].
+    /// Row-aware fields (the asteroid's noise) evaluate a run faster, a height field (the
+    /// Svoboda terrain) computes its heights once for the rows. A point's value does not
+    /// depend on how points are grouped, so this changes no value.
     fn evaluate_runs(&self, field: &dyn ScalarField, slab: &mut Slab<'_>) {
         let [dx, dy, _] = self.dims;
         let plane = dx * dy;
@@ -437,6 +440,8 @@ impl Samples {
             scratch.counts[seg.0] += 1;
         }
         std::mem::swap(&mut scratch.segments, &mut scratch.sorted);
+        // The rows' runs, each joined from its segments: (plane in the slab, y, first slot, end).
+        scratch.runs.clear();
         let mut i = 0;
         while i < scratch.segments.len() {
             let (key, y, a, mut b) = scratch.segments[i];
@@ -448,23 +453,44 @@ impl Samples {
                 b = scratch.segments[i].3;
                 i += 1;
             }
-            // One run of a storage row: the points share `y` and `z` (the same position
-            // function as dense sampling gives every coordinate).
-            let z = z0 + key / BLOCK;
-            let row = key / BLOCK * plane + y * dx;
-            let first = self.slot_position(a, y, z);
+            scratch.runs.push((key / BLOCK, y, a, b));
+        }
+        // Runs of neighbouring rows of one plane with the same slots share their x coordinates
+        // (and z): they go to the field together ([`ScalarField::sample_rows`]; a height field
+        // computes its heights once for them).
+        let mut j = 0;
+        while j < scratch.runs.len() {
+            let (zl, y0, a, b) = scratch.runs[j];
+            let mut rows = 1;
+            while j + rows < scratch.runs.len() && scratch.runs[j + rows] == (zl, y0 + rows, a, b) {
+                rows += 1;
+            }
+            j += rows;
+            // The same position function as dense sampling gives every coordinate.
+            let z = z0 + zl;
+            let first = self.slot_position(a, y0, z);
             scratch.xs.clear();
             scratch
                 .xs
-                .extend((a..b).map(|x| self.slot_position(x, y, z).x));
-            let out = &mut slab.out[row + a..row + b];
-            field.sample_row(&scratch.xs, first.y, first.z, out);
-            slab.result.evaluated += b - a;
-            if let Some(k) = out.iter().position(|v| !v.is_finite()) {
-                let s = row + a + k;
-                if slab.result.bad.is_none_or(|(bs, _, _)| s < bs) {
-                    let p = self.slot_position(a + k, y, z);
-                    slab.result.bad = Some((s, p, out[k]));
+                .extend((a..b).map(|x| self.slot_position(x, y0, z).x));
+            scratch.ys.clear();
+            scratch
+                .ys
+                .extend((y0..y0 + rows).map(|y| self.slot_position(a, y, z).y));
+            let n = b - a;
+            // The rows' slots, `dx` apart in the slab.
+            let row0 = zl * plane + y0 * dx;
+            let out = &mut slab.out[row0 + a..row0 + (rows - 1) * dx + b];
+            field.sample_rows(&scratch.xs, &scratch.ys, first.z, out, dx);
+            slab.result.evaluated += rows * n;
+            for r in 0..rows {
+                let vals = &out[r * dx..r * dx + n];
+                if let Some(k) = vals.iter().position(|v| !v.is_finite()) {
+                    let s = row0 + r * dx + a + k;
+                    if slab.result.bad.is_none_or(|(bs, _, _)| s < bs) {
+                        let p = self.slot_position(a + k, y0 + r, z);
+                        slab.result.bad = Some((s, p, vals[k]));
+                    }
                 }
             }
         }
@@ -615,8 +641,11 @@ struct Scratch {
     /// The segments grouped by row, and the counting sort's counters.
     sorted: Vec<(usize, usize, usize, usize)>,
     counts: Vec<usize>,
-    /// The `x` coordinates of the run being evaluated.
+    /// The band's runs: (plane in the slab, y, first slot, end).
+    runs: Vec<(usize, usize, usize, usize)>,
+    /// The `x` coordinates of the rows being evaluated, and their `y` coordinates.
     xs: Vec<f32>,
+    ys: Vec<f32>,
 }
 
 /// One slab's output and working memory, passed down the blocks.

@@ -65,6 +65,17 @@ pub trait ScalarField: Send + Sync {
         }
     }
 
+    /// Samples rows that share their `x` coordinates and `z`, one per `ys[r]`, row `r` at
+    /// `stride * r` in `out`: `out[stride * r + i] = sample(Vec3::new(xs[i], ys[r], z))`, bit
+    /// for bit (the elements between the rows are left as they are; `stride >= xs.len()`).
+    /// The default calls [`ScalarField::sample_row`] per row; a field whose value along `y` is
+    /// cheap once the rest is known (a height field) overrides it.
+    fn sample_rows(&self, xs: &[f32], ys: &[f32], z: f32, out: &mut [f32], stride: usize) {
+        for (r, &y) in ys.iter().enumerate() {
+            self.sample_row(xs, y, z, &mut out[stride * r..stride * r + xs.len()]);
+        }
+    }
+
     /// Unsigned distance from `p` to the field's true surface, when the field knows it (used to
     /// measure extraction fidelity); `None` otherwise.
     fn surface_distance(&self, _p: Vec3) -> Option<f32> {

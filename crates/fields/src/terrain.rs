@@ -100,6 +100,26 @@ impl ScalarField for SvobodaTerrain {
         }
     }
 
+    /// The heights of the shared `(x, z)` columns once ([`BatchFbm`] lanes, as `sample_batch`
+    /// computes them), then `y - height` for every row: the same bits as `sample`.
+    fn sample_rows(&self, xs: &[f32], ys: &[f32], z: f32, out: &mut [f32], stride: usize) {
+        let (base, a) = (self.params.base, self.params.amplitude);
+        let zs = [f64::from(z); LANES];
+        let mut noise = [0.0f64; LANES];
+        for (c, xc) in xs.chunks(LANES).enumerate() {
+            let lanes: [f64; LANES] =
+                std::array::from_fn(|k| xc.get(k).map_or(0.0, |&x| f64::from(x)));
+            self.batch.get_lanes_2d(&lanes, &zs, &mut noise);
+            for (k, &v) in noise.iter().take(xc.len()).enumerate() {
+                let height = base + a * v as f32;
+                let i = c * LANES + k;
+                for (r, &y) in ys.iter().enumerate() {
+                    out[stride * r + i] = y - height;
+                }
+            }
+        }
+    }
+
     /// Bounded by the height amplitude: the noise lies in `[-1, 1]` (see `asteroid::fbm_bound`),
     /// so the height lies in `[base - |A|, base + |A|]` and `f = y - height` in
     /// `[y_lo - base - |A|, y_hi - base + |A|]`. Rounding: three roundings on operands of
@@ -293,6 +313,49 @@ impl ScalarField for CaveTerrain {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+        /// Rows sharing their x coordinates give the bits of single samples, for the terrain's
+        /// own `sample_rows` (heights once per column) and for the trait's default (through
+        /// `sample_row`, here on the cave terrain), with any number of rows and row lengths
+        /// around the lane width.
+        #[test]
+        fn shared_rows_give_the_same_bits_as_single_samples(
+            x0 in -3.0f32..3.0,
+            step in 0.001f32..0.1,
+            len in 1usize..40,
+            ys in proptest::collection::vec(-1.0f32..1.0, 0..6),
+            z in -3.0f32..3.0,
+            seed in 0u32..1000,
+            gap in 0usize..5,
+        ) {
+            let t = SvobodaTerrain::new(SvobodaParams { seed, ..SvobodaParams::default() });
+            let caves = CaveTerrain::new(CaveParams::default());
+            let xs: Vec<f32> = (0..len).map(|i| x0 + step * i as f32).collect();
+            // Rows `stride` apart, with a gap that must stay untouched.
+            let stride = len + gap;
+            for field in [&t as &dyn ScalarField, &caves] {
+                let mut out = vec![f32::NAN; stride * ys.len()];
+                field.sample_rows(&xs, &ys, z, &mut out, stride);
+                for (r, &y) in ys.iter().enumerate() {
+                    for (i, &x) in xs.iter().enumerate() {
+                        let p = Vec3::new(x, y, z);
+                        proptest::prop_assert_eq!(
+                            out[stride * r + i].to_bits(),
+                            field.sample(p).to_bits(),
+                            "at {}",
+                            p
+                        );
+                    }
+                    proptest::prop_assert!(out[stride * r + len..stride * (r + 1)]
+                        .iter()
+                        .all(|v| v.is_nan()));
+                }
+            }
+        }
+    }
 
     fn lattice(n: usize) -> impl Iterator<Item = Vec3> {
         (0..n * n * n).map(move |k| {
