@@ -59,6 +59,13 @@ impl Asteroid {
         }
     }
 
+    /// The value at offset `q` from the centre, the noise there being `n`: one formula for
+    /// every way of sampling, so every way gives the same bits.
+    #[inline(always)]
+    fn value(&self, q: Vec3, n: f32) -> f32 {
+        q.length() - self.params.radius + self.params.amplitude * n
+    }
+
     /// The parameters it was built with.
     pub fn params(&self) -> &AsteroidParams {
         &self.params
@@ -70,14 +77,13 @@ impl ScalarField for Asteroid {
     fn sample(&self, p: Vec3) -> f32 {
         let q = p - self.centre;
         let n = self.fast.get([q.x, q.y, q.z].map(f64::from));
-        q.length() - self.params.radius + self.params.amplitude * n
+        self.value(q, n)
     }
 
     /// The same values as [`ScalarField::sample`], bit for bit; runs of points with equal `y`
     /// and `z` (the rows of a lattice) share the noise's work (see [`FastFbm`]).
     fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
         const CHUNK: usize = 256;
-        let (r, a) = (self.params.radius, self.params.amplitude);
         let mut xyz = [[0.0f64; CHUNK]; 3];
         let mut noise = [0.0f32; CHUNK];
         for (ps, os) in points.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
@@ -92,8 +98,7 @@ impl ScalarField for Asteroid {
             self.fast
                 .get_points(&x[..n], &y[..n], &z[..n], &mut noise[..n]);
             for (i, (o, &p)) in os.iter_mut().zip(ps).enumerate() {
-                let q = p - self.centre;
-                *o = q.length() - r + a * noise[i];
+                *o = self.value(p - self.centre, noise[i]);
             }
         }
     }
@@ -103,7 +108,6 @@ impl ScalarField for Asteroid {
     /// points), the same operations per point, so the same bits.
     fn sample_row(&self, xs: &[f32], y: f32, z: f32, out: &mut [f32]) {
         const CHUNK: usize = 256;
-        let (r, a) = (self.params.radius, self.params.amplitude);
         let c = self.centre;
         let (qy, qz) = (y - c.y, z - c.z);
         let mut qx = [0.0f64; CHUNK];
@@ -116,8 +120,7 @@ impl ScalarField for Asteroid {
             self.fast
                 .get_row(&qx[..n], f64::from(qy), f64::from(qz), &mut noise[..n]);
             for ((o, &x), &v) in oc.iter_mut().zip(xc).zip(&noise) {
-                let q = Vec3::new(x - c.x, qy, qz);
-                *o = q.length() - r + a * v;
+                *o = self.value(Vec3::new(x - c.x, qy, qz), v);
             }
         }
     }

@@ -74,7 +74,14 @@ impl SvobodaTerrain {
     /// Ground height at `(x, z)`.
     #[inline]
     pub fn height(&self, x: f32, z: f32) -> f32 {
-        self.params.base + self.params.amplitude * self.fbm.get([f64::from(x), f64::from(z)]) as f32
+        self.height_of(self.fbm.get([f64::from(x), f64::from(z)]))
+    }
+
+    /// The height where the noise is `n`: one formula for every way of sampling, so every way
+    /// gives the same bits.
+    #[inline(always)]
+    fn height_of(&self, n: f64) -> f32 {
+        self.params.base + self.params.amplitude * n as f32
     }
 }
 
@@ -86,7 +93,6 @@ impl ScalarField for SvobodaTerrain {
 
     /// The same values as `sample`, bit for bit ([`BatchFbm`]), `LANES` points at a time.
     fn sample_batch(&self, points: &[Vec3], out: &mut [f32]) {
-        let (base, a) = (self.params.base, self.params.amplitude);
         let mut n = [0.0f64; LANES];
         for (ps, os) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
             let lane = |f: fn(&Vec3) -> f32| -> [f64; LANES] {
@@ -95,7 +101,7 @@ impl ScalarField for SvobodaTerrain {
             self.batch
                 .get_lanes_2d(&lane(|p| p.x), &lane(|p| p.z), &mut n);
             for ((o, p), &n) in os.iter_mut().zip(ps).zip(&n) {
-                *o = p.y - (base + a * n as f32);
+                *o = p.y - self.height_of(n);
             }
         }
     }
@@ -103,7 +109,6 @@ impl ScalarField for SvobodaTerrain {
     /// The heights of the shared `(x, z)` columns once ([`BatchFbm`] lanes, as `sample_batch`
     /// computes them), then `y - height` for every row: the same bits as `sample`.
     fn sample_rows(&self, xs: &[f32], ys: &[f32], z: f32, out: &mut [f32], stride: usize) {
-        let (base, a) = (self.params.base, self.params.amplitude);
         let zs = [f64::from(z); LANES];
         let mut noise = [0.0f64; LANES];
         for (c, xc) in xs.chunks(LANES).enumerate() {
@@ -111,7 +116,7 @@ impl ScalarField for SvobodaTerrain {
                 std::array::from_fn(|k| xc.get(k).map_or(0.0, |&x| f64::from(x)));
             self.batch.get_lanes_2d(&lanes, &zs, &mut noise);
             for (k, &v) in noise.iter().take(xc.len()).enumerate() {
-                let height = base + a * v as f32;
+                let height = self.height_of(v);
                 let i = c * LANES + k;
                 for (r, &y) in ys.iter().enumerate() {
                     out[stride * r + i] = y - height;
