@@ -28,7 +28,7 @@ use fast_surface_nets::{surface_nets, SurfaceNetsBuffer};
 use glam::Vec3;
 use rmt_extract::{
     Clustering, ExtractError, ExtractSettings, Extractor, Grid, Lattice, Method, NormalMode,
-    Samples, Stats,
+    Samples, Stats, ThreadPlacement,
 };
 use rmt_fields::{Asteroid, AsteroidParams, ScalarField, Sphere};
 use rmt_mesh::Mesh;
@@ -240,6 +240,9 @@ pub struct BenchConfig {
     pub reps: usize,
     /// Thread counts of our methods.
     pub threads: Vec<usize>,
+    /// Where the workers of our methods' pools run ([`ThreadPlacement::Os`] by default; see
+    /// `rmt_extract::threads` for what pinning changes on an idle pool).
+    pub placement: ThreadPlacement,
 }
 
 impl Default for BenchConfig {
@@ -249,6 +252,7 @@ impl Default for BenchConfig {
             sizes: vec![32, 64, 128],
             reps: 20,
             threads: vec![1, 2],
+            placement: ThreadPlacement::Os,
         }
     }
 }
@@ -328,6 +332,8 @@ pub struct BenchReport {
     pub results: Vec<BenchRow>,
     /// Timed repetitions per row.
     pub reps: usize,
+    /// Where our pools' workers ran: `os` or `pinned`.
+    pub placement: &'static str,
     /// 1, 5 and 15 minute load averages before the run (Linux only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load_average_before: Option<[f64; 3]>,
@@ -500,11 +506,16 @@ impl Case {
         }
     }
 
-    fn runner(&self, method: BenchMethod) -> Result<Runner, BenchError> {
+    fn runner(
+        &self,
+        method: BenchMethod,
+        placement: ThreadPlacement,
+    ) -> Result<Runner, BenchError> {
         let side = (self.n + 1) as u32;
         Ok(match method.settings(self.n, 1) {
             Some(settings) => {
                 let mut extractor = Box::new(Extractor::new());
+                extractor.set_thread_placement(placement);
                 *extractor.samples_mut() = if method.body_centred() {
                     self.bcdl.clone()
                 } else {
@@ -639,7 +650,7 @@ pub fn run_bench(
             let case = Case::new(field, n, sample_threads)?;
             let mut runners = methods
                 .iter()
-                .map(|&m| case.runner(m))
+                .map(|&m| case.runner(m, config.placement))
                 .collect::<Result<Vec<_>, _>>()?;
             // Warm-up: two untimed calls per thread count; the second gives the allocation share.
             let mut share = vec![vec![None; methods.len()]; config.threads.len()];
@@ -709,6 +720,10 @@ pub fn run_bench(
     Ok(BenchReport {
         results,
         reps: config.reps,
+        placement: match config.placement {
+            ThreadPlacement::Os => "os",
+            ThreadPlacement::Pinned => "pinned",
+        },
         load_average_before,
         load_average_after: load_average(),
     })
@@ -782,8 +797,9 @@ pub fn format_table(report: &BenchReport) -> String {
          x_fsn = time over fast-surface-nets'; x_fsn/pt = ns/point over fast-surface-nets' ns per \
          grid point (the target's measure); vg = vertex + geometry passes (wall); vg_xmt = vg over \
          plain MT's on the same lattice; alloc2 = \
-         allocation share of a second call; load average before {}, after {}",
+         allocation share of a second call; workers placed by: {}; load average before {}, after {}",
         report.reps,
+        report.placement,
         load(report.load_average_before),
         load(report.load_average_after)
     );
@@ -883,13 +899,17 @@ mod tests {
     #[test]
     fn peers_mesh_a_closed_surface_from_the_shared_samples() {
         let case = Case::new(BenchField::Sphere, 16, 1).unwrap();
-        let mut mc = case.runner(BenchMethod::Mc).unwrap();
+        let mut mc = case.runner(BenchMethod::Mc, ThreadPlacement::Os).unwrap();
         let ours = case.run(BenchMethod::Mc, &mut mc, 1).unwrap();
-        let mut iso = case.runner(BenchMethod::IsomeshMc).unwrap();
+        let mut iso = case
+            .runner(BenchMethod::IsomeshMc, ThreadPlacement::Os)
+            .unwrap();
         let theirs = case.run(BenchMethod::IsomeshMc, &mut iso, 1).unwrap();
         // Marching cubes is marching cubes: same case table size, same triangle count.
         assert_eq!(ours.triangles, theirs.triangles);
-        let mut fsn = case.runner(BenchMethod::FastSurfaceNets).unwrap();
+        let mut fsn = case
+            .runner(BenchMethod::FastSurfaceNets, ThreadPlacement::Os)
+            .unwrap();
         let nets = case.run(BenchMethod::FastSurfaceNets, &mut fsn, 1).unwrap();
         assert!(nets.triangles > 0);
         for runner in [&iso, &fsn] {
@@ -915,6 +935,7 @@ mod tests {
             sizes: vec![12, 16],
             reps: 3,
             threads: vec![1, 2],
+            placement: ThreadPlacement::Os,
         };
         let mut lines = 0;
         let report = run_bench(&config, |_| lines += 1).unwrap();

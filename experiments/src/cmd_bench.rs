@@ -2,12 +2,13 @@
 //! a table or as one JSON object `{"results": [...]}`.
 //!
 //! ```text
-//! experiments bench --fields sphere,asteroid --sizes 32,64,128 --reps 20 --threads 1,2 --json
+//! experiments bench --fields sphere,asteroid --sizes 32,64,128 --reps 20 --threads 1,2 [--pin] --json
 //! ```
 
 use anyhow::{Context, Result};
 
 use crate::bench::{format_table, run_bench, BenchConfig, BenchField};
+use rmt_extract::ThreadPlacement;
 
 /// Arguments of `bench`.
 #[derive(clap::Args, Debug)]
@@ -24,6 +25,11 @@ pub struct Args {
     /// Thread counts of our methods, comma-separated (the peers are single-threaded).
     #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub threads: Vec<usize>,
+    /// Bind worker i of each of our pools to the i-th CPU (Linux): an idle pool's woken workers
+    /// then cannot end up sharing one CPU (see `rmt_extract::threads`). Default: the OS places
+    /// them.
+    #[arg(long)]
+    pub pin: bool,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -42,6 +48,11 @@ pub fn run(args: Args) -> Result<()> {
         sizes: args.sizes,
         reps: args.reps,
         threads: args.threads,
+        placement: if args.pin {
+            ThreadPlacement::Pinned
+        } else {
+            ThreadPlacement::Os
+        },
     };
     let report = run_bench(&config, |line| eprintln!("bench: {line}"))?;
     if args.json {

@@ -354,3 +354,39 @@ fn extract_in_chunks_equals_the_whole_volume_and_refuses_non_cubic_cells() {
         "{err}"
     );
 }
+
+#[test]
+fn bench_with_pinned_workers_says_so_and_measures_every_method() {
+    let run = |pin: bool| {
+        let mut args = vec![
+            "bench",
+            "--fields",
+            "sphere",
+            "--sizes",
+            "16",
+            "--reps",
+            "1",
+            "--threads",
+            "1,2",
+            "--json",
+        ];
+        if pin {
+            args.push("--pin");
+        }
+        let o = experiments(&args);
+        assert!(o.status.success(), "bench failed: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let rows = v["results"].as_array().unwrap().clone();
+        (v["placement"].as_str().unwrap().to_string(), rows)
+    };
+    let (os, os_rows) = run(false);
+    let (pinned, pinned_rows) = run(true);
+    assert_eq!((os.as_str(), pinned.as_str()), ("os", "pinned"));
+    assert_eq!(os_rows.len(), pinned_rows.len());
+    // Where the workers run changes no mesh: the same triangle counts, row by row.
+    for (a, b) in os_rows.iter().zip(&pinned_rows) {
+        assert_eq!(a["method"], b["method"]);
+        assert_eq!(a["triangles"], b["triangles"]);
+        assert!(b["triangles"].as_u64().unwrap() > 0);
+    }
+}

@@ -60,6 +60,7 @@ pub mod samples;
 pub mod settings;
 pub mod simplify;
 pub mod stats;
+pub mod threads;
 pub mod tiles;
 
 pub use measure::{measure, Measurement};
@@ -68,6 +69,7 @@ pub use settings::{
     CellRange, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Tiling,
 };
 pub use stats::Stats;
+pub use threads::{thread_pool, ThreadPlacement};
 
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
@@ -141,6 +143,9 @@ pub struct Extractor {
     pub(crate) merge: merge::MergeBuffers,
     pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>)>,
     pub(crate) sampling: Sampling,
+    pub(crate) placement: ThreadPlacement,
+    /// The pools given by [`Extractor::set_pool`] (kept when the placement changes).
+    pub(crate) given: Vec<std::sync::Arc<rayon::ThreadPool>>,
 }
 
 impl Extractor {
@@ -185,6 +190,32 @@ impl Extractor {
         self.sampling = sampling;
     }
 
+    /// Sets where the workers of the extractor's own thread pools run (default
+    /// [`ThreadPlacement::Os`]; see [`threads`] for why [`ThreadPlacement::Pinned`] exists). Pools
+    /// built before with another placement are dropped; pools given by [`Extractor::set_pool`]
+    /// are the caller's and are kept. The meshes do not depend on it.
+    ///
+    /// ```
+    /// use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, ThreadPlacement};
+    /// let mut s = ExtractSettings::new(Grid::cube(16, 1.0), Lattice::BodyCentred,
+    ///     Clustering::Integrated);
+    /// s.threads = 2;
+    /// let sphere = rmt_fields::Sphere::new(glam::Vec3::ZERO, 0.6);
+    /// let (mut a, mut b) = (rmt_mesh::Mesh::default(), rmt_mesh::Mesh::default());
+    /// Extractor::new().extract(&sphere, &s, &mut a).unwrap();
+    /// let mut pinned = Extractor::new();
+    /// pinned.set_thread_placement(ThreadPlacement::Pinned);
+    /// pinned.extract(&sphere, &s, &mut b).unwrap();
+    /// assert_eq!((a.positions, a.indices), (b.positions, b.indices));
+    /// ```
+    pub fn set_thread_placement(&mut self, placement: ThreadPlacement) {
+        if placement != self.placement {
+            self.pools
+                .retain(|(_, p)| self.given.iter().any(|g| std::sync::Arc::ptr_eq(g, p)));
+            self.placement = placement;
+        }
+    }
+
     /// Runs extractions with `pool.current_num_threads()` threads on `pool` instead of a pool of
     /// the extractor's own. Callers already running on a rayon pool (e.g. meshing chunks in
     /// parallel) pass it, so that the extractor's parallel passes run inline on the calling
@@ -192,6 +223,8 @@ impl Extractor {
     pub fn set_pool(&mut self, pool: std::sync::Arc<rayon::ThreadPool>) {
         let threads = pool.current_num_threads();
         self.pools.retain(|(n, _)| *n != threads);
+        self.given.retain(|g| g.current_num_threads() != threads);
+        self.given.push(pool.clone());
         self.pools.push((threads, pool));
     }
 
@@ -203,13 +236,10 @@ impl Extractor {
         if let Some((_, p)) = self.pools.iter().find(|(n, _)| *n == threads) {
             return Ok(p.clone());
         }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| ExtractError::ThreadPool {
-                threads,
-                message: e.to_string(),
-            })?;
+        let pool = thread_pool(threads, self.placement).map_err(|e| ExtractError::ThreadPool {
+            threads,
+            message: e.to_string(),
+        })?;
         let pool = std::sync::Arc::new(pool);
         self.pools.push((threads, pool.clone()));
         Ok(pool)

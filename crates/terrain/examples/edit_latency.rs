@@ -5,8 +5,13 @@
 //! cargo run --release -p rmt-terrain --example edit_latency -- \
 //!     [--field svoboda|cave] [--cells 256x64x256] [--chunk 32] [--threads 2] \
 //!     [--lattice bcdl|simple] [--clustering integrated|none|postprocessed|integrated-unchecked|mc] \
-//!     [--strokes 200] [--warmup 20] [--seed 1] [--ground-cell Y]
+//!     [--strokes 200] [--warmup 20] [--seed 1] [--ground-cell Y] [--placement os|pinned] \
+//!     [--pause-ms 0]
 //! ```
+//!
+//! `--placement pinned` binds the world's workers to their own CPUs (`rmt_extract::threads`);
+//! `--pause-ms` idles before each timed stroke, as a player does between strokes (the workers
+//! fall asleep meanwhile).
 //!
 //! The world spans 8 world units along x (h = 8 / cells_x); the terrain's base height (y = 0)
 //! sits at cell `Y` of the y axis (default: the middle, which with 32-cell chunks on a 64-cell
@@ -14,7 +19,7 @@
 
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
-use rmt_extract::{Clustering, Lattice};
+use rmt_extract::{Clustering, Lattice, ThreadPlacement};
 use rmt_fields::{CaveParams, CaveTerrain, ScalarField, SvobodaParams, SvobodaTerrain};
 use rmt_terrain::{canonical_triangles, run_strokes, StrokeParams, World, WorldSettings};
 
@@ -29,6 +34,8 @@ struct Args {
     warmup: usize,
     seed: u64,
     ground_cell: Option<usize>,
+    placement: ThreadPlacement,
+    pause_ms: usize,
 }
 
 fn parse() -> Result<Args> {
@@ -43,6 +50,8 @@ fn parse() -> Result<Args> {
         warmup: 20,
         seed: 1,
         ground_cell: None,
+        placement: ThreadPlacement::Os,
+        pause_ms: 0,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -62,7 +71,15 @@ fn parse() -> Result<Args> {
             }
             "--chunk" => a.chunk = num(&value)?,
             "--threads" => a.threads = num(&value)?,
+            "--placement" => {
+                a.placement = match value.as_str() {
+                    "os" => ThreadPlacement::Os,
+                    "pinned" => ThreadPlacement::Pinned,
+                    _ => bail!("--placement wants os or pinned, got {value:?}"),
+                }
+            }
             "--strokes" => a.strokes = num(&value)?,
+            "--pause-ms" => a.pause_ms = num(&value)?,
             "--warmup" => a.warmup = num(&value)?,
             "--seed" => a.seed = num(&value)? as u64,
             "--ground-cell" => a.ground_cell = Some(num(&value)?),
@@ -98,7 +115,10 @@ fn main() -> Result<()> {
             WorldSettings::new(a.cells, origin, h, a.lattice, clustering)
         }
     };
-    settings = settings.with_chunk(a.chunk).with_threads(a.threads);
+    settings = settings
+        .with_chunk(a.chunk)
+        .with_threads(a.threads)
+        .with_placement(a.placement);
     let field: Box<dyn ScalarField> = match a.field.as_str() {
         "svoboda" => Box::new(SvobodaTerrain::new(SvobodaParams::default())),
         "cave" => Box::new(CaveTerrain::new(CaveParams::default())),
@@ -154,7 +174,10 @@ fn main() -> Result<()> {
 
     let params = StrokeParams::for_cells(h, a.warmup, a.seed.wrapping_add(1_000_003));
     run_strokes(&mut world, &params).context("warm-up strokes")?;
-    let params = StrokeParams::for_cells(h, a.strokes, a.seed);
+    let params = StrokeParams {
+        pause_s: a.pause_ms as f32 * 1e-3,
+        ..StrokeParams::for_cells(h, a.strokes, a.seed)
+    };
     let r = run_strokes(&mut world, &params).context("strokes")?;
     let n = r.chunks.len().max(1) as f64;
     let per_chunk: Vec<f64> = r.triangles_per_chunk();

@@ -19,6 +19,10 @@ pub struct StrokeParams {
     pub dt: f32,
     /// Clamp of the edited values.
     pub clamp: Option<f32>,
+    /// Idle time before each stroke in seconds (not timed): a player's pace. The world's
+    /// workers sleep meanwhile, and how they wake decides what a second thread gains (see
+    /// `rmt_extract::threads`). 0 runs the strokes back to back.
+    pub pause_s: f32,
 }
 
 impl StrokeParams {
@@ -32,6 +36,7 @@ impl StrokeParams {
             strength: 60.0 * h,
             dt: 1.0 / 60.0,
             clamp: Some(8.0 * h),
+            pause_s: 0.0,
         }
     }
 }
@@ -116,6 +121,9 @@ pub fn run_strokes(world: &mut World, params: &StrokeParams) -> Result<StrokeRep
             mode,
             clamp: params.clamp,
         };
+        if params.pause_s > 0.0 && params.pause_s.is_finite() {
+            std::thread::sleep(std::time::Duration::from_secs_f32(params.pause_s));
+        }
         let start = std::time::Instant::now();
         world.apply_brush(&brush, params.dt)?;
         let stats = world.remesh_dirty()?;

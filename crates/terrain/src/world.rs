@@ -9,8 +9,8 @@ use rayon::prelude::*;
 use rmt_extract::lattice::LatticeTables;
 use rmt_extract::samples::sampled_lattice;
 use rmt_extract::{
-    CellRange, Clustering, ExtractError, ExtractSettings, Extractor, Grid, Lattice, Method,
-    NormalMode, Samples, Stats, Tiling,
+    thread_pool, CellRange, Clustering, ExtractError, ExtractSettings, Extractor, Grid, Lattice,
+    Method, NormalMode, Samples, Stats, ThreadPlacement, Tiling,
 };
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
@@ -48,6 +48,10 @@ pub struct WorldSettings {
     pub iso: f32,
     /// Worker threads: chunks are meshed in parallel on this many threads.
     pub threads: usize,
+    /// Where the workers run ([`ThreadPlacement::Os`] unless set; pinned workers keep their
+    /// parallel speed after the pool has been idle between strokes, see
+    /// `rmt_extract::threads`).
+    pub placement: ThreadPlacement,
 }
 
 impl WorldSettings {
@@ -71,6 +75,7 @@ impl WorldSettings {
             collapse_threshold: defaults.collapse_threshold,
             iso: 0.0,
             threads: 1,
+            placement: ThreadPlacement::Os,
         }
     }
 
@@ -85,6 +90,12 @@ impl WorldSettings {
     /// The same settings with chunks of `chunk` cells.
     pub fn with_chunk(mut self, chunk: usize) -> Self {
         self.chunk = chunk;
+        self
+    }
+
+    /// The same settings with the workers placed as `placement` says.
+    pub fn with_placement(mut self, placement: ThreadPlacement) -> Self {
+        self.placement = placement;
         self
     }
 
@@ -201,13 +212,12 @@ impl World {
     /// [`World::remesh_dirty`] to mesh them.
     pub fn new(field: &dyn ScalarField, settings: WorldSettings) -> Result<Self, TerrainError> {
         settings.check()?;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(settings.threads)
-            .build()
-            .map_err(|e| TerrainError::ThreadPool {
+        let pool = thread_pool(settings.threads, settings.placement).map_err(|e| {
+            TerrainError::ThreadPool {
                 threads: settings.threads,
                 message: e.to_string(),
-            })?;
+            }
+        })?;
         let pool = Arc::new(pool);
         let unit = settings.unit_settings();
         let mut sampling = unit;
