@@ -7,8 +7,9 @@
 //!
 //! Why pinning exists: on the 2-vCPU Firecracker VMs this project is measured on (Linux 6.18),
 //! a pool whose workers had slept for 30 ms or more ran its next parallel job on one CPU: the
-//! woken worker was put on the CPU of the worker that woke it, and the two shared it while the
-//! other CPU stayed idle. A job of 10 ms of work split into 64 parts took 10.0 ms on 2 threads
+//! woken worker evidently queued on the CPU of the worker that woke it, and the two shared it
+//! while the other CPU stayed idle (binding each worker to its own CPU removes the effect, which
+//! is what the placement, not the work, would predict). A job of 10 ms of work split into 64 parts took 10.0 ms on 2 threads
 //! after 30 or 100 ms of idleness (5.1-5.4 ms after 0-10 ms), and 5.2-5.6 ms in every case with
 //! pinned workers. Extraction pools sit idle between calls whenever the caller does something
 //! else (a game between strokes, the benchmark between methods), so this decides what a second
