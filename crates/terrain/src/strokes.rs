@@ -21,7 +21,7 @@ pub struct StrokeParams {
     pub clamp: Option<f32>,
     /// Idle time before each stroke in seconds (not timed): a player's pace. The world's
     /// workers sleep meanwhile, and how they wake decides what a second thread gains (see
-    /// `rmt_extract::threads`). 0 runs the strokes back to back.
+    /// `rmt_extract::threads`). 0 (or a negative or NaN value) runs the strokes back to back.
     pub pause_s: f32,
 }
 
@@ -121,8 +121,11 @@ pub fn run_strokes(world: &mut World, params: &StrokeParams) -> Result<StrokeRep
             mode,
             clamp: params.clamp,
         };
-        if params.pause_s > 0.0 && params.pause_s.is_finite() {
-            std::thread::sleep(std::time::Duration::from_secs_f32(params.pause_s));
+        // Negative, NaN or unrepresentable pauses are no pause.
+        if let Ok(pause) = std::time::Duration::try_from_secs_f32(params.pause_s) {
+            if !pause.is_zero() {
+                std::thread::sleep(pause);
+            }
         }
         let start = std::time::Instant::now();
         world.apply_brush(&brush, params.dt)?;
@@ -150,5 +153,50 @@ mod tests {
         assert_eq!(r.latency_quantile(1.0), 100.0);
         assert_eq!(r.triangles_per_chunk()[0], 10.0);
         assert_eq!(StrokeReport::default().latency_quantile(0.5), 0.0);
+    }
+
+    /// A small world: a sphere in 16^3 cells, chunks of 8.
+    fn small_world() -> World {
+        let settings = crate::WorldSettings::new(
+            [16, 16, 16],
+            Vec3::splat(-1.0),
+            0.125,
+            rmt_extract::Lattice::BodyCentred,
+            rmt_extract::Clustering::Integrated,
+        )
+        .with_chunk(8);
+        World::new(&rmt_fields::Sphere::new(Vec3::ZERO, 0.6), settings).unwrap()
+    }
+
+    #[test]
+    fn the_pause_before_a_stroke_is_not_part_of_its_latency() {
+        let mut world = small_world();
+        let pause = 0.02;
+        let params = StrokeParams {
+            pause_s: pause,
+            ..StrokeParams::for_cells(0.125, 4, 3)
+        };
+        let start = std::time::Instant::now();
+        let r = run_strokes(&mut world, &params).unwrap();
+        let elapsed = start.elapsed().as_secs_f64();
+        // Each sleep lasts at least the pause, so the strokes' own time fits in what is left;
+        // latencies that included the pause would add up to more.
+        let pauses = 4.0 * f64::from(pause);
+        assert!(elapsed >= pauses, "{elapsed} s for {pauses} s of pauses");
+        let timed: f64 = r.latencies_s.iter().sum();
+        assert!(timed <= elapsed - pauses, "{timed} s timed of {elapsed} s");
+    }
+
+    #[test]
+    fn negative_nan_and_unrepresentable_pauses_are_no_pause() {
+        for pause_s in [-1.0, f32::NAN, f32::MAX, f32::INFINITY] {
+            let mut world = small_world();
+            let params = StrokeParams {
+                pause_s,
+                ..StrokeParams::for_cells(0.125, 2, 5)
+            };
+            let r = run_strokes(&mut world, &params).unwrap();
+            assert_eq!(r.latencies_s.len(), 2, "pause {pause_s}");
+        }
     }
 }
