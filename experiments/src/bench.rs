@@ -720,10 +720,7 @@ pub fn run_bench(
     Ok(BenchReport {
         results,
         reps: config.reps,
-        placement: match config.placement {
-            ThreadPlacement::Os => "os",
-            ThreadPlacement::Pinned => "pinned",
-        },
+        placement: config.placement.name(),
         load_average_before,
         load_average_after: load_average(),
     })

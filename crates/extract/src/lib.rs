@@ -141,11 +141,11 @@ pub struct Extractor {
     pub(crate) samples: Samples,
     pub(crate) mt: mt::MtBuffers,
     pub(crate) merge: merge::MergeBuffers,
-    pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>)>,
+    /// Thread pools by worker count; `true` marks a pool given by [`Extractor::set_pool`] (the
+    /// caller's: kept when the placement changes).
+    pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>, bool)>,
     pub(crate) sampling: Sampling,
     pub(crate) placement: ThreadPlacement,
-    /// The pools given by [`Extractor::set_pool`] (kept when the placement changes).
-    pub(crate) given: Vec<std::sync::Arc<rayon::ThreadPool>>,
 }
 
 impl Extractor {
@@ -210,8 +210,7 @@ impl Extractor {
     /// ```
     pub fn set_thread_placement(&mut self, placement: ThreadPlacement) {
         if placement != self.placement {
-            self.pools
-                .retain(|(_, p)| self.given.iter().any(|g| std::sync::Arc::ptr_eq(g, p)));
+            self.pools.retain(|&(_, _, given)| given);
             self.placement = placement;
         }
     }
@@ -222,10 +221,8 @@ impl Extractor {
     /// worker and its siblings instead of being handed to other threads and back.
     pub fn set_pool(&mut self, pool: std::sync::Arc<rayon::ThreadPool>) {
         let threads = pool.current_num_threads();
-        self.pools.retain(|(n, _)| *n != threads);
-        self.given.retain(|g| g.current_num_threads() != threads);
-        self.given.push(pool.clone());
-        self.pools.push((threads, pool));
+        self.pools.retain(|(n, _, _)| *n != threads);
+        self.pools.push((threads, pool, true));
     }
 
     /// The thread pool for `threads` workers, built once and kept.
@@ -233,7 +230,7 @@ impl Extractor {
         &mut self,
         threads: usize,
     ) -> Result<std::sync::Arc<rayon::ThreadPool>, ExtractError> {
-        if let Some((_, p)) = self.pools.iter().find(|(n, _)| *n == threads) {
+        if let Some((_, p, _)) = self.pools.iter().find(|(n, _, _)| *n == threads) {
             return Ok(p.clone());
         }
         let pool = thread_pool(threads, self.placement).map_err(|e| ExtractError::ThreadPool {
@@ -241,7 +238,7 @@ impl Extractor {
             message: e.to_string(),
         })?;
         let pool = std::sync::Arc::new(pool);
-        self.pools.push((threads, pool.clone()));
+        self.pools.push((threads, pool.clone(), false));
         Ok(pool)
     }
 

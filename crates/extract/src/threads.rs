@@ -9,9 +9,9 @@
 //! a pool whose workers had slept for 30 ms or more ran its next parallel job on one CPU: the
 //! woken worker evidently queued on the CPU of the worker that woke it, and the two shared it
 //! while the other CPU stayed idle (binding each worker to its own CPU removes the effect, which
-//! is what the placement, not the work, would predict). A job of 10 ms of work split into 64 parts took 10.0 ms on 2 threads
-//! after 30 or 100 ms of idleness (5.1-5.4 ms after 0-10 ms), and 5.2-5.6 ms in every case with
-//! pinned workers. Extraction pools sit idle between calls whenever the caller does something
+//! is what the placement, not the work, would predict). A job of 10 ms of work split into 64
+//! parts took 10.0 ms on 2 threads after 30 or 100 ms of idleness (5.1-5.4 ms after 0-10 ms),
+//! and 5.2-5.6 ms in every case with pinned workers. Extraction pools sit idle between calls whenever the caller does something
 //! else (a game between strokes, the benchmark between methods), so this decides what a second
 //! thread gains. Pinning is an opt-in: a process that runs several pinned pools at once (tests
 //! in parallel, say) would crowd them onto the same CPUs.
@@ -30,6 +30,30 @@ pub enum ThreadPlacement {
     /// Worker `i` is bound to the `i`-th CPU the building thread may run on (Linux; elsewhere
     /// the same as `Os`). Binding is best effort: a worker that cannot be bound runs unbound.
     Pinned,
+}
+
+impl ThreadPlacement {
+    /// Both placements, in order.
+    pub const ALL: [ThreadPlacement; 2] = [ThreadPlacement::Os, ThreadPlacement::Pinned];
+
+    /// The name used on command lines and in reports: `os` or `pinned`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ThreadPlacement::Os => "os",
+            ThreadPlacement::Pinned => "pinned",
+        }
+    }
+
+    /// The placement called `name` ([`ThreadPlacement::name`]), or `None`.
+    ///
+    /// ```
+    /// use rmt_extract::ThreadPlacement;
+    /// assert_eq!(ThreadPlacement::parse("pinned"), Some(ThreadPlacement::Pinned));
+    /// assert_eq!(ThreadPlacement::parse("pin"), None);
+    /// ```
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
 }
 
 /// A rayon pool of `threads` workers placed as `placement` says.
@@ -62,7 +86,7 @@ pub fn thread_pool(
 }
 
 /// The CPUs the calling thread may run on, in increasing order (empty where unknown).
-pub fn allowed_cpus() -> Vec<usize> {
+pub(crate) fn allowed_cpus() -> Vec<usize> {
     #[cfg(target_os = "linux")]
     {
         // SAFETY: `cpu_set_t` is plain data (all-zero is the empty set), and the size passed

@@ -72,11 +72,8 @@ fn parse() -> Result<Args> {
             "--chunk" => a.chunk = num(&value)?,
             "--threads" => a.threads = num(&value)?,
             "--placement" => {
-                a.placement = match value.as_str() {
-                    "os" => ThreadPlacement::Os,
-                    "pinned" => ThreadPlacement::Pinned,
-                    _ => bail!("--placement wants os or pinned, got {value:?}"),
-                }
+                a.placement = ThreadPlacement::parse(&value)
+                    .with_context(|| format!("--placement wants os or pinned, got {value:?}"))?
             }
             "--strokes" => a.strokes = num(&value)?,
             "--pause-ms" => a.pause_ms = num(&value)?,
