@@ -240,10 +240,9 @@ pub(crate) struct Star {
     tris: Vec<u32>,
     /// Per triangle: bit `i` set when its corner `i` is a member.
     mask: Vec<u8>,
-    /// Link edges `src[i] -> dst[i]` of the test of (b), and the cycle walk's successors.
+    /// Link edges `src[i] -> dst[i]` of the test of (b).
     src: Vec<u32>,
     dst: Vec<u32>,
-    next: Vec<u32>,
     /// Labels of the link vertices (see [`Quotient::passes`]).
     link: Vec<u32>,
 }
@@ -302,13 +301,9 @@ impl Quotient<'_> {
             for &ti in self.tris_of(x) {
                 let t = self.tri(ti);
                 let mask = (0..3).fold(0u8, |m, i| m | u8::from(member(t[i])) << i);
-                // Each triangle once: from its first member corner.
-                if t[mask.trailing_zeros() as usize] != x {
-                    continue;
-                }
                 if mask.count_ones() >= 2 {
-                    // Collapsed: only test (a) reads it.
-                    if test_a {
+                    // Collapsed: only test (a) reads it, once, from its first member corner.
+                    if test_a && t[mask.trailing_zeros() as usize] == x {
                         for e in 0..3 {
                             let (a, b) = (e, (e + 1) % 3);
                             if mask >> a & 1 != 0 && mask >> b & 1 != 0 {
@@ -322,6 +317,7 @@ impl Quotient<'_> {
                     }
                     continue;
                 }
+                // One member corner, `x`: the triangle is listed once, from it.
                 let Some(q) = self.quotient_triangle(t, mask, me) else {
                     continue;
                 };
@@ -344,7 +340,7 @@ impl Quotient<'_> {
                 return Verdict::FailsContractible;
             }
         }
-        if geometry && simple_cycle(&s.src, &s.dst, &mut s.next) {
+        if geometry && simple_cycle(&s.src, &s.dst) {
             Verdict::Passes
         } else {
             Verdict::FailsLink
@@ -587,36 +583,26 @@ fn connected(adj: &[u32; 32], members: u32) -> bool {
     }
 }
 
-/// Whether the directed edges `src[i] -> dst[i]` form one simple cycle of at least 3 vertices
-/// (`next` is working memory).
-fn simple_cycle(src: &[u32], dst: &[u32], next: &mut Vec<u32>) -> bool {
+/// Whether the directed edges `src[i] -> dst[i]` form one simple cycle of at least 3 vertices:
+/// every vertex starts one edge and ends one, and the edges make one cycle.
+///
+/// The walk from edge 0 always takes the *first* edge that starts where the current one ends.
+/// It comes back to edge 0 after exactly `m` steps, and not before, if and only if the edges
+/// form one simple cycle: such a walk visits all `m` edges, each of them the first edge with
+/// its start, so no two edges start at one vertex; and it is a bijection on the edges, so no
+/// two end at one. Conversely, on one simple cycle the first edge is the only one. (A test
+/// beside this function compares it with the definition on every small edge set.)
+fn simple_cycle(src: &[u32], dst: &[u32]) -> bool {
     let m = src.len();
     if m < 3 {
         return false;
     }
-    // Each vertex starts one edge and ends one.
-    next.clear();
-    next.resize(m, 0);
-    for i in 0..m {
-        let mut found = None;
-        for j in 0..m {
-            if j != i && (src[j] == src[i] || dst[j] == dst[i]) {
-                return false;
-            }
-            if dst[j] == src[i] {
-                found = Some(j);
-            }
-        }
-        match found {
-            // Edge `j` ends where edge `i` starts: `i` follows `j`.
-            Some(j) => next[j] = i as u32,
-            None => return false,
-        }
-    }
-    // One cycle through all edges.
     let mut at = 0usize;
     for step in 1..=m {
-        at = next[at] as usize;
+        match src.iter().position(|&v| v == dst[at]) {
+            Some(j) => at = j,
+            None => return false,
+        }
         if at == 0 {
             return step == m;
         }
@@ -637,6 +623,23 @@ fn shape(p: [[f32; 3]; 3]) -> Shape {
     let p = p.map(|x| DVec3::from(x.map(f64::from)));
     let e = [p[2] - p[1], p[0] - p[2], p[1] - p[0]];
     let n = e[1].cross(e[2]);
+    // The same comparison squared, without the square roots, where it is clear by far more
+    // than the rounding of either form (a relative 1e-6 against a few 1e-16); the exact form
+    // below decides the rest.
+    let l2_max = e[0]
+        .length_squared()
+        .max(e[1].length_squared())
+        .max(e[2].length_squared());
+    let (lhs, rhs) = (
+        n.length_squared(),
+        4.0 * ZERO_AREA_REL_TOL * ZERO_AREA_REL_TOL * l2_max * l2_max,
+    );
+    if lhs > rhs * (1.0 + 1e-6) {
+        return Shape::Normal(n);
+    }
+    if lhs < rhs * (1.0 - 1e-6) {
+        return Shape::Flat;
+    }
     let l_max = e[0].length().max(e[1].length()).max(e[2].length());
     if 0.5 * n.length() <= ZERO_AREA_REL_TOL * l_max * l_max {
         Shape::Flat
@@ -654,14 +657,112 @@ mod tests {
 
     #[test]
     fn simple_cycles_are_told_apart_from_paths_figure_eights_and_doubles() {
-        let n = &mut Vec::new();
-        assert!(simple_cycle(&[1, 2, 3], &[2, 3, 1], n));
-        assert!(simple_cycle(&[5, 1, 9, 2], &[9, 5, 2, 1], n));
+        assert!(simple_cycle(&[1, 2, 3], &[2, 3, 1]));
+        assert!(simple_cycle(&[5, 1, 9, 2], &[9, 5, 2, 1]));
         // Too short, open, two cycles, a vertex twice.
-        assert!(!simple_cycle(&[1, 2], &[2, 1], n));
-        assert!(!simple_cycle(&[1, 2, 3], &[2, 3, 4], n));
-        assert!(!simple_cycle(&[1, 2, 3, 4, 5, 6], &[2, 3, 1, 5, 6, 4], n));
-        assert!(!simple_cycle(&[1, 2, 3, 1], &[2, 3, 1, 4], n));
+        assert!(!simple_cycle(&[1, 2], &[2, 1]));
+        assert!(!simple_cycle(&[1, 2, 3], &[2, 3, 4]));
+        assert!(!simple_cycle(&[1, 2, 3, 4, 5, 6], &[2, 3, 1, 5, 6, 4]));
+        assert!(!simple_cycle(&[1, 2, 3, 1], &[2, 3, 1, 4]));
+    }
+
+    /// The definition, directly: at least 3 edges, every vertex starts one edge and ends one,
+    /// and following the edges from edge 0 passes through all of them before it returns.
+    fn simple_cycle_by_definition(src: &[u32], dst: &[u32]) -> bool {
+        let m = src.len();
+        if m < 3 {
+            return false;
+        }
+        for i in 0..m {
+            for j in 0..m {
+                if i != j && (src[i] == src[j] || dst[i] == dst[j]) {
+                    return false;
+                }
+            }
+        }
+        let mut at = 0;
+        for step in 1..=m {
+            match (0..m).find(|&j| src[j] == dst[at]) {
+                Some(j) => at = j,
+                None => return false,
+            }
+            if at == 0 {
+                return step == m;
+            }
+        }
+        false
+    }
+
+    #[test]
+    fn the_walk_agrees_with_the_definition_on_every_small_edge_set() {
+        // Every list of up to 5 edges over 4 vertices (ordered, repeats allowed).
+        let mut checked = 0;
+        for m in 0..=5u32 {
+            for code in 0..16u32.pow(m) {
+                let (mut src, mut dst) = (Vec::new(), Vec::new());
+                let mut c = code;
+                for _ in 0..m {
+                    src.push(c % 4);
+                    dst.push(c / 4 % 4);
+                    c /= 16;
+                }
+                assert_eq!(
+                    simple_cycle(&src, &dst),
+                    simple_cycle_by_definition(&src, &dst),
+                    "edges {src:?} -> {dst:?}"
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, (0..=5).map(|m| 16u32.pow(m)).sum::<u32>());
+    }
+
+    /// The shape as `rmt_mesh::quality` measures it, with no shortcut.
+    fn shape_exact(p: [[f32; 3]; 3]) -> Shape {
+        let p = p.map(|x| DVec3::from(x.map(f64::from)));
+        let e = [p[2] - p[1], p[0] - p[2], p[1] - p[0]];
+        let n = e[1].cross(e[2]);
+        let l_max = e[0].length().max(e[1].length()).max(e[2].length());
+        if 0.5 * n.length() <= ZERO_AREA_REL_TOL * l_max * l_max {
+            Shape::Flat
+        } else {
+            Shape::Normal(n)
+        }
+    }
+
+    #[test]
+    fn the_squared_shortcut_agrees_with_the_exact_shape() {
+        let (mut flat, mut tested) = (0, 0);
+        // Heights around the threshold (area 1e-12 of the longest edge squared: a height of
+        // 2e-12 on these unit bases), on both sides in steps of 1e-5, and random triangles.
+        let mut h = 0.5e-12f32;
+        while h < 8e-12 {
+            for p in [
+                [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, h, 0.0]],
+                [[0.25, 0.0, 1.0], [1.25, 0.0, 1.0], [0.75, 0.0, 1.0 + h]],
+            ] {
+                assert_eq!(shape(p), shape_exact(p), "{p:?}");
+                flat += usize::from(shape(p) == Shape::Flat);
+                tested += 1;
+            }
+            h = f32::from_bits(h.to_bits() + 1).max(h * (1.0 + 1e-5));
+        }
+        assert!(flat > 0 && flat < tested, "{flat} of {tested} flat");
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        for _ in 0..20_000 {
+            let p = [
+                [next(), next(), next()],
+                [next(), next(), next()],
+                [next(), next(), next()],
+            ];
+            assert_eq!(shape(p), shape_exact(p), "{p:?}");
+        }
     }
 
     #[test]
