@@ -1,0 +1,184 @@
+//! How wide a halo makes a chunk reproduce the whole volume *without* the tile rule (issue 18's
+//! chunk seams): the data for choosing the rule that will replace the tile rule.
+//!
+//! ```text
+//! cargo run --release -p rmt-terrain --example halo_exactness -- [object] [chunk] [halos]
+//! ```
+//!
+//! `object` is `asteroid` (64^3 cells) or `terrain` (the Svoboda terrain of `edit_latency`, 128 x
+//! 64 x 128 cells of h = 8/256); `chunk` the chunk edge in cells (default 32); `halos` the halo
+//! widths in cells, comma-separated (default `1,2,3,4,6,8`).
+//!
+//! Body-centred integrated clustering, one thread, in lattice units (cell edge 1, boxes at
+//! integer corners, so positions are exact in every box). The whole volume is extracted once
+//! with the global rule (no tiles). Then every chunk is extracted from its cells plus a halo of
+//! `H` cells (clipped at the volume), again with no tiles, keeping the triangles anchored in its
+//! own cells, as the terrain world keeps them. A chunk is *exact* when every triangle it keeps is
+//! a triangle of the whole volume; when every chunk is exact and their triangles add up to the
+//! whole's, the chunks are the whole volume, bit for bit. Printed per halo: the chunks with a
+//! triangle that is not the whole's, those triangles, the chunks' triangles over the whole's,
+//! and the median time of one chunk. The first line is the terrain world's way, for comparison:
+//! the tile rule (tiles = chunks) and a halo of one cell. Its chunks reproduce the whole volume
+//! *under the tile rule* (the world's invariant), so most of their triangles are not the
+//! global rule's.
+//!
+//! A halo that suffices on these fields is not a proof: the repair rounds are not bounded, so
+//! a chunk needs a rule (or a certificate) to be exact by construction. This measures how far
+//! the global rule is from that in practice.
+
+use std::collections::HashSet;
+
+use glam::Vec3;
+use rmt_extract::samples::sampled_lattice;
+use rmt_extract::{CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Tiling};
+use rmt_fields::{Asteroid, AsteroidParams, ScalarField, SvobodaParams, SvobodaTerrain};
+use rmt_mesh::Mesh;
+use rmt_terrain::canonical_triangles;
+
+/// A field sampled in lattice units: `inner` at `origin + p * h`.
+struct Scaled {
+    inner: Box<dyn ScalarField>,
+    origin: Vec3,
+    h: f32,
+}
+
+impl ScalarField for Scaled {
+    fn sample(&self, p: Vec3) -> f32 {
+        self.inner.sample(self.origin + p * self.h)
+    }
+}
+
+fn settings(cells: [usize; 3], lo: [usize; 3], hi: [usize; 3]) -> ExtractSettings {
+    let v = |c: [usize; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+    ExtractSettings::new(
+        Grid::new(cells, v(lo), v(hi)),
+        Lattice::BodyCentred,
+        Clustering::Integrated,
+    )
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let object = args.get(1).map_or("asteroid", String::as_str);
+    let chunk: usize = match args.get(2) {
+        Some(s) => s
+            .parse()
+            .map_err(|_| format!("chunk: a whole number, got {s:?}"))?,
+        None => 32,
+    };
+    let halos: Vec<usize> = match args.get(3) {
+        Some(s) => s
+            .split(',')
+            .map(|h| {
+                h.parse()
+                    .map_err(|_| format!("halos: whole numbers, got {h:?}"))
+            })
+            .collect::<Result<_, _>>()?,
+        None => vec![1, 2, 3, 4, 6, 8],
+    };
+    if chunk == 0 {
+        return Err("chunk must be at least 1".into());
+    }
+    let (cells, field) = match object {
+        "asteroid" => (
+            [64; 3],
+            Scaled {
+                inner: Box::new(Asteroid::new(Vec3::ZERO, AsteroidParams::default())),
+                origin: Vec3::splat(-1.0),
+                h: 2.0 / 64.0,
+            },
+        ),
+        "terrain" => {
+            let h = 8.0 / 256.0;
+            (
+                [128, 64, 128],
+                Scaled {
+                    inner: Box::new(SvobodaTerrain::new(SvobodaParams::default())),
+                    origin: Vec3::new(0.0, -32.0 * h, 0.0),
+                    h,
+                },
+            )
+        }
+        other => return Err(format!("object: asteroid or terrain, got {other:?}").into()),
+    };
+
+    // The whole volume, with the global rule.
+    let whole_settings = settings(cells, [0; 3], cells);
+    let mut whole = Extractor::new();
+    let mut mesh = Mesh::default();
+    whole.extract(&field, &whole_settings, &mut mesh)?;
+    let whole_tris = canonical_triangles(&mesh);
+    let whole_set: HashSet<[[u32; 3]; 3]> = whole_tris.iter().copied().collect();
+    println!(
+        "{object} {cells:?} cells, chunks of {chunk}^3, BCDL integrated, whole volume: {} triangles",
+        whole_tris.len()
+    );
+    let samples = whole.samples();
+    let counts = cells.map(|c| c.div_ceil(chunk));
+    let mut ex = Extractor::new();
+    let mut out = Mesh::default();
+    // The terrain world's way first (the tile rule with tiles = chunks, a halo of one cell),
+    // then the global rule with each halo.
+    let runs = std::iter::once((1, true)).chain(halos.iter().map(|&h| (h, false)));
+    for (halo, tiled) in runs {
+        let (mut inexact, mut wrong, mut kept) = (0, 0, 0);
+        let mut times = Vec::new();
+        for cz in 0..counts[2] {
+            for cy in 0..counts[1] {
+                for cx in 0..counts[0] {
+                    let c = [cx, cy, cz];
+                    let lo = [0, 1, 2].map(|a| c[a] * chunk);
+                    let hi = [0, 1, 2].map(|a| (lo[a] + chunk).min(cells[a]));
+                    let s0 = [0, 1, 2].map(|a| lo[a].saturating_sub(halo));
+                    let s1 = [0, 1, 2].map(|a| (hi[a] + halo).min(cells[a]));
+                    let mut st = settings([0, 1, 2].map(|a| s1[a] - s0[a]), s0, s1);
+                    if tiled {
+                        st.tiles = Some(Tiling::new([chunk; 3], s0));
+                    }
+                    st.keep_cells = Some(CellRange {
+                        lo: [0, 1, 2].map(|a| lo[a] - s0[a]),
+                        hi: [0, 1, 2].map(|a| hi[a] - s0[a]),
+                    });
+                    // The box's values, copied from the whole volume's samples (storage
+                    // slots shift by s0 per axis, body-centred planes by 2 s0).
+                    let dst = ex.samples_mut();
+                    dst.prepare(&st);
+                    let (wd, ld) = (samples.dims, dst.dims);
+                    let zoff = match sampled_lattice(&st) {
+                        Lattice::BodyCentred => 2 * s0[2],
+                        Lattice::Simple => s0[2],
+                    };
+                    for z in 0..ld[2] {
+                        for y in 0..ld[1] {
+                            let src = ((z + zoff) * wd[1] + y + s0[1]) * wd[0] + s0[0];
+                            let at = (z * ld[1] + y) * ld[0];
+                            dst.values[at..at + ld[0]]
+                                .copy_from_slice(&samples.values[src..src + ld[0]]);
+                        }
+                    }
+                    let stats = ex.extract_presampled(&st, &mut out)?;
+                    times.push(stats.t_total_s);
+                    let tris = canonical_triangles(&out);
+                    let bad = tris.iter().filter(|t| !whole_set.contains(*t)).count();
+                    inexact += usize::from(bad > 0);
+                    wrong += bad;
+                    kept += tris.len();
+                }
+            }
+        }
+        times.sort_by(f64::total_cmp);
+        println!(
+            "{} {halo}: {inexact} of {} chunks with triangles not in the whole ({wrong} \
+             triangles); chunks' triangles over the whole's {:.4}; median chunk {:.2} ms",
+            if tiled {
+                "tile rule, halo"
+            } else {
+                "global rule, halo"
+            },
+            times.len(),
+            kept as f64 / whole_tris.len().max(1) as f64,
+            times[times.len() / 2] * 1e3
+        );
+    }
+    Ok(())
+}
