@@ -2,12 +2,14 @@
 //! chunk seams): the data for choosing the rule that will replace the tile rule.
 //!
 //! ```text
-//! cargo run --release -p rmt-terrain --example halo_exactness -- [object] [chunk] [halos]
+//! cargo run --release -p rmt-terrain --example halo_exactness -- [object] [chunk] [halos] [fields]
 //! ```
 //!
-//! `object` is `asteroid` (64^3 cells) or `terrain` (the Svoboda terrain of `edit_latency`, 128 x
-//! 64 x 128 cells of h = 8/256); `chunk` the chunk edge in cells (default 32); `halos` the halo
-//! widths in cells, comma-separated (default `1,2,3,4,6,8`).
+//! `object` is `asteroid` (64^3 cells), `terrain` (the Svoboda terrain of `edit_latency`, 128 x
+//! 64 x 128 cells of h = 8/256) or `random` (the property tests' random fields,
+//! `rmt_fields::RandomField`, seeds 0 to `fields` - 1, default 200, on 12^3 cells); `chunk` the
+//! chunk edge in cells (default 32, for `random` 4); `halos` the halo widths in cells,
+//! comma-separated (default `1,2,3,4,6,8`).
 //!
 //! Body-centred integrated clustering, one thread, in lattice units (cell edge 1, boxes at
 //! integer corners, so positions are exact in every box). The whole volume is extracted once
@@ -31,7 +33,9 @@ use std::collections::HashSet;
 use glam::Vec3;
 use rmt_extract::samples::sampled_lattice;
 use rmt_extract::{CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Tiling};
-use rmt_fields::{Asteroid, AsteroidParams, ScalarField, SvobodaParams, SvobodaTerrain};
+use rmt_fields::{
+    Asteroid, AsteroidParams, RandomField, ScalarField, SvobodaParams, SvobodaTerrain,
+};
 use rmt_mesh::Mesh;
 use rmt_terrain::canonical_triangles;
 
@@ -57,15 +61,115 @@ fn settings(cells: [usize; 3], lo: [usize; 3], hi: [usize; 3]) -> ExtractSetting
     )
 }
 
+/// One configuration's outcome over all chunks.
+#[derive(Clone, Copy, Default)]
+struct Row {
+    /// Chunks with a triangle that is not the whole's.
+    inexact: usize,
+    /// Those triangles.
+    wrong: usize,
+    /// The chunks' triangles.
+    kept: usize,
+    /// Chunks.
+    chunks: usize,
+    /// Median seconds of one chunk's extraction.
+    median_s: f64,
+}
+
+/// The whole volume's triangle count, and one row per configuration `(halo, tiled)`.
+fn measure(
+    field: &dyn ScalarField,
+    cells: [usize; 3],
+    chunk: usize,
+    runs: &[(usize, bool)],
+) -> Result<(usize, Vec<Row>), Box<dyn std::error::Error>> {
+    // The whole volume, with the global rule.
+    let mut whole = Extractor::new();
+    let mut mesh = Mesh::default();
+    whole.extract(field, &settings(cells, [0; 3], cells), &mut mesh)?;
+    let whole_tris = canonical_triangles(&mesh);
+    let whole_set: HashSet<[[u32; 3]; 3]> = whole_tris.iter().copied().collect();
+    let samples = whole.samples();
+    let counts = cells.map(|c| c.div_ceil(chunk));
+    let mut ex = Extractor::new();
+    let mut out = Mesh::default();
+    let mut rows = Vec::new();
+    for &(halo, tiled) in runs {
+        let mut row = Row::default();
+        let mut times = Vec::new();
+        for cz in 0..counts[2] {
+            for cy in 0..counts[1] {
+                for cx in 0..counts[0] {
+                    let c = [cx, cy, cz];
+                    let lo = [0, 1, 2].map(|a| c[a] * chunk);
+                    let hi = [0, 1, 2].map(|a| (lo[a] + chunk).min(cells[a]));
+                    let s0 = [0, 1, 2].map(|a| lo[a].saturating_sub(halo));
+                    let s1 = [0, 1, 2].map(|a| (hi[a] + halo).min(cells[a]));
+                    let mut st = settings([0, 1, 2].map(|a| s1[a] - s0[a]), s0, s1);
+                    if tiled {
+                        st.tiles = Some(Tiling::new([chunk; 3], s0));
+                    }
+                    st.keep_cells = Some(CellRange {
+                        lo: [0, 1, 2].map(|a| lo[a] - s0[a]),
+                        hi: [0, 1, 2].map(|a| hi[a] - s0[a]),
+                    });
+                    // The box's values, copied from the whole volume's samples (storage
+                    // slots shift by s0 per axis, body-centred planes by 2 s0), as the
+                    // terrain world copies them.
+                    let dst = ex.samples_mut();
+                    dst.prepare(&st);
+                    let (wd, ld) = (samples.dims, dst.dims);
+                    let zoff = match sampled_lattice(&st) {
+                        Lattice::BodyCentred => 2 * s0[2],
+                        Lattice::Simple => s0[2],
+                    };
+                    for z in 0..ld[2] {
+                        for y in 0..ld[1] {
+                            let src = ((z + zoff) * wd[1] + y + s0[1]) * wd[0] + s0[0];
+                            let at = (z * ld[1] + y) * ld[0];
+                            dst.values[at..at + ld[0]]
+                                .copy_from_slice(&samples.values[src..src + ld[0]]);
+                        }
+                    }
+                    let stats = ex.extract_presampled(&st, &mut out)?;
+                    times.push(stats.t_total_s);
+                    let tris = canonical_triangles(&out);
+                    let bad = tris.iter().filter(|t| !whole_set.contains(*t)).count();
+                    row.inexact += usize::from(bad > 0);
+                    row.wrong += bad;
+                    row.kept += tris.len();
+                    row.chunks += 1;
+                }
+            }
+        }
+        times.sort_by(f64::total_cmp);
+        row.median_s = times.get(times.len() / 2).copied().unwrap_or(0.0);
+        rows.push(row);
+    }
+    Ok((whole_tris.len(), rows))
+}
+
+fn name(tiled: bool) -> &'static str {
+    if tiled {
+        "tile rule, halo"
+    } else {
+        "global rule, halo"
+    }
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let object = args.get(1).map_or("asteroid", String::as_str);
-    let chunk: usize = match args.get(2) {
-        Some(s) => s
-            .parse()
-            .map_err(|_| format!("chunk: a whole number, got {s:?}"))?,
-        None => 32,
+    let number = |i: usize, what: &str, default: usize| -> Result<usize, String> {
+        match args.get(i) {
+            Some(s) => s
+                .parse()
+                .map_err(|_| format!("{what}: a whole number, got {s:?}")),
+            None => Ok(default),
+        }
     };
+    let random = object == "random";
+    let chunk = number(2, "chunk", if random { 4 } else { 32 })?;
     let halos: Vec<usize> = match args.get(3) {
         Some(s) => s
             .split(',')
@@ -78,6 +182,48 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     if chunk == 0 {
         return Err("chunk must be at least 1".into());
+    }
+    // The terrain world's way first (the tile rule with tiles = chunks, a halo of one cell),
+    // then the global rule with each halo.
+    let runs: Vec<(usize, bool)> = std::iter::once((1, true))
+        .chain(halos.iter().map(|&h| (h, false)))
+        .collect();
+    if random {
+        // The property tests' random fields, `fields` of them from seed 0, on 12^3 cells.
+        let fields = number(4, "fields", 200)?;
+        let cells = [12; 3];
+        let mut failing = vec![0usize; runs.len()];
+        let mut totals = vec![Row::default(); runs.len()];
+        for seed in 0..fields as u64 {
+            let field = Scaled {
+                inner: Box::new(RandomField::from_seed(seed)),
+                origin: Vec3::splat(-1.0),
+                h: 2.0 / 12.0,
+            };
+            let (_, rows) = measure(&field, cells, chunk, &runs)?;
+            for (k, r) in rows.iter().enumerate() {
+                failing[k] += usize::from(r.inexact > 0);
+                totals[k].inexact += r.inexact;
+                totals[k].wrong += r.wrong;
+                totals[k].chunks += r.chunks;
+            }
+        }
+        println!(
+            "random fields 0..{fields}, {cells:?} cells, chunks of {chunk}^3, BCDL integrated"
+        );
+        for (k, &(halo, tiled)) in runs.iter().enumerate() {
+            let t = totals[k];
+            println!(
+                "{} {halo}: {} of {fields} fields with an inexact chunk ({} of {} chunks, \
+                 {} triangles)",
+                name(tiled),
+                failing[k],
+                t.inexact,
+                t.chunks,
+                t.wrong
+            );
+        }
+        return Ok(());
     }
     let (cells, field) = match object {
         "asteroid" => (
@@ -99,85 +245,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 },
             )
         }
-        other => return Err(format!("object: asteroid or terrain, got {other:?}").into()),
+        other => return Err(format!("object: asteroid, terrain or random, got {other:?}").into()),
     };
-
-    // The whole volume, with the global rule.
-    let whole_settings = settings(cells, [0; 3], cells);
-    let mut whole = Extractor::new();
-    let mut mesh = Mesh::default();
-    whole.extract(&field, &whole_settings, &mut mesh)?;
-    let whole_tris = canonical_triangles(&mesh);
-    let whole_set: HashSet<[[u32; 3]; 3]> = whole_tris.iter().copied().collect();
+    let (whole, rows) = measure(&field, cells, chunk, &runs)?;
     println!(
-        "{object} {cells:?} cells, chunks of {chunk}^3, BCDL integrated, whole volume: {} triangles",
-        whole_tris.len()
+        "{object} {cells:?} cells, chunks of {chunk}^3, BCDL integrated, whole volume: {whole} \
+         triangles"
     );
-    let samples = whole.samples();
-    let counts = cells.map(|c| c.div_ceil(chunk));
-    let mut ex = Extractor::new();
-    let mut out = Mesh::default();
-    // The terrain world's way first (the tile rule with tiles = chunks, a halo of one cell),
-    // then the global rule with each halo.
-    let runs = std::iter::once((1, true)).chain(halos.iter().map(|&h| (h, false)));
-    for (halo, tiled) in runs {
-        let (mut inexact, mut wrong, mut kept) = (0, 0, 0);
-        let mut times = Vec::new();
-        for cz in 0..counts[2] {
-            for cy in 0..counts[1] {
-                for cx in 0..counts[0] {
-                    let c = [cx, cy, cz];
-                    let lo = [0, 1, 2].map(|a| c[a] * chunk);
-                    let hi = [0, 1, 2].map(|a| (lo[a] + chunk).min(cells[a]));
-                    let s0 = [0, 1, 2].map(|a| lo[a].saturating_sub(halo));
-                    let s1 = [0, 1, 2].map(|a| (hi[a] + halo).min(cells[a]));
-                    let mut st = settings([0, 1, 2].map(|a| s1[a] - s0[a]), s0, s1);
-                    if tiled {
-                        st.tiles = Some(Tiling::new([chunk; 3], s0));
-                    }
-                    st.keep_cells = Some(CellRange {
-                        lo: [0, 1, 2].map(|a| lo[a] - s0[a]),
-                        hi: [0, 1, 2].map(|a| hi[a] - s0[a]),
-                    });
-                    // The box's values, copied from the whole volume's samples (storage
-                    // slots shift by s0 per axis, body-centred planes by 2 s0).
-                    let dst = ex.samples_mut();
-                    dst.prepare(&st);
-                    let (wd, ld) = (samples.dims, dst.dims);
-                    let zoff = match sampled_lattice(&st) {
-                        Lattice::BodyCentred => 2 * s0[2],
-                        Lattice::Simple => s0[2],
-                    };
-                    for z in 0..ld[2] {
-                        for y in 0..ld[1] {
-                            let src = ((z + zoff) * wd[1] + y + s0[1]) * wd[0] + s0[0];
-                            let at = (z * ld[1] + y) * ld[0];
-                            dst.values[at..at + ld[0]]
-                                .copy_from_slice(&samples.values[src..src + ld[0]]);
-                        }
-                    }
-                    let stats = ex.extract_presampled(&st, &mut out)?;
-                    times.push(stats.t_total_s);
-                    let tris = canonical_triangles(&out);
-                    let bad = tris.iter().filter(|t| !whole_set.contains(*t)).count();
-                    inexact += usize::from(bad > 0);
-                    wrong += bad;
-                    kept += tris.len();
-                }
-            }
-        }
-        times.sort_by(f64::total_cmp);
+    for (r, &(halo, tiled)) in rows.iter().zip(&runs) {
         println!(
-            "{} {halo}: {inexact} of {} chunks with triangles not in the whole ({wrong} \
-             triangles); chunks' triangles over the whole's {:.4}; median chunk {:.2} ms",
-            if tiled {
-                "tile rule, halo"
-            } else {
-                "global rule, halo"
-            },
-            times.len(),
-            kept as f64 / whole_tris.len().max(1) as f64,
-            times[times.len() / 2] * 1e3
+            "{} {halo}: {} of {} chunks with triangles not in the whole ({} triangles); \
+             chunks' triangles over the whole's {:.4}; median chunk {:.2} ms",
+            name(tiled),
+            r.inexact,
+            r.chunks,
+            r.wrong,
+            r.kept as f64 / whole.max(1) as f64,
+            r.median_s * 1e3
         );
     }
     Ok(())
