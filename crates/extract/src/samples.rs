@@ -119,6 +119,46 @@ impl Samples {
         self.values.resize(len, f32::NAN);
     }
 
+    /// Sets the layout for `settings` (as [`Samples::prepare`]) and fills it with the values of
+    /// `whole` for the box of `settings.grid.cells` cells whose corner is cell `s0` of `whole`:
+    /// a chunk's input, cut from a larger sampled volume with no value computed again. Storage
+    /// slots shift by `s0` per axis, and body-centred storage planes by `2 s0` (every lattice
+    /// point of the box keeps its value). Errors when `whole` is not sampled on the same lattice
+    /// or does not hold the box.
+    pub fn copy_box(
+        &mut self,
+        whole: &Samples,
+        settings: &ExtractSettings,
+        s0: [usize; 3],
+    ) -> Result<(), ExtractError> {
+        let lattice = sampled_lattice(settings);
+        let cells = settings.grid.cells;
+        if whole.lattice != Some(lattice)
+            || (0..3).any(|a| s0[a].saturating_add(cells[a]) > whole.cells[a])
+            || whole.values.len() != whole.dims.iter().product::<usize>()
+        {
+            return Err(ExtractError::InvalidSettings(format!(
+                "a box of {cells:?} cells at cell {s0:?} is not inside the {:?} cells of the \
+                 sampled volume on the {lattice:?} lattice",
+                whole.cells
+            )));
+        }
+        self.prepare(settings);
+        let (wd, ld) = (whole.dims, self.dims);
+        let zoff = match lattice {
+            Lattice::BodyCentred => 2 * s0[2],
+            Lattice::Simple => s0[2],
+        };
+        for z in 0..ld[2] {
+            for y in 0..ld[1] {
+                let src = ((z + zoff) * wd[1] + y + s0[1]) * wd[0] + s0[0];
+                let at = (z * ld[1] + y) * ld[0];
+                self.values[at..at + ld[0]].copy_from_slice(&whole.values[src..src + ld[0]]);
+            }
+        }
+        Ok(())
+    }
+
     /// Errors unless the layout matches `settings` (for pre-sampled extraction).
     pub fn check_layout(&self, settings: &ExtractSettings) -> Result<(), ExtractError> {
         let lattice = sampled_lattice(settings);
@@ -667,4 +707,104 @@ struct SlabResult {
     skipped: usize,
     /// The non-finite value at the lowest slot of the slab: (slot, position, value).
     bad: Option<(usize, Vec3, f32)>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Clustering, Grid};
+
+    /// A different value at every lattice point (exact in these lattice units).
+    struct Coords;
+
+    impl ScalarField for Coords {
+        fn sample(&self, p: Vec3) -> f32 {
+            p.x + 16.0 * p.y + 256.0 * p.z
+        }
+    }
+
+    fn settings(cells: [usize; 3], lo: [usize; 3], lattice: Lattice) -> ExtractSettings {
+        let v = |c: [usize; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+        let hi = [0, 1, 2].map(|a| lo[a] + cells[a]);
+        ExtractSettings::new(Grid::new(cells, v(lo), v(hi)), lattice, Clustering::None)
+    }
+
+    fn sampled(st: &ExtractSettings) -> Samples {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("a pool");
+        let mut s = Samples::default();
+        s.sample(&Coords, st, &pool, &mut Stats::default())
+            .expect("finite values");
+        s
+    }
+
+    #[test]
+    fn a_copied_box_holds_the_values_the_box_samples_itself() {
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            let whole = sampled(&settings([7, 6, 8], [0; 3], lattice));
+            for (s0, cells) in [
+                ([1, 2, 3], [3, 2, 4]),
+                ([0, 0, 0], [7, 6, 8]),
+                ([2, 1, 0], [5, 5, 5]),
+            ] {
+                let st = settings(cells, s0, lattice);
+                let direct = sampled(&st);
+                let mut copied = Samples::default();
+                copied.copy_box(&whole, &st, s0).expect("inside");
+                assert_eq!(copied.dims, direct.dims, "{lattice:?} {s0:?}");
+                // Every slot of a lattice point of the box holds that point's value. (The
+                // body-centred ghost slots outside the box hold the whole volume's values
+                // there, where the box's own sampling clamps them onto its faces: they only
+                // shape triangles outside the box.)
+                let [dx, dy, _] = direct.dims;
+                let mut points = 0;
+                for (k, (c, d)) in copied.values.iter().zip(&direct.values).enumerate() {
+                    let (sx, sy, z) = (k % dx, k / dx % dy, k / (dx * dy));
+                    let inside = match lattice {
+                        Lattice::BodyCentred => {
+                            let zz = z as i64 - 1;
+                            let odd = zz & 1;
+                            let p = [2 * sx as i64 - odd, 2 * sy as i64 - odd, zz];
+                            (0..3).all(|a| p[a] >= 0 && p[a] <= 2 * cells[a] as i64)
+                        }
+                        Lattice::Simple => true,
+                    };
+                    if inside {
+                        assert_eq!(c.to_bits(), d.to_bits(), "{lattice:?} {s0:?} slot {k}");
+                        points += 1;
+                    }
+                }
+                // Each lattice point of the box once: the corners, and the centres.
+                let corners: usize = cells.iter().map(|c| c + 1).product();
+                let centres: usize = cells.iter().product();
+                let expected = match lattice {
+                    Lattice::BodyCentred => corners + centres,
+                    Lattice::Simple => corners,
+                };
+                assert_eq!(points, expected, "{lattice:?} {s0:?} {cells:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn boxes_outside_the_volume_or_on_another_lattice_are_refused() {
+        let whole = sampled(&settings([4, 4, 4], [0; 3], Lattice::BodyCentred));
+        let mut out = Samples::default();
+        for (s0, cells) in [
+            ([1, 0, 0], [4, 4, 4]),
+            ([0, 0, 3], [2, 2, 2]),
+            ([usize::MAX, 0, 0], [1, 1, 1]),
+        ] {
+            let st = settings(cells.map(|c: usize| c.max(1)), [0; 3], Lattice::BodyCentred);
+            let err = out.copy_box(&whole, &st, s0).expect_err("outside");
+            assert!(err.to_string().contains("not inside"), "{err}");
+        }
+        let st = settings([2, 2, 2], [0; 3], Lattice::Simple);
+        assert!(
+            out.copy_box(&whole, &st, [0; 3]).is_err(),
+            "another lattice"
+        );
+    }
 }

@@ -31,7 +31,6 @@
 use std::collections::HashSet;
 
 use glam::Vec3;
-use rmt_extract::samples::sampled_lattice;
 use rmt_extract::{CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Tiling};
 use rmt_fields::{
     Asteroid, AsteroidParams, RandomField, ScalarField, SvobodaParams, SvobodaTerrain,
@@ -113,24 +112,9 @@ fn measure(
                         lo: [0, 1, 2].map(|a| lo[a] - s0[a]),
                         hi: [0, 1, 2].map(|a| hi[a] - s0[a]),
                     });
-                    // The box's values, copied from the whole volume's samples (storage
-                    // slots shift by s0 per axis, body-centred planes by 2 s0), as the
-                    // terrain world copies them.
-                    let dst = ex.samples_mut();
-                    dst.prepare(&st);
-                    let (wd, ld) = (samples.dims, dst.dims);
-                    let zoff = match sampled_lattice(&st) {
-                        Lattice::BodyCentred => 2 * s0[2],
-                        Lattice::Simple => s0[2],
-                    };
-                    for z in 0..ld[2] {
-                        for y in 0..ld[1] {
-                            let src = ((z + zoff) * wd[1] + y + s0[1]) * wd[0] + s0[0];
-                            let at = (z * ld[1] + y) * ld[0];
-                            dst.values[at..at + ld[0]]
-                                .copy_from_slice(&samples.values[src..src + ld[0]]);
-                        }
-                    }
+                    // The box's values, cut from the whole volume's samples as the terrain
+                    // world cuts a chunk's.
+                    ex.samples_mut().copy_box(samples, &st, s0)?;
                     let stats = ex.extract_presampled(&st, &mut out)?;
                     times.push(stats.t_total_s);
                     let tris = canonical_triangles(&out);

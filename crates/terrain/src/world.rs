@@ -602,22 +602,8 @@ fn extract_chunk(
         lo: [0, 1, 2].map(|a| own.lo[a] - s0[a]),
         hi: [0, 1, 2].map(|a| own.hi[a] - s0[a]),
     });
-    // The world's pool (see `Extractor::set_pool`): nested passes run on the same workers.
-    let dst = ex.samples_mut();
-    dst.prepare(&st);
-    let (wd, ld) = (samples.dims, dst.dims);
-    // Storage offsets of the box corner: slots shift by s0 per axis, body-centred planes by 2 s0.
-    let zoff = match sampled_lattice(&st) {
-        Lattice::BodyCentred => 2 * s0[2],
-        Lattice::Simple => s0[2],
-    };
-    for z in 0..ld[2] {
-        for y in 0..ld[1] {
-            let src = ((z + zoff) * wd[1] + y + s0[1]) * wd[0] + s0[0];
-            let dst_at = (z * ld[1] + y) * ld[0];
-            dst.values[dst_at..dst_at + ld[0]].copy_from_slice(&samples.values[src..src + ld[0]]);
-        }
-    }
+    // The chunk's input: its cells and halo cut from the world's samples.
+    ex.samples_mut().copy_box(samples, &st, s0)?;
     let stats = ex.extract_presampled(&st, mesh)?;
     mesh.normals.clear();
     mesh.drop_unused_vertices(&mut Vec::new());
