@@ -11,6 +11,7 @@ mod common;
 use common::*;
 use glam::Vec3;
 use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
 use rmt_extract::{Clustering, Grid, Lattice};
 use rmt_fields::FnField;
 
@@ -86,7 +87,13 @@ fn lattice() -> impl Strategy<Value = Lattice> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: cases(1000), failure_persistence: None, ..ProptestConfig::default() })]
+    // A failing case's seed is kept beside this file (`*.proptest-regressions`) and replayed
+    // first on every later run: a rare failure found by a long run is not lost with the run.
+    #![proptest_config(ProptestConfig {
+        cases: cases(1000),
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn unmerged_mt_is_closed_inside_the_box_and_manifold(n in 6usize..14, lattice in lattice(), f in field(10)) {

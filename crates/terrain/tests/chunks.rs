@@ -5,6 +5,7 @@
 
 use glam::Vec3;
 use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
 use rmt_extract::{measure::on_box_boundary, Clustering, Lattice};
 use rmt_fields::{FnField, Sphere};
 use rmt_mesh::{validate, Mesh, ValidationReport};
@@ -174,7 +175,13 @@ fn assert_matches_whole(world: &World, c: &Case) -> Result<(), TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: cases(400), failure_persistence: None, ..ProptestConfig::default() })]
+    // A failing case's seed is kept beside this file (`*.proptest-regressions`) and replayed
+    // first on every later run: a rare failure found by a long run is not lost with the run.
+    #![proptest_config(ProptestConfig {
+        cases: cases(400),
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn chunked_extraction_equals_the_whole_volume(c in case()) {
