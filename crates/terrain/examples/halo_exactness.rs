@@ -51,10 +51,11 @@ impl ScalarField for Scaled {
     }
 }
 
-fn settings(cells: [usize; 3], lo: [usize; 3], hi: [usize; 3]) -> ExtractSettings {
+/// The box of cells `lo .. hi`, at its own lattice coordinates.
+fn settings(lo: [usize; 3], hi: [usize; 3]) -> ExtractSettings {
     let v = |c: [usize; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
     ExtractSettings::new(
-        Grid::new(cells, v(lo), v(hi)),
+        Grid::new([0, 1, 2].map(|a| hi[a] - lo[a]), v(lo), v(hi)),
         Lattice::BodyCentred,
         Clustering::Integrated,
     )
@@ -85,7 +86,7 @@ fn measure(
     // The whole volume, with the global rule.
     let mut whole = Extractor::new();
     let mut mesh = Mesh::default();
-    whole.extract(field, &settings(cells, [0; 3], cells), &mut mesh)?;
+    whole.extract(field, &settings([0; 3], cells), &mut mesh)?;
     let whole_tris = canonical_triangles(&mesh);
     let whole_set: HashSet<[[u32; 3]; 3]> = whole_tris.iter().copied().collect();
     let samples = whole.samples();
@@ -104,7 +105,7 @@ fn measure(
                     let hi = [0, 1, 2].map(|a| (lo[a] + chunk).min(cells[a]));
                     let s0 = [0, 1, 2].map(|a| lo[a].saturating_sub(halo));
                     let s1 = [0, 1, 2].map(|a| (hi[a] + halo).min(cells[a]));
-                    let mut st = settings([0, 1, 2].map(|a| s1[a] - s0[a]), s0, s1);
+                    let mut st = settings(s0, s1);
                     if tiled {
                         st.tiles = Some(Tiling::new([chunk; 3], s0));
                     }
