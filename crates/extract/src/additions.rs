@@ -155,6 +155,13 @@ pub(crate) struct SliverProposals {
 /// crossing; a crossing left alone that picked it back forms a pair with it. A function of the
 /// current state around each crossing, so order-free. The tile rule keeps groups and pairs
 /// inside one tile.
+///
+/// A group that gave the crossing back in a lone pass ([`crate::quotient::Groups::refused`]) is
+/// asked again: its star has changed since, as the other lone passes settled. The lone passes
+/// skip it so as not to go back and forth between two groups; the sliver passes are few. This
+/// matters where a sample point lies exactly on the surface: its crossings coincide there, the
+/// triangles between them are flat, and only their one group removes them, which may refuse
+/// them in a lone pass (a random tube through a sample point kept 2 flat triangles that way).
 pub(crate) fn sliver_proposals(
     f: &Fixed,
     g: &Groups,
@@ -211,7 +218,7 @@ pub(crate) fn sliver_proposals(
         }
         let h = g.group_of[u as usize];
         if h != NONE && g.active[h as usize] != 0 {
-            if g.refused[x as usize] != h && q.same_tile(x, h) {
+            if q.same_tile(x, h) {
                 out.lones.push((h, Lone { id: x }));
             }
         } else if x < u

@@ -143,3 +143,31 @@ proptest! {
         prop_assert!(r.zero_area_triangles <= r0.zero_area_triangles, "{}", what);
     }
 }
+
+/// A thin tube whose surface passes exactly through one sample point (found by a long run of
+/// `integrated_clustering_keeps_topology`, and also kept in its seed file): three crossings of
+/// that point coincide there, and plain MT draws 4 flat triangles between them. Their one group
+/// refused the point's first crossing in the lone passes, and until the sliver passes asked that
+/// group again, integrated clustering kept 2 of the flat triangles.
+#[test]
+fn a_surface_through_a_sample_point_leaves_no_flat_triangle() {
+    let f = RandomField {
+        family: Family::Tube(
+            Vec3::new(0.022448422, 0.017358119, 0.039132856),
+            0.30765688,
+            0.07673736,
+        ),
+        quantum: 0.0,
+        centre: Vec3::ZERO,
+        half: 1.0,
+    };
+    let field = FnField(|p| f.sample(p));
+    let grid = Grid::cube(13, 1.0);
+    let (plain, _, r0) = run(&field, grid, Lattice::BodyCentred, Clustering::None);
+    // The case is what it says: flat triangles in plain MT, between crossings at a sample point.
+    assert_eq!(flat_triangles_inside(&plain, &grid), 4, "{r0:?}");
+    let (mesh, _, r) = run(&field, grid, Lattice::BodyCentred, Clustering::Integrated);
+    assert_clean("tube through a sample point", &r);
+    assert_eq!((r.euler, r.components), (r0.euler, r0.components));
+    assert_eq!(flat_triangles_inside(&mesh, &grid), 0, "{r:?}");
+}

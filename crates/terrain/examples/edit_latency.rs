@@ -38,7 +38,14 @@ struct Args {
     pause_ms: usize,
 }
 
-fn parse() -> Result<Args> {
+/// The flags, as the module documentation lists them (printed for `--help`).
+const USAGE: &str = "edit_latency [--field svoboda|cave] [--cells 256x64x256] [--chunk 32] \
+[--threads 2] [--lattice bcdl|simple] \
+[--clustering integrated|none|postprocessed|integrated-unchecked|mc] [--strokes 200] \
+[--warmup 20] [--seed 1] [--ground-cell Y] [--placement os|pinned] [--pause-ms 0]";
+
+/// The arguments, or `None` when `--help` asked for the usage.
+fn parse() -> Result<Option<Args>> {
     let mut a = Args {
         field: "svoboda".into(),
         cells: [256, 64, 256],
@@ -55,7 +62,12 @@ fn parse() -> Result<Args> {
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
-        let value = it.next().with_context(|| format!("{flag} needs a value"))?;
+        if flag == "--help" || flag == "-h" {
+            return Ok(None);
+        }
+        let value = it
+            .next()
+            .with_context(|| format!("{flag} needs a value (usage: {USAGE})"))?;
         let num = |v: &str| -> Result<usize> {
             v.parse()
                 .with_context(|| format!("{flag}: not a whole number: {v:?}"))
@@ -88,14 +100,17 @@ fn parse() -> Result<Args> {
                 }
             }
             "--clustering" => a.clustering = value,
-            _ => bail!("unknown flag {flag:?}"),
+            _ => bail!("unknown flag {flag:?} (usage: {USAGE})"),
         }
     }
-    Ok(a)
+    Ok(Some(a))
 }
 
 fn main() -> Result<()> {
-    let a = parse()?;
+    let Some(a) = parse()? else {
+        println!("{USAGE}");
+        return Ok(());
+    };
     let h = 8.0 / a.cells[0] as f32;
     let ground = a.ground_cell.unwrap_or(a.cells[1] / 2);
     let origin = Vec3::new(0.0, -(ground as f32) * h, 0.0);
