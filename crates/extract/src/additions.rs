@@ -156,9 +156,10 @@ pub(crate) struct SliverProposals {
 /// current state around each crossing, so order-free. The tile rule keeps groups and pairs
 /// inside one tile.
 ///
-/// A group that gave the crossing back in a lone pass ([`crate::quotient::Groups::refused`]) is
-/// asked again: its star has changed since, as the other lone passes settled. The lone passes
-/// skip it so as not to go back and forth between two groups; the sliver passes are few. This
+/// A crossing skips the sliver edges that lead to the group that last gave it back
+/// ([`crate::quotient::Groups::refused`]) and takes its next-shortest one. The sliver passes
+/// start with the lone passes' refusals cleared, so a group that gave a crossing back in a lone
+/// pass is asked again: its star has changed since, as the other lone passes settled. This
 /// matters where a sample point lies exactly on the surface: its crossings coincide there, the
 /// triangles between them are flat, and only their one group removes them, which may refuse
 /// them in a lone pass (a random tube through a sample point kept 2 flat triangles that way).
@@ -198,6 +199,10 @@ pub(crate) fn sliver_proposals(
             } else {
                 continue;
             };
+            let h = g.group_of[other as usize];
+            if h != NONE && h == g.refused[x as usize] && g.active[h as usize] != 0 {
+                continue;
+            }
             if best.is_none_or(|(bl, bu)| (len, other) < (bl, bu)) {
                 best = Some((len, other));
             }

@@ -88,8 +88,8 @@ pub(crate) struct Groups {
     /// How many of those the group had before the current phase: a group that fails with
     /// lones given in this phase sheds them, back to this many.
     pub(crate) base_len: Vec<u8>,
-    /// Per crossing: the last group that gave it back ([`NONE`] if none); the next lone pass
-    /// does not give it to that group (the sliver passes may).
+    /// Per crossing: the last group that gave it back ([`NONE`] if none); the next pass does not
+    /// give it to that group. The sliver passes start with it cleared.
     pub(crate) refused: Vec<u32>,
     /// Per crossing, its vertex in the quotient of the current state: the label (the leader of
     /// its kept group, or itself) and that vertex's position ([`Groups::relabel`]).

@@ -365,6 +365,9 @@ fn sliver_passes(
     stats: &mut Stats,
 ) -> usize {
     let mut pairs = 0;
+    // A group that gave a crossing back in a lone pass is asked again (see
+    // `additions::sliver_proposals`).
+    groups.refused.fill(crate::quotient::NONE);
     for _ in 0..SLIVER_PASSES {
         let step = std::time::Instant::now();
         let props = crate::additions::sliver_proposals(
