@@ -3,16 +3,18 @@
 //! brush strokes on a chunked world, with the latency of each edit).
 //!
 //! Both build a [`World`] from an [`Extraction`]: its box and resolution (cells must be cubes),
-//! method, lattice and clustering. The world meshes every chunk under the tile rule (no merge
-//! crosses a chunk face), so the welded chunks equal the whole-volume extraction with the same
-//! rule; [`ChunkedExtraction::identical`] reports that comparison for every run.
+//! method, lattice and clustering. With integrated clustering of marching tetrahedra the world
+//! has exact seams ([`Seams::Exact`]): its chunks are the whole volume's own mesh, and an edit
+//! re-extracts a box around it; the other modes mesh every chunk under the tile rule (no merge
+//! crosses a chunk face). Either way the welded chunks equal the whole-volume extraction with the
+//! world's rule; [`ChunkedExtraction::identical`] reports that comparison for every run.
 
 use anyhow::{bail, Context, Result};
 use rmt_extract::Method;
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
 use rmt_terrain::{
-    canonical_triangles, run_strokes, StrokeParams, StrokeReport, World, WorldSettings,
+    canonical_triangles, run_strokes, Seams, StrokeParams, StrokeReport, World, WorldSettings,
 };
 
 use crate::config::Extraction;
@@ -98,6 +100,8 @@ pub struct EditSession {
     /// Whether the world after the strokes equals a whole-volume extraction of the edited
     /// samples.
     pub identical_after: bool,
+    /// How the world's chunks meet.
+    pub seams: Seams,
 }
 
 /// Runs the `edit` workload on `e`: builds and meshes the world, runs `plan.warmup` untimed
@@ -129,21 +133,24 @@ pub fn run_edit_session(
         initial,
         strokes,
         identical_after,
+        seams: world.settings().seams,
     })
 }
 
 /// Column names of `edits.csv` (one row per timed stroke).
-pub const EDITS_HEADER: [&str; 6] = [
+pub const EDITS_HEADER: [&str; 8] = [
     "id",
     "edit",
     "latency_s",
     "chunks",
     "triangles",
     "triangles_per_chunk",
+    "boxes",
+    "box_cells",
 ];
 
 /// Column names of an edit run's `summary.csv` (one row per configuration).
-pub const EDIT_SUMMARY_HEADER: [&str; 24] = [
+pub const EDIT_SUMMARY_HEADER: [&str; 25] = [
     "id",
     "object",
     "method",
@@ -168,6 +175,7 @@ pub const EDIT_SUMMARY_HEADER: [&str; 24] = [
     "t_chunked_s",
     "t_whole_s",
     "chunked_equals_whole",
+    "seams",
 ];
 
 /// The `edits.csv` rows of one session.
@@ -183,6 +191,8 @@ pub fn edit_rows(id: &str, s: &EditSession) -> Vec<Vec<String>> {
                 r.chunks[i].to_string(),
                 r.triangles[i].to_string(),
                 format!("{:.3}", per_chunk[i]),
+                r.boxes.get(i).copied().unwrap_or(0).to_string(),
+                r.box_cells.get(i).copied().unwrap_or(0).to_string(),
             ]
         })
         .collect()
@@ -228,6 +238,11 @@ pub fn edit_summary_row(
         format!("{:.6}", s.initial.t_chunked_s),
         format!("{:.6}", s.initial.t_whole_s),
         (s.initial.identical && s.identical_after).to_string(),
+        match s.seams {
+            Seams::Exact => "exact",
+            Seams::Tiles => "tiles",
+        }
+        .to_string(),
     ]
 }
 
@@ -315,6 +330,11 @@ mod tests {
         assert!(rows.iter().all(|r| r.len() == EDITS_HEADER.len()));
         let summary = edit_summary_row("x", &e, &plan, 1, &s);
         assert_eq!(summary.len(), EDIT_SUMMARY_HEADER.len());
-        assert_eq!(summary.last().map(String::as_str), Some("true"));
+        let col = |name: &str| EDIT_SUMMARY_HEADER.iter().position(|h| *h == name);
+        let at = |name: &str| col(name).map(|i| summary[i].as_str());
+        assert_eq!(at("chunked_equals_whole"), Some("true"));
+        // Integrated clustering of marching tetrahedra: the whole volume's own mesh.
+        assert_eq!(at("seams"), Some("exact"));
+        assert_eq!(at("triangles"), at("whole_triangles"));
     }
 }

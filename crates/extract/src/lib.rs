@@ -286,6 +286,48 @@ impl Extractor {
         Ok(stats)
     }
 
+    /// Sets whether extractions record, for integrated clustering of marching tetrahedra, the
+    /// anchor cell of every output triangle ([`Extractor::triangle_cells`]) and where the
+    /// clustering did anything after its proposals ([`Extractor::activity`]); other modes
+    /// record nothing. Off by default: it costs a pass over the crossings per lone and sliver
+    /// pass, and four bytes per triangle. The meshes do not depend on it.
+    ///
+    /// Activity is what makes a sub-box's result checkable against the whole volume's: where
+    /// neither did anything after the proposals, both kept their proposals, which depend on
+    /// nearby samples only (see `rmt_terrain`'s exact chunks).
+    ///
+    /// ```
+    /// use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice};
+    /// let s = ExtractSettings::new(Grid::cube(16, 1.0), Lattice::BodyCentred,
+    ///     Clustering::Integrated);
+    /// let mut ex = Extractor::new();
+    /// ex.set_recording(true);
+    /// let mut mesh = rmt_mesh::Mesh::default();
+    /// ex.extract(&rmt_fields::Sphere::new(glam::Vec3::ZERO, 0.6), &s, &mut mesh).unwrap();
+    /// assert_eq!(ex.triangle_cells().len(), mesh.triangle_count());
+    /// // Every proposal of a sphere passes at once: nothing happens after the proposals.
+    /// assert!(ex.activity().is_empty());
+    /// ```
+    pub fn set_recording(&mut self, record: bool) {
+        self.mt.record = record;
+    }
+
+    /// Recorded by the last extraction ([`Extractor::set_recording`]): the anchor cell of each
+    /// output triangle ([`CellRange`]'s anchors), as a linear index `x + nx * (y + ny * z)` over
+    /// the grid's cells; empty when nothing was recorded.
+    pub fn triangle_cells(&self) -> &[u32] {
+        &self.mt.tri_cells
+    }
+
+    /// Recorded by the last extraction ([`Extractor::set_recording`]): the lattice points, in
+    /// grid-local lattice coordinates (cells on the simple lattice; half cells on the
+    /// body-centred one, corners even, centres odd), with a crossing that a step of integrated
+    /// clustering after the proposals changed, found in a failing group, or considered as a
+    /// crossing left alone; sorted, each once.
+    pub fn activity(&self) -> &[[i32; 3]] {
+        &self.mt.activity
+    }
+
     /// The sample array (to fill it yourself before [`Extractor::extract_presampled`]).
     pub fn samples_mut(&mut self) -> &mut Samples {
         &mut self.samples

@@ -95,6 +95,10 @@ pub(crate) struct Groups {
     /// its kept group, or itself) and that vertex's position ([`Groups::relabel`]).
     pub(crate) vlabel: Vec<u32>,
     pub(crate) vpos: Vec<[f32; 3]>,
+    /// When recording the clustering's activity (empty otherwise): per crossing, 1 once a step
+    /// after the proposals changed its state, tested its group and found it failing, or
+    /// considered it as a crossing left alone that may join a group.
+    pub(crate) touched: Vec<u8>,
 }
 
 impl Groups {
@@ -144,8 +148,12 @@ impl Groups {
         let start = self.lone_start[gi] as usize;
         let lones = &self.lone[start..start + self.lone_len[gi] as usize];
         let kept = self.active[gi] != 0;
+        let track = !self.touched.is_empty();
         for x in f.groups[gi].ids().chain(lones.iter().map(|l| l.id)) {
             let x = x as usize;
+            if track {
+                self.touched[x] = 1;
+            }
             if kept {
                 self.vlabel[x] = self.leader[gi];
                 self.vpos[x] = self.centroid[gi];
@@ -153,6 +161,19 @@ impl Groups {
                 self.vlabel[x] = x as u32;
                 self.vpos[x] = f.cpos[x];
             }
+        }
+    }
+
+    /// Marks the members of group `gi` (its island and lone crossings) as touched, when
+    /// recording.
+    pub(crate) fn touch_group(&mut self, f: &Fixed, gi: usize) {
+        if self.touched.is_empty() {
+            return;
+        }
+        let start = self.lone_start[gi] as usize;
+        let lones = &self.lone[start..start + self.lone_len[gi] as usize];
+        for x in f.groups[gi].ids().chain(lones.iter().map(|l| l.id)) {
+            self.touched[x as usize] = 1;
         }
     }
 

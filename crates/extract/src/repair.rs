@@ -154,6 +154,8 @@ pub(crate) fn settle(
         });
         for &(gi, _) in &fails {
             failing[gi as usize] = 0;
+            // Recording: a failing group is activity, whatever its repair.
+            g.touch_group(f, gi as usize);
         }
         let mut asks: Vec<Repair> = repairs.iter().flat_map(|r| r.0.iter().copied()).collect();
         asks.sort_unstable();
@@ -192,6 +194,9 @@ fn shed(f: &Fixed, g: &mut Groups, gi: usize) {
     let (base, len) = (g.base_len[gi] as usize, g.lone_len[gi] as usize);
     for l in &g.lone[start + base..start + len] {
         let x = l.id as usize;
+        if !g.touched.is_empty() {
+            g.touched[x] = 1;
+        }
         g.group_of[x] = NONE;
         g.refused[x] = gi as u32;
         g.vlabel[x] = l.id;

@@ -7,13 +7,14 @@
 //!
 //! `clustering` is none / integrated / integrated-unchecked / postprocessed (default
 //! integrated), on the body-centred lattice, 256 x 64 x 256 cells in chunks of 32; `chunks` is
-//! how many surface chunks to time (default 8).
+//! how many surface chunks to time (default 8). Chunks under the tile rule (`Seams::Tiles`),
+//! each extracted on its own: what a tile-seam edit costs per chunk.
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use rmt_extract::{Clustering, Extractor, Lattice};
 use rmt_fields::{SvobodaParams, SvobodaTerrain};
 use rmt_mesh::Mesh;
-use rmt_terrain::{World, WorldSettings};
+use rmt_terrain::{Seams, World, WorldSettings};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -34,7 +35,8 @@ fn main() -> Result<()> {
     let cells = [256, 64, 256];
     let h = 8.0 / 256.0;
     let origin = Vec3::new(0.0, -32.0 * h, 0.0);
-    let settings = WorldSettings::new(cells, origin, h, Lattice::BodyCentred, clustering);
+    let settings = WorldSettings::new(cells, origin, h, Lattice::BodyCentred, clustering)
+        .with_seams(Seams::Tiles);
     let world = World::new(&SvobodaTerrain::new(SvobodaParams::default()), settings)?;
     // The chunks are extracted on a one-thread pool, from inside it, as `World::remesh_dirty`
     // does: the extractor's parallel passes then run inline, with no hand-off between threads.

@@ -6,8 +6,12 @@
 //!     [--field svoboda|cave] [--cells 256x64x256] [--chunk 32] [--threads 2] \
 //!     [--lattice bcdl|simple] [--clustering integrated|none|postprocessed|integrated-unchecked|mc] \
 //!     [--strokes 200] [--warmup 20] [--seed 1] [--ground-cell Y] [--placement os|pinned] \
-//!     [--pause-ms 0]
+//!     [--pause-ms 0] [--seams exact|tiles]
 //! ```
+//!
+//! `--seams` defaults to the world's default: exact for integrated clustering of marching
+//! tetrahedra (the chunks are the whole volume's mesh; a stroke re-extracts a box), tiles for the
+//! other modes (each marked chunk re-extracted under the tile rule).
 //!
 //! `--placement pinned` binds the world's workers to their own CPUs (`rmt_extract::threads`);
 //! `--pause-ms` idles before each timed stroke, as a player does between strokes (the workers
@@ -21,7 +25,7 @@ use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use rmt_extract::{Clustering, Lattice, ThreadPlacement};
 use rmt_fields::{CaveParams, CaveTerrain, ScalarField, SvobodaParams, SvobodaTerrain};
-use rmt_terrain::{canonical_triangles, run_strokes, StrokeParams, World, WorldSettings};
+use rmt_terrain::{canonical_triangles, run_strokes, Seams, StrokeParams, World, WorldSettings};
 
 struct Args {
     field: String,
@@ -36,13 +40,15 @@ struct Args {
     ground_cell: Option<usize>,
     placement: ThreadPlacement,
     pause_ms: usize,
+    seams: Option<Seams>,
 }
 
 /// The flags, as the module documentation lists them (printed for `--help`).
 const USAGE: &str = "edit_latency [--field svoboda|cave] [--cells 256x64x256] [--chunk 32] \
 [--threads 2] [--lattice bcdl|simple] \
 [--clustering integrated|none|postprocessed|integrated-unchecked|mc] [--strokes 200] \
-[--warmup 20] [--seed 1] [--ground-cell Y] [--placement os|pinned] [--pause-ms 0]";
+[--warmup 20] [--seed 1] [--ground-cell Y] [--placement os|pinned] [--pause-ms 0] \
+[--seams exact|tiles]";
 
 /// The arguments, or `None` when `--help` asked for the usage.
 fn parse() -> Result<Option<Args>> {
@@ -59,6 +65,7 @@ fn parse() -> Result<Option<Args>> {
         ground_cell: None,
         placement: ThreadPlacement::Os,
         pause_ms: 0,
+        seams: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -100,6 +107,13 @@ fn parse() -> Result<Option<Args>> {
                 }
             }
             "--clustering" => a.clustering = value,
+            "--seams" => {
+                a.seams = Some(match value.as_str() {
+                    "exact" => Seams::Exact,
+                    "tiles" => Seams::Tiles,
+                    _ => bail!("--seams wants exact or tiles, got {value:?}"),
+                })
+            }
             _ => bail!("unknown flag {flag:?} (usage: {USAGE})"),
         }
     }
@@ -131,6 +145,9 @@ fn main() -> Result<()> {
         .with_chunk(a.chunk)
         .with_threads(a.threads)
         .with_placement(a.placement);
+    if let Some(seams) = a.seams {
+        settings = settings.with_seams(seams);
+    }
     let field: Box<dyn ScalarField> = match a.field.as_str() {
         "svoboda" => Box::new(SvobodaTerrain::new(SvobodaParams::default())),
         "cave" => Box::new(CaveTerrain::new(CaveParams::default())),
@@ -157,14 +174,15 @@ fn main() -> Result<()> {
         .context("untiled extraction")?;
     let same = canonical_triangles(&chunked) == canonical_triangles(&whole);
     println!(
-        "world {:?} cells (ground at y cell {ground}), {} chunks of {}^3, {} threads, field {}, {} {}",
+        "world {:?} cells (ground at y cell {ground}), {} chunks of {}^3, {} threads, field {}, {} {}, {:?} seams",
         a.cells,
         world.chunk_count(),
         a.chunk,
         a.threads,
         a.field,
         a.lattice.name(),
-        a.clustering
+        a.clustering,
+        world.settings().seams
     );
     println!("sampling: {:.1} ms", sampling * 1e3);
     println!(
@@ -208,6 +226,22 @@ fn main() -> Result<()> {
         r.chunks.iter().sum::<usize>() as f64 / n,
         r.chunks.iter().max().unwrap_or(&0),
         per_chunk.iter().sum::<f64>() / n
+    );
+    println!(
+        "boxes extracted per edit: mean {:.2}, max {}; cells per edit: mean {:.0} (a chunk: {})",
+        r.boxes.iter().sum::<usize>() as f64 / n,
+        r.boxes.iter().max().unwrap_or(&0),
+        r.box_cells.iter().sum::<usize>() as f64 / n,
+        a.chunk.pow(3)
+    );
+    // The edited world against its whole volume extracted at once.
+    let (whole, _) = world.extract_whole().context("whole extraction")?;
+    let chunked = world.mesh_welded();
+    println!(
+        "after the strokes: {} triangles in the chunks, {} in the whole volume; welded == whole: {}",
+        chunked.triangle_count(),
+        whole.triangle_count(),
+        canonical_triangles(&chunked) == canonical_triangles(&whole)
     );
     Ok(())
 }

@@ -26,7 +26,9 @@
 //!
 //! A halo that suffices on these fields is not a proof: the repair rounds are not bounded, so
 //! a chunk needs a rule (or a certificate) to be exact by construction. This measures how far
-//! the global rule is from that in practice.
+//! the global rule is from that in practice. The world's exact seams (`rmt_terrain::Seams`)
+//! take the certificate route: a box is trusted inside a band where clustering did nothing.
+//! (The "tile rule" line below names the tile rule explicitly, whatever the world's default.)
 
 use std::collections::HashSet;
 

@@ -50,6 +50,10 @@ pub struct StrokeReport {
     pub chunks: Vec<usize>,
     /// Triangles of the re-meshed chunks.
     pub triangles: Vec<usize>,
+    /// Boxes extracted ([`crate::RemeshStats::boxes`]).
+    pub boxes: Vec<usize>,
+    /// Cells of those boxes ([`crate::RemeshStats::box_cells`]).
+    pub box_cells: Vec<usize>,
 }
 
 impl StrokeReport {
@@ -133,6 +137,8 @@ pub fn run_strokes(world: &mut World, params: &StrokeParams) -> Result<StrokeRep
         report.latencies_s.push(start.elapsed().as_secs_f64());
         report.chunks.push(stats.chunks);
         report.triangles.push(stats.triangles);
+        report.boxes.push(stats.boxes);
+        report.box_cells.push(stats.box_cells);
     }
     Ok(report)
 }
@@ -147,6 +153,7 @@ mod tests {
             latencies_s: (1..=100).rev().map(f64::from).collect(),
             chunks: vec![1; 100],
             triangles: vec![10; 100],
+            ..StrokeReport::default()
         };
         assert_eq!(r.latency_quantile(0.5), 50.0);
         assert_eq!(r.latency_quantile(0.99), 99.0);

@@ -17,13 +17,29 @@ use rmt_mesh::Mesh;
 
 use crate::{Brush, TerrainError};
 
+mod exact;
 mod undo;
+pub use exact::{PROPOSAL_REACH, QUIET_BAND};
 pub use undo::StrokeRecord;
 
 /// Cells of halo around a chunk's own cells (clipped at the world box): enough for the
 /// body-centred tetrahedra on the chunk's faces and for the cluster proposals of the points on
 /// them (see the crate doc).
 pub const HALO: usize = 1;
+
+/// How chunk meshes meet at the seams.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Seams {
+    /// The tile rule with tiles equal to the chunks (see the crate doc): every chunk is meshed
+    /// on its own, and no group crosses a chunk face. Any mode; the chunks equal the whole
+    /// volume *under the tile rule*, which costs triangles along the seams.
+    Tiles,
+    /// The whole volume's own mesh (integrated clustering of marching tetrahedra, no tile rule),
+    /// cut by anchor cell; an edit re-extracts a box around it and keeps what is provably the
+    /// whole volume's (see `world/exact.rs`). The chunks equal the whole volume extracted at
+    /// once, with no triangle added at the seams.
+    Exact,
+}
 
 /// What a world is and how it is meshed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +68,9 @@ pub struct WorldSettings {
     /// parallel speed after the pool has been idle between strokes, see
     /// `rmt_extract::threads`).
     pub placement: ThreadPlacement,
+    /// How chunks meet: [`Seams::Exact`] for integrated clustering of marching tetrahedra (the
+    /// default there), [`Seams::Tiles`] for every mode.
+    pub seams: Seams,
 }
 
 impl WorldSettings {
@@ -76,6 +95,11 @@ impl WorldSettings {
             iso: 0.0,
             threads: 1,
             placement: ThreadPlacement::Os,
+            seams: if clustering == Clustering::Integrated {
+                Seams::Exact
+            } else {
+                Seams::Tiles
+            },
         }
     }
 
@@ -83,8 +107,15 @@ impl WorldSettings {
     pub fn marching_cubes(cells: [usize; 3], origin: Vec3, h: f32) -> Self {
         Self {
             method: Method::Mc,
+            seams: Seams::Tiles,
             ..Self::new(cells, origin, h, Lattice::Simple, Clustering::None)
         }
+    }
+
+    /// The same settings with chunk seams `seams`.
+    pub fn with_seams(mut self, seams: Seams) -> Self {
+        self.seams = seams;
+        self
     }
 
     /// The same settings with chunks of `chunk` cells.
@@ -150,13 +181,23 @@ impl WorldSettings {
                     .into(),
             ));
         }
+        if self.seams == Seams::Exact
+            && !(self.method == Method::Mt && self.clustering == Clustering::Integrated)
+        {
+            return Err(TerrainError::Unsupported(format!(
+                "exact seams need integrated clustering of marching tetrahedra (got {:?} with \
+                 {:?} clustering); use Seams::Tiles",
+                self.method, self.clustering
+            )));
+        }
         self.world_grid().check()?;
         self.unit_settings().check()?;
         Ok(())
     }
 
     /// Extraction settings of the whole volume in lattice units (cell edge 1, box from 0 to
-    /// `cells`), under the tile rule with tiles equal to the chunks.
+    /// `cells`), under the tile rule with tiles equal to the chunks ([`Seams::Tiles`]) or with
+    /// no tiles ([`Seams::Exact`]).
     pub fn unit_settings(&self) -> ExtractSettings {
         let n = Vec3::new(
             self.cells[0] as f32,
@@ -173,7 +214,7 @@ impl WorldSettings {
         s.iso = self.iso;
         s.threads = self.threads;
         s.normals = NormalMode::Skip;
-        s.tiles = Some(Tiling::new([self.chunk; 3], [0; 3]));
+        s.tiles = (self.seams == Seams::Tiles).then(|| Tiling::new([self.chunk; 3], [0; 3]));
         s
     }
 }
@@ -181,10 +222,16 @@ impl WorldSettings {
 /// What one [`World::remesh_dirty`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RemeshStats {
-    /// Chunks re-extracted.
+    /// Chunks re-meshed ([`World::remeshed_chunks`]): re-extracted under [`Seams::Tiles`],
+    /// changed under [`Seams::Exact`].
     pub chunks: usize,
     /// Triangles of the re-extracted chunks (after the update).
     pub triangles: usize,
+    /// Boxes extracted: one per chunk under [`Seams::Tiles`]; under [`Seams::Exact`] one per
+    /// attempt (a box grows when no band around the edit is quiet; 0 when nothing was pending).
+    pub boxes: usize,
+    /// Cells of those boxes, in all.
+    pub box_cells: usize,
     /// Wall time in seconds.
     pub seconds: f64,
 }
@@ -205,6 +252,13 @@ pub struct World {
     extractors: Mutex<Vec<Extractor>>,
     /// Old values of the last stroke's box (working memory of [`World::apply_brush`]).
     stroke_old: Vec<f32>,
+    /// [`Seams::Exact`]: the anchor cells of the chunks' triangles, the whole volume's activity
+    /// and the edits waiting.
+    exact: Option<exact::Exact>,
+    /// [`Seams::Exact`]: the cells the last stroke changed in a way that matters (for undo).
+    last_edit: Option<exact::Cells>,
+    /// The chunks the last [`World::remesh_dirty`] rebuilt, ascending.
+    remeshed: Vec<usize>,
 }
 
 impl World {
@@ -238,6 +292,9 @@ impl World {
             pool,
             extractors: Mutex::new(Vec::new()),
             stroke_old: Vec::new(),
+            exact: (settings.seams == Seams::Exact).then(exact::Exact::default),
+            last_edit: None,
+            remeshed: Vec::new(),
         })
     }
 
@@ -261,6 +318,14 @@ impl World {
         self.counts
     }
 
+    /// The chunks the last [`World::remesh_dirty`] rebuilt, ascending: what a viewer must upload
+    /// again. Under [`Seams::Tiles`] the dirty ones; under [`Seams::Exact`] those whose mesh
+    /// changed (among the chunks the box's cut meets, or all of them when the whole volume was
+    /// extracted).
+    pub fn remeshed_chunks(&self) -> &[usize] {
+        &self.remeshed
+    }
+
     /// Chunks waiting for [`World::remesh_dirty`].
     pub fn dirty_count(&self) -> usize {
         self.dirty.iter().filter(|&&d| d).count()
@@ -270,6 +335,9 @@ impl World {
     /// chunk by chunk).
     pub fn mark_all_dirty(&mut self) {
         self.dirty.iter_mut().for_each(|d| *d = true);
+        if let Some(e) = self.exact.as_mut() {
+            e.built = false;
+        }
     }
 
     /// The mesh of chunk `i` in lattice units (cell edge 1, world corner at 0): its own
@@ -303,6 +371,7 @@ impl World {
     /// for missing points, always count.
     pub fn apply_brush(&mut self, brush: &Brush, dt: f32) -> Result<usize, TerrainError> {
         brush.check(dt)?;
+        self.last_edit = None;
         let s = &self.settings;
         let lattice = sampled_lattice(&self.unit);
         let body = lattice == Lattice::BodyCentred;
@@ -423,6 +492,11 @@ impl World {
         if clo[0] > chi[0] {
             return Ok(0);
         }
+        if self.exact.is_some() {
+            let edit = exact::Cells::of_points(lattice, clo, chi);
+            self.last_edit = Some(edit);
+            return Ok(self.mark_edit(edit));
+        }
         let mut marked = 0;
         for i in 0..self.chunks.len() {
             let (s0, s1) = self.input_box(i);
@@ -439,6 +513,29 @@ impl World {
         Ok(marked)
     }
 
+    /// [`Seams::Exact`]: adds `edit` to the pending edits and marks the chunks its first cut
+    /// meets; returns how many it marked.
+    fn mark_edit(&mut self, edit: exact::Cells) -> usize {
+        let Some(state) = self.exact.as_mut() else {
+            return 0;
+        };
+        state.pending = Some(state.pending.map_or(edit, |p| p.union(edit)));
+        let cut = self.exact_cut(edit);
+        let mut marked = 0;
+        for i in 0..self.chunks.len() {
+            let r = self.chunk_cells(i);
+            let own = exact::Cells {
+                lo: r.lo.map(|c| c as i64),
+                hi: r.hi.map(|c| c as i64),
+            };
+            if own.intersects(&cut) {
+                self.dirty[i] = true;
+                marked += 1;
+            }
+        }
+        marked
+    }
+
     /// The cells `s0 .. s1` chunk `i` is extracted from: its own plus the halo, clipped.
     fn input_box(&self, i: usize) -> ([usize; 3], [usize; 3]) {
         let r = self.chunk_cells(i);
@@ -450,7 +547,19 @@ impl World {
     /// Re-extracts the dirty chunks, in parallel on the world's threads.
     pub fn remesh_dirty(&mut self) -> Result<RemeshStats, TerrainError> {
         let start = Instant::now();
+        if self.exact.is_some() {
+            let stats = self.remesh_exact()?;
+            self.dirty.iter_mut().for_each(|d| *d = false);
+            return Ok(RemeshStats {
+                chunks: stats.chunks,
+                triangles: stats.triangles,
+                boxes: stats.attempts,
+                box_cells: stats.box_cells,
+                seconds: start.elapsed().as_secs_f64(),
+            });
+        }
         let ids: Vec<usize> = (0..self.dirty.len()).filter(|&i| self.dirty[i]).collect();
+        self.remeshed.clone_from(&ids);
         let mut jobs: Vec<Job> = ids
             .iter()
             .map(|&i| {
@@ -486,6 +595,10 @@ impl World {
                 .collect()
         });
         let mut triangles = 0;
+        let jobs_cells: Vec<usize> = jobs
+            .iter()
+            .map(|(_, _, (s0, s1), _)| (0..3).map(|a| s1[a] - s0[a]).product())
+            .collect();
         for (i, _, _, mesh) in jobs {
             triangles += mesh.triangle_count();
             self.chunks[i] = mesh;
@@ -496,9 +609,12 @@ impl World {
         for &i in &ids {
             self.dirty[i] = false;
         }
+        let box_cells = jobs_cells.iter().sum();
         Ok(RemeshStats {
             chunks: ids.len(),
             triangles,
+            boxes: ids.len(),
+            box_cells,
             seconds: start.elapsed().as_secs_f64(),
         })
     }

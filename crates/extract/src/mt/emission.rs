@@ -96,6 +96,7 @@ pub(crate) fn plain_triangles(
     tris: &mut Vec<u32>,
     grad: &mut Vec<[f32; 3]>,
     kept: &mut Vec<u8>,
+    cells: Option<&mut Vec<u32>>,
     inc_start: &mut Vec<u32>,
     inc: &mut Vec<u32>,
     inc_cursor: &mut Vec<u32>,
@@ -107,25 +108,33 @@ pub(crate) fn plain_triangles(
     overwritten(tris, 3 * total, 0, pool);
     overwritten(grad, total, [0.0; 3], pool);
     overwritten(kept, if keep.is_some() { total } else { 0 }, 0, pool);
+    let record = cells.is_some();
+    let mut no_cells = Vec::new();
+    let cells = cells.unwrap_or(&mut no_cells);
+    overwritten(cells, if record { total } else { 0 }, 0, pool);
     let mut parts = Vec::with_capacity(layers);
     let (mut rest, mut rest_src, mut rest_kept) = (&mut tris[..], &mut grad[..], &mut kept[..]);
+    let mut rest_cells = &mut cells[..];
     for &n in &counts {
         let (head, tail) = rest.split_at_mut(3 * n);
         let (head_src, tail_src) = rest_src.split_at_mut(n);
         let (head_kept, tail_kept) = rest_kept.split_at_mut(if keep.is_some() { n } else { 0 });
-        parts.push((head, head_src, head_kept));
+        let (head_cells, tail_cells) = rest_cells.split_at_mut(if record { n } else { 0 });
+        parts.push((head, head_src, head_kept, head_cells));
         rest = tail;
         rest_src = tail_src;
         rest_kept = tail_kept;
+        rest_cells = tail_cells;
     }
     let processed: usize = pool.install(|| {
         parts
             .into_par_iter()
             .enumerate()
-            .map(|(k, (out, grad, kept))| {
+            .map(|(k, (out, grad, kept, cells))| {
                 let list = ListOut {
                     grad,
                     kept: keep.map(|range| (range, kept)),
+                    cells: record.then_some(cells),
                 };
                 geometry_layer(layout, k, iso, None, crossed, cpos, None, out, Some(list)).0
             })
@@ -318,6 +327,8 @@ pub(crate) struct ListOut<'s> {
     /// In a chunk: the kept cells, and per triangle 1 when its anchor's cell is one of them
     /// (the triangles the chunk emits), else 0.
     pub(crate) kept: Option<(CellRange, &'s mut [u8])>,
+    /// When recording: per triangle, its anchor cell (linear index, x fastest).
+    pub(crate) cells: Option<&'s mut [u32]>,
 }
 
 /// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`.
@@ -346,55 +357,67 @@ pub(crate) fn geometry_in_window(
     let mark = list
         .as_ref()
         .and_then(|list| list.kept.as_ref().map(|k| k.0));
-    let mut tet = |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool, kept: bool| {
-        let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
-        let val = idx.map(|i| v[i]);
-        let mut tris = [[0u32; 3]; 2];
-        // The window starts at slot 0 of plane z0.
-        let id = |o: usize, d: u8| {
-            let entry = window[idx[o] - z0 * plane];
-            debug_assert_eq!(entry, crossed.get(idx[o]));
-            entry.id(d)
-        };
-        let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
-        processed += usize::from(n > 0 && kept);
-        match map {
-            None => {
-                // The gradient of the tetrahedron, for the quotient test's (c).
-                let g = if n > 0 && list.is_some() {
-                    l.gradient(anchor, ti, inner)
-                } else {
-                    [0.0; 3]
-                };
-                for t in &tris[..n] {
-                    if let Some(list) = list.as_mut() {
-                        list.grad[w / 3] = g;
-                        if let Some((_, flags)) = list.kept.as_mut() {
-                            flags[w / 3] = u8::from(kept);
+    let cells_wanted = list.as_ref().is_some_and(|list| list.cells.is_some());
+    let [nx, ny, _] = l.s.cells;
+    let mut tet =
+        |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool, kept: bool, cell: u32| {
+            let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
+            let val = idx.map(|i| v[i]);
+            let mut tris = [[0u32; 3]; 2];
+            // The window starts at slot 0 of plane z0.
+            let id = |o: usize, d: u8| {
+                let entry = window[idx[o] - z0 * plane];
+                debug_assert_eq!(entry, crossed.get(idx[o]));
+                entry.id(d)
+            };
+            let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
+            processed += usize::from(n > 0 && kept);
+            match map {
+                None => {
+                    // The gradient of the tetrahedron, for the quotient test's (c).
+                    let g = if n > 0 && list.is_some() {
+                        l.gradient(anchor, ti, inner)
+                    } else {
+                        [0.0; 3]
+                    };
+                    for t in &tris[..n] {
+                        if let Some(list) = list.as_mut() {
+                            list.grad[w / 3] = g;
+                            if let Some((_, flags)) = list.kept.as_mut() {
+                                flags[w / 3] = u8::from(kept);
+                            }
+                            if let Some(cells) = list.cells.as_mut() {
+                                cells[w / 3] = cell;
+                            }
                         }
-                    }
-                    out[w..w + 3].copy_from_slice(t);
-                    w += 3;
-                }
-            }
-            Some(map) => {
-                // Clustered: the vertices of the groups' quotient; a triangle with two corners
-                // in one group collapsed and is dropped.
-                for t in &tris[..n] {
-                    let q = t.map(|i| map[i as usize]);
-                    if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
-                        out[w..w + 3].copy_from_slice(&q);
+                        out[w..w + 3].copy_from_slice(t);
                         w += 3;
                     }
                 }
+                Some(map) => {
+                    // Clustered: the vertices of the groups' quotient; a triangle with two corners
+                    // in one group collapsed and is dropped.
+                    for t in &tris[..n] {
+                        let q = t.map(|i| map[i as usize]);
+                        if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
+                            out[w..w + 3].copy_from_slice(&q);
+                            w += 3;
+                        }
+                    }
+                }
             }
-        }
-    };
+        };
     for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
         // Only the listing reads these: whether no corner is a ghost (for the gradient), and in
         // a chunk whether the anchor's cell is kept.
         let inner = listing && l.inner_anchor(p);
         let kept = mark.is_none_or(|range| range.contains(l.anchor_cell(p, g)));
+        let cell = if cells_wanted {
+            let c = l.anchor_cell(p, g);
+            (c[0] + nx * (c[1] + ny * c[2])) as u32
+        } else {
+            0
+        };
         let first = match l.lattice {
             Lattice::BodyCentred => 4 * g,
             Lattice::Simple => 0,
@@ -404,7 +427,7 @@ pub(crate) fn geometry_in_window(
             Lattice::Simple => l.tets.len(),
         };
         for ti in first..first + count {
-            tet(anchor, ti, &l.tets[ti], inner, kept);
+            tet(anchor, ti, &l.tets[ti], inner, kept, cell);
         }
     });
     debug_assert!(
@@ -495,6 +518,18 @@ pub(crate) fn emit(
         });
         stats.tetrahedra_processed += plain_processed;
         stats.discarded += listed - emitted;
+        if buf.record {
+            // The anchor cells of the emitted triangles, in their order.
+            let cells = &buf.plain_cell;
+            buf.tri_cells.clear();
+            buf.tri_cells.extend(
+                plain
+                    .chunks_exact(3)
+                    .enumerate()
+                    .filter(|&(i, t)| mapped(t, i).is_some())
+                    .map(|(i, _)| cells[i]),
+            );
+        }
     } else {
         emit_layers(layout, iso, keep, crossed, propose, buf, mesh, pool, stats);
     }

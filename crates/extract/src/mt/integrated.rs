@@ -77,6 +77,7 @@ pub(crate) fn build_groups(
     g.base_len.clear();
     g.base_len.resize(count, 0);
     g.refused.clear();
+    g.touched.clear();
     if !checked {
         edge_of.clear();
         return;
@@ -167,6 +168,7 @@ pub(crate) fn cluster(
             &mut buf.plain,
             &mut buf.plain_grad,
             &mut buf.plain_kept,
+            buf.record.then_some(&mut buf.plain_cell),
             &mut buf.inc_start,
             &mut buf.inc,
             &mut buf.inc_cursor,
@@ -178,6 +180,9 @@ pub(crate) fn cluster(
         let variant_of = add_variants(buf, &mut groups, layout, islands, stats);
         revive_and_give_lones(buf, &mut groups, layout, keys, &variant_of, pool, stats);
         islands += sliver_passes(buf, &mut groups, layout, keys, pool, stats);
+        if buf.record {
+            activity_points(layout, &groups.touched, &buf.edge_of, &mut buf.activity);
+        }
         buf.groups = groups;
     } else {
         buf.plain.clear();
@@ -287,6 +292,10 @@ fn settle_islands(
     let fixed = fixed(buf, layout, keys);
     groups.relabel(&fixed, pool);
     crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
+    if buf.record {
+        // The proposals are complete: from here on, what the steps do is activity.
+        groups.touched.resize(buf.cpos.len(), 0);
+    }
     groups.base_len.fill(0);
     stats.t_groups_s += step.elapsed().as_secs_f64();
     let all = (0..islands as u32).collect();
@@ -341,6 +350,7 @@ fn revive_and_give_lones(
     };
     for _ in 0..LONE_PASSES {
         let step = std::time::Instant::now();
+        mark_deciders(&fixed, groups, &buf.edge_of, pool);
         let dirty = crate::additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
         stats.t_groups_s += step.elapsed().as_secs_f64();
         if dirty.is_empty() {
@@ -370,6 +380,7 @@ fn sliver_passes(
     groups.refused.fill(crate::quotient::NONE);
     for _ in 0..SLIVER_PASSES {
         let step = std::time::Instant::now();
+        mark_deciders(&fixed(buf, layout, keys), groups, &buf.edge_of, pool);
         let props = crate::additions::sliver_proposals(
             &fixed(buf, layout, keys),
             groups,
@@ -406,6 +417,52 @@ fn sliver_passes(
         );
     }
     pairs
+}
+
+/// Recording the activity: marks every crossing that the next lone or sliver pass considers
+/// (an inner crossing in no kept group, which the tile rule lets join one), whatever it finds.
+fn mark_deciders(
+    f: &crate::quotient::Fixed,
+    g: &mut crate::quotient::Groups,
+    edge_of: &[(u32, u8)],
+    pool: &rayon::ThreadPool,
+) {
+    if g.touched.is_empty() {
+        return;
+    }
+    let mut touched = std::mem::take(&mut g.touched);
+    let q = crate::quotient::Quotient::new(f, g);
+    pool.install(|| {
+        touched.par_iter_mut().enumerate().for_each(|(x, t)| {
+            let (slot, dir) = edge_of[x];
+            if q.alone(x as u32) && q.joinable(x as u32) && q.inner(slot as usize, dir) {
+                *t = 1;
+            }
+        })
+    });
+    g.touched = touched;
+}
+
+/// The lattice points (grid-local lattice coordinates) of the crossings `touched` marks,
+/// sorted, each once.
+fn activity_points(
+    layout: &Layout,
+    touched: &[u8],
+    edge_of: &[(u32, u8)],
+    out: &mut Vec<[i32; 3]>,
+) {
+    out.clear();
+    let mut last = u32::MAX;
+    for (x, &t) in touched.iter().enumerate() {
+        let slot = edge_of[x].0;
+        // Crossings are numbered point by point: one entry per point.
+        if t != 0 && slot != last {
+            out.push(layout.coords_of(slot as usize));
+            last = slot;
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
 }
 
 /// The output vertices: one per crossing outside the kept groups and one per kept group, in

@@ -66,6 +66,17 @@ pub struct MtBuffers {
     plain_grad: Vec<[f32; 3]>,
     /// In a chunk: per plain triangle, 1 when its anchor's cell is kept (emitted by the chunk).
     plain_kept: Vec<u8>,
+    /// When recording ([`crate::Extractor::set_recording`]): per plain triangle, its anchor
+    /// cell (linear index, x fastest).
+    plain_cell: Vec<u32>,
+    /// Record the anchor cell of every output triangle and the clustering's activity
+    /// (integrated clustering only).
+    pub(crate) record: bool,
+    /// Recorded: the anchor cell of every output triangle (linear index, x fastest).
+    pub(crate) tri_cells: Vec<u32>,
+    /// Recorded: the lattice points (grid-local lattice coordinates) whose crossings the
+    /// clustering touched after its proposals, sorted, each once.
+    pub(crate) activity: Vec<[i32; 3]>,
     inc_start: Vec<u32>,
     inc: Vec<u32>,
     /// Working memory of the incidence table's fill.
@@ -98,6 +109,7 @@ impl MtBuffers {
             + self.plain.len() * 4
             + self.plain_grad.len() * 12
             + self.plain_kept.len()
+            + self.plain_cell.len() * 4
             + self.inc_start.len() * 4
             + self.inc.len() * 4
             + self.inc_cursor.len() * 4
@@ -134,6 +146,8 @@ pub fn extract(
         Rules::Dissertation
     };
     allocate(samples, buf, stats)?;
+    buf.tri_cells.clear();
+    buf.activity.clear();
 
     // Vertex pass: crossings, their ids and positions, and the proposals.
     let t = std::time::Instant::now();
@@ -294,6 +308,7 @@ fn release_tables(buf: &mut MtBuffers, pool: &rayon::ThreadPool) -> usize {
         buf.plain = Vec::new();
         buf.plain_grad = Vec::new();
         buf.plain_kept = Vec::new();
+        buf.plain_cell = Vec::new();
         buf.inc_start = Vec::new();
         buf.inc = Vec::new();
         buf.inc_cursor = Vec::new();

@@ -207,11 +207,10 @@ impl Session {
 
     fn finish(&mut self, start: Instant, changed_values: usize) -> Result<EditOutcome, String> {
         self.last_used = Instant::now();
-        let dirty: Vec<usize> = (0..self.world.chunk_count())
-            .filter(|&i| self.world.chunk_is_dirty(i))
-            .collect();
         let stats = self.world.remesh_dirty().map_err(|e| e.to_string())?;
-        let parts = dirty.iter().map(|&i| self.part(i)).collect();
+        // The chunks rebuilt (with exact seams more than were marked when the box had to grow).
+        let rebuilt = self.world.remeshed_chunks().to_vec();
+        let parts = rebuilt.iter().map(|&i| self.part(i)).collect();
         Ok(EditOutcome {
             parts,
             changed_values,

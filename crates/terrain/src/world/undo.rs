@@ -25,6 +25,8 @@ pub struct StrokeRecord {
     after: Vec<f32>,
     /// The chunks dirty after the stroke (those it marked, and any that were dirty already).
     chunks: Vec<usize>,
+    /// Exact seams: the cells the stroke changed in a way that matters.
+    region: Option<super::exact::Cells>,
 }
 
 impl StrokeRecord {
@@ -67,6 +69,7 @@ impl World {
             }
         }
         record.chunks = (0..self.dirty.len()).filter(|&i| self.dirty[i]).collect();
+        record.region = self.last_edit;
         Ok((marked, record))
     }
 
@@ -93,6 +96,10 @@ impl World {
             if let Some(slot) = self.samples.values.get_mut(i as usize) {
                 *slot = v;
             }
+        }
+        if let Some(region) = record.region {
+            // The same cells matter again (the test is symmetric in before and after).
+            self.mark_edit(region);
         }
         let mut marked = 0;
         for &c in &record.chunks {

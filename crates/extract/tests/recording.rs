@@ -1,0 +1,140 @@
+//! Recording ([`Extractor::set_recording`]): the anchor cell of every output triangle and the
+//! clustering's activity, without changing the mesh.
+
+use glam::Vec3;
+use rmt_extract::{CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice};
+use rmt_fields::{RandomField, ScalarField, Sphere};
+use rmt_mesh::Mesh;
+
+const LATTICES: [Lattice; 2] = [Lattice::BodyCentred, Lattice::Simple];
+
+/// Extracts `field` with `settings`, recording or not: the mesh, the anchor cells, the activity.
+fn extract(
+    field: &dyn ScalarField,
+    settings: &ExtractSettings,
+    record: bool,
+) -> (Mesh, Vec<u32>, Vec<[i32; 3]>) {
+    let mut ex = Extractor::new();
+    ex.set_recording(record);
+    let mut mesh = Mesh::default();
+    ex.extract(field, settings, &mut mesh)
+        .expect("extraction runs");
+    (mesh, ex.triangle_cells().to_vec(), ex.activity().to_vec())
+}
+
+/// The triangles of `mesh` as their corner positions, in order.
+fn corners(mesh: &Mesh) -> Vec<[[f32; 3]; 3]> {
+    mesh.indices
+        .chunks_exact(3)
+        .map(|t| [0, 1, 2].map(|i| mesh.positions[t[i] as usize]))
+        .collect()
+}
+
+/// Random fields of the property tests on 12^3 cells of [-1, 1]^3.
+fn fields() -> Vec<RandomField> {
+    (0..24).map(RandomField::from_seed).collect()
+}
+
+#[test]
+fn recording_leaves_the_mesh_as_it_is() {
+    for lattice in LATTICES {
+        for f in fields() {
+            let s = ExtractSettings::new(Grid::cube(12, 1.0), lattice, Clustering::Integrated);
+            let (plain, cells, _) = extract(&f, &s, false);
+            assert!(cells.is_empty(), "nothing is recorded unless asked");
+            let (recorded, cells, _) = extract(&f, &s, true);
+            assert_eq!(plain.positions, recorded.positions, "{lattice:?} {f:?}");
+            assert_eq!(plain.indices, recorded.indices, "{lattice:?} {f:?}");
+            assert_eq!(cells.len(), recorded.triangle_count());
+        }
+    }
+}
+
+/// The triangles recorded in the cells of a box are, in order, those an extraction keeping only
+/// that box's cells emits: the recorded cell is the anchor `keep_cells` filters on.
+#[test]
+fn recorded_cells_are_the_anchors_that_keep_cells_selects() {
+    let n = 12;
+    let boxes = [
+        CellRange {
+            lo: [0, 0, 0],
+            hi: [5, 12, 12],
+        },
+        CellRange {
+            lo: [3, 4, 5],
+            hi: [9, 8, 12],
+        },
+        CellRange {
+            lo: [6, 0, 2],
+            hi: [12, 7, 7],
+        },
+    ];
+    let mut checked = 0;
+    for lattice in LATTICES {
+        for f in fields().into_iter().take(8) {
+            let s = ExtractSettings::new(Grid::cube(n, 1.0), lattice, Clustering::Integrated);
+            let (mesh, cells, _) = extract(&f, &s, true);
+            let all = corners(&mesh);
+            for r in boxes {
+                let inside = |c: u32| {
+                    let c = c as usize;
+                    r.contains([c % n, (c / n) % n, c / (n * n)])
+                };
+                let want: Vec<_> = all
+                    .iter()
+                    .zip(&cells)
+                    .filter(|&(_, &c)| inside(c))
+                    .map(|(t, _)| *t)
+                    .collect();
+                let mut k = s;
+                k.keep_cells = Some(r);
+                let (kept, kept_cells, _) = extract(&f, &k, true);
+                assert_eq!(corners(&kept), want, "{lattice:?} {r:?} {f:?}");
+                assert!(kept_cells.iter().all(|&c| inside(c)));
+                checked += want.len();
+            }
+        }
+    }
+    assert!(checked > 1000, "the boxes hold triangles: {checked}");
+}
+
+/// A sphere's proposals all pass at once (no activity); fields where groups fail, lone crossings
+/// wait or slivers pair have some, inside the grid, the same for any thread count.
+#[test]
+fn activity_is_where_clustering_worked_and_does_not_depend_on_threads() {
+    let sphere = Sphere::new(Vec3::ZERO, 0.6);
+    for lattice in LATTICES {
+        let s = ExtractSettings::new(Grid::cube(24, 1.0), lattice, Clustering::Integrated);
+        let (_, _, activity) = extract(&sphere, &s, true);
+        assert!(activity.is_empty(), "{lattice:?}: {activity:?}");
+    }
+    let mut active = 0;
+    for lattice in LATTICES {
+        for f in fields() {
+            let mut s = ExtractSettings::new(Grid::cube(12, 1.0), lattice, Clustering::Integrated);
+            let (_, _, one) = extract(&f, &s, true);
+            s.threads = 2;
+            let (_, _, two) = extract(&f, &s, true);
+            assert_eq!(one, two, "{lattice:?} {f:?}");
+            // Lattice coordinates: cells on the simple lattice, half cells (with the ghost
+            // planes at -1 and 2n + 1) on the body-centred one.
+            let max = match lattice {
+                Lattice::BodyCentred => 25,
+                Lattice::Simple => 12,
+            };
+            let min = if lattice == Lattice::BodyCentred {
+                -1
+            } else {
+                0
+            };
+            assert!(one.iter().flatten().all(|&c| (min..=max).contains(&c)));
+            assert!(one.windows(2).all(|w| w[0] < w[1]), "sorted, each once");
+            active += usize::from(!one.is_empty());
+        }
+    }
+    assert!(active > 0, "some random field keeps its clustering busy");
+    // Other modes record nothing.
+    let s = ExtractSettings::new(Grid::cube(12, 1.0), Lattice::BodyCentred, Clustering::None);
+    let (_, cells, activity) = extract(&fields()[0], &s, true);
+    assert!(cells.is_empty() && activity.is_empty());
+}
