@@ -36,7 +36,8 @@
 //! read inside and `Q`, decisions outside read outside and `Q`. So the glued history follows
 //! the rule everywhere: it is the new whole volume's. The cut lies in the middle of `Q`, where
 //! both runs agree, so the triangles it takes from `B` are the new whole volume's, bit for bit.
-//! When no band is quiet, the box grows; the whole volume always works.
+//! When the band holds activity, the inside grows over it and the box with it; the whole
+//! volume always works.
 
 use std::collections::HashMap;
 
@@ -199,10 +200,10 @@ impl World {
             }
             return Ok(stats);
         };
-        // Bands further and further out, until one is quiet (the whole volume always is).
-        let mut offset = 0;
+        // A band around the edit; where it holds activity, the inside grows over that activity
+        // and the band moves out past it, until a band is quiet (the whole volume always is).
+        let mut inner = edit.grow(PROPOSAL_REACH);
         loop {
-            let inner = edit.grow(PROPOSAL_REACH + offset);
             let outer = inner.grow(QUIET_BAND);
             let b = outer.grow(PROPOSAL_REACH + 1).clip(n);
             stats.attempts += 1;
@@ -239,7 +240,17 @@ impl World {
                 }
                 return Ok(stats);
             }
-            offset = 2 * offset + 4;
+            // The inside takes in the activity found in the band (with a cell to spare), so the
+            // next band lies past it.
+            let grown = out
+                .activity
+                .iter()
+                .chain(old)
+                .filter(|p| in_band(p))
+                .fold(inner, |i, p| {
+                    i.union(Cells::of_points(lattice, *p, *p).grow(1))
+                });
+            inner = grown;
         }
     }
 
