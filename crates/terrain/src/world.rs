@@ -37,7 +37,9 @@ pub enum Seams {
     /// The whole volume's own mesh (integrated clustering of marching tetrahedra, no tile rule),
     /// cut by anchor cell; an edit re-extracts a box around it and keeps what is provably the
     /// whole volume's (see `world/exact.rs`). The chunks equal the whole volume extracted at
-    /// once, with no triangle added at the seams.
+    /// once, with no triangle added at the seams. The first meshing (and one after
+    /// [`World::mark_all_dirty`]) extracts the whole volume at once: its working memory is about
+    /// twice the world's samples, beside them.
     Exact,
 }
 

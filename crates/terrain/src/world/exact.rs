@@ -172,6 +172,23 @@ impl World {
     /// Re-meshes what the pending edits changed (or everything, the first time): see the
     /// module doc.
     pub(crate) fn remesh_exact(&mut self) -> Result<ExactStats, TerrainError> {
+        let pending = self.exact.as_ref().and_then(|s| s.pending);
+        let result = self.remesh_pending();
+        if result.is_err() {
+            // Nothing is lost: the edits stay pending (the chunk meshes are as they were, or
+            // hold the box's triangles only where it was trusted), and the next call retries.
+            if let Some(state) = self.exact.as_mut() {
+                state.pending = match (state.pending, pending) {
+                    (Some(a), Some(b)) => Some(a.union(b)),
+                    (a, b) => a.or(b),
+                };
+            }
+        }
+        result
+    }
+
+    /// [`World::remesh_exact`] once the pending edits are taken.
+    fn remesh_pending(&mut self) -> Result<ExactStats, TerrainError> {
         let n = self.settings.cells;
         let world = Cells {
             lo: [0; 3],
