@@ -623,7 +623,10 @@ impl World {
 
     /// Extracts chunk `i` from the current samples into `mesh` with `ex` (whose buffers are
     /// reused), without touching the world's own chunk meshes or dirty flags: the extractor's
-    /// stage timings and counters for one chunk, for profiling.
+    /// stage timings and counters for one chunk, for profiling. Under [`Seams::Tiles`] the
+    /// result is the chunk's mesh; under [`Seams::Exact`] it is the chunk and its halo extracted
+    /// with the global rule, which need not be (the world's chunks come from the whole volume
+    /// and the edits' boxes).
     pub fn extract_chunk(
         &self,
         i: usize,
@@ -714,8 +717,8 @@ fn extract_chunk(
     let corner = |c: [usize; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
     let mut st = *unit;
     st.grid = Grid::new(cells, corner(s0), corner(s1));
-    let size = unit.tiles.map_or([usize::MAX; 3], |t| t.size);
-    st.tiles = Some(Tiling::new(size, s0));
+    // Tile seams: the world's tiles, offset to the box; exact seams: no tiles.
+    st.tiles = unit.tiles.map(|t| Tiling::new(t.size, s0));
     st.keep_cells = Some(CellRange {
         lo: [0, 1, 2].map(|a| own.lo[a] - s0[a]),
         hi: [0, 1, 2].map(|a| own.hi[a] - s0[a]),
