@@ -42,7 +42,7 @@ proptest! {
 
     /// Random fields of the extraction's property tests (blobs, waves, thin shells and tubes,
     /// sheets, stairs; some quantised, with samples exactly on the threshold) on worlds of 36
-    /// to 64 cells across, strokes of 1 to 5 cells anywhere.
+    /// to 64 cells across, strokes of 1 to 5 cells anywhere, then all of them undone.
     #[test]
     fn chunks_equal_the_whole_volume_after_every_stroke(
         seed in any::<u64>(),
@@ -64,7 +64,9 @@ proptest! {
         let mut world = World::new(&field, s).expect("world builds");
         world.remesh_dirty().expect("remesh runs");
         prop_assert!(exact(&world), "first meshing, seed {}", seed);
+        let initial = canonical_triangles(&world.mesh_welded());
         let total: usize = cells.iter().product();
+        let mut records = Vec::new();
         for (k, &(x, y, z, r, add)) in strokes.iter().enumerate() {
             let centre = origin + Vec3::new(x, y, z) * size;
             let brush = if add {
@@ -72,7 +74,8 @@ proptest! {
             } else {
                 Brush::subtract(centre, r * h, 3.0)
             };
-            world.apply_brush(&brush, 0.1).expect("brush applies");
+            let (_, record) = world.apply_brush_recorded(&brush, 0.1).expect("brush applies");
+            records.push(record);
             let stats = world.remesh_dirty().expect("remesh runs");
             if stats.boxes == 0 {
                 QUIET.fetch_add(1, Ordering::Relaxed);
@@ -85,6 +88,12 @@ proptest! {
             }
             prop_assert!(exact(&world), "stroke {} of seed {}, {:?}, {:?} cells, chunk {}", k, seed, lattice, cells, chunk);
         }
+        // Undoing every stroke, last first, brings the first mesh back, exactly.
+        for record in records.iter().rev() {
+            world.undo_stroke(record);
+            world.remesh_dirty().expect("remesh runs");
+        }
+        prop_assert!(canonical_triangles(&world.mesh_welded()) == initial, "undo, seed {}", seed);
         if DONE.fetch_add(1, Ordering::Relaxed) + 1 == cases(60) as usize {
             eprintln!(
                 "exact seams over {} worlds: {} strokes changed nothing that matters, {} were \
