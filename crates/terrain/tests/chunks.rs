@@ -303,26 +303,23 @@ fn integrated_clustering_still_merges_inside_chunks() {
 #[test]
 fn output_does_not_depend_on_the_thread_count() {
     let field = FnField(|p: Vec3| p.y - 1.0 - 0.3 * (3.0 * p.x).sin() * (2.0 * p.z).cos());
-    let run = |threads: usize| {
+    // 64 x 16 x 64 cells: exact seams' boxes are smaller than the world there.
+    let run = |threads: usize, seams: Seams| {
         let s = WorldSettings::new(
-            [24, 16, 24],
+            [64, 16, 64],
             Vec3::ZERO,
             0.125,
             Lattice::BodyCentred,
             Clustering::Integrated,
         )
         .with_chunk(8)
-        .with_threads(threads);
+        .with_threads(threads)
+        .with_seams(seams);
         let mut world = World::new(&field, s).expect("world builds");
         let report =
             run_strokes(&mut world, &StrokeParams::for_cells(0.125, 10, 7)).expect("strokes run");
-        (world.mesh_welded(), report.chunks)
+        (world.mesh_welded(), report.chunks, report.box_cells)
     };
-    let (a, ca) = run(1);
-    let (b, cb) = run(2);
-    assert!(a.triangle_count() > 0);
-    assert!(ca.iter().any(|&c| c > 0), "strokes re-meshed nothing");
-    assert_eq!(ca, cb);
     let bits = |m: &Mesh| -> Vec<u32> {
         m.positions
             .iter()
@@ -331,8 +328,26 @@ fn output_does_not_depend_on_the_thread_count() {
             .map(|c| c.to_bits())
             .collect()
     };
-    assert_eq!(a.indices, b.indices);
-    assert_eq!(bits(&a), bits(&b));
+    for seams in [Seams::Exact, Seams::Tiles] {
+        let (a, ca, boxes) = run(1, seams);
+        assert!(a.triangle_count() > 0);
+        assert!(
+            ca.iter().any(|&c| c > 0),
+            "{seams:?}: strokes re-meshed nothing"
+        );
+        if seams == Seams::Exact {
+            assert!(
+                boxes.iter().any(|&c| c > 0 && c < 64 * 16 * 64),
+                "{seams:?}: no stroke re-meshed with a box smaller than the world"
+            );
+        }
+        for threads in [2, 8] {
+            let (b, cb, _) = run(threads, seams);
+            assert_eq!(ca, cb, "{seams:?}, {threads} threads");
+            assert_eq!(a.indices, b.indices, "{seams:?}, {threads} threads");
+            assert!(bits(&a) == bits(&b), "{seams:?}, {threads} threads");
+        }
+    }
 }
 
 /// A stroke re-meshes a few chunks, not the world, and none where it cannot change the surface.
