@@ -410,34 +410,37 @@ impl World {
         };
         let (chunks, cells) = (&self.chunks, &state.cells);
         // Chunks in parallel on the world's threads.
-        let rebuilt: Vec<(usize, Mesh, Vec<u32>)> = self.pool.install(|| {
+        let rebuilt: Vec<Option<(usize, Mesh, Vec<u32>)>> = self.pool.install(|| {
             jobs.into_par_iter()
                 .map(|(i, mut new)| {
                     new.sort_by_key(|&(c, _)| c);
                     let mesh = &chunks[i];
-                    let old = mesh
-                        .indices
-                        .chunks_exact(3)
-                        .zip(&cells[i])
-                        .filter(|&(_, &c)| !cut.contains(coords(c)))
-                        .map(|(t, &c)| (c, [0, 1, 2].map(|k| mesh.positions[t[k] as usize])));
+                    let triangles = || {
+                        mesh.indices
+                            .chunks_exact(3)
+                            .zip(&cells[i])
+                            .map(|(t, &c)| (c, [0, 1, 2].map(|k| mesh.positions[t[k] as usize])))
+                    };
+                    // A chunk whose triangles in the cut come out the same (bit for bit, in the
+                    // same order) is left as it was: nothing to rebuild or upload.
+                    let bits = |t: &[[f32; 3]; 3]| t.map(|p| p.map(f32::to_bits));
+                    let same = !all
+                        && triangles()
+                            .filter(|&(c, _)| cut.contains(coords(c)))
+                            .map(|(c, t)| (c, bits(&t)))
+                            .eq(new.iter().map(|(c, t)| (*c, bits(t))));
+                    if same {
+                        return None;
+                    }
+                    let old = triangles().filter(|&(c, _)| !cut.contains(coords(c)));
                     let (m, c) = merge_into_mesh(old, new);
-                    (i, m, c)
+                    Some((i, m, c))
                 })
                 .collect()
         });
         let (mut count, mut triangles) = (0, 0);
         self.remeshed.clear();
-        for (i, m, c) in rebuilt {
-            // A chunk whose triangles came out the same is left as it was (nothing to upload).
-            let old = &self.chunks[i];
-            if !all
-                && m.indices == old.indices
-                && m.positions == old.positions
-                && c == state.cells[i]
-            {
-                continue;
-            }
+        for (i, m, c) in rebuilt.into_iter().flatten() {
             self.remeshed.push(i);
             count += 1;
             triangles += m.triangle_count();
