@@ -245,7 +245,19 @@ impl World {
         // A band around the edit; where it holds activity, the inside grows over that activity
         // and the band moves out past it, until a band is quiet (the whole volume always is).
         let mut inner = edit.grow(PROPOSAL_REACH);
+        let lattice = sampled_lattice(&self.unit);
         loop {
+            // The whole volume's activity is known before the box is extracted: the inside takes
+            // in what of it lies in the band first, so that a box is not extracted in vain.
+            if let Some(state) = self.exact.as_ref() {
+                loop {
+                    let grown = grow_over_band(inner, &state.activity, lattice);
+                    if grown == inner {
+                        break;
+                    }
+                    inner = grown;
+                }
+            }
             let outer = inner.grow(QUIET_BAND);
             let b = outer.grow(PROPOSAL_REACH + 1).clip(n);
             stats.attempts += 1;
@@ -263,13 +275,10 @@ impl World {
             }
             let cut = inner.grow(CUT).clip(n);
             let out = self.extract_cells(b, cut)?;
-            let lattice = sampled_lattice(&self.unit);
-            let in_band = |p: &[i64; 3]| {
-                let c = Cells::of_points(lattice, *p, *p);
-                c.intersects(&outer) && !inner.contains_box(&c)
-            };
             let old = self.exact.as_ref().map_or(&[][..], |s| &s.activity[..]);
-            if !out.activity.iter().any(in_band) && !old.iter().any(in_band) {
+            if !out.activity.iter().any(|p| in_band(inner, p, lattice))
+                && !old.iter().any(|p| in_band(inner, p, lattice))
+            {
                 // The new activity: the box's inside the band, the old one outside.
                 let inside = |p: &[i64; 3]| inner.contains_box(&Cells::of_points(lattice, *p, *p));
                 let mut activity: Vec<[i64; 3]> =
@@ -284,15 +293,7 @@ impl World {
             }
             // The inside takes in the activity found in the band (with a cell to spare), so the
             // next band lies past it.
-            let grown = out
-                .activity
-                .iter()
-                .chain(old)
-                .filter(|p| in_band(p))
-                .fold(inner, |i, p| {
-                    i.union(Cells::of_points(lattice, *p, *p).grow(1))
-                });
-            inner = grown;
+            inner = grow_over_band(inner, &out.activity, lattice);
         }
     }
 
@@ -451,6 +452,24 @@ impl World {
     }
 }
 
+/// Whether activity point `p` (lattice coordinates) lies in the band of `inner`: the cells it
+/// touches meet the band's outer box and are not all inside `inner`.
+fn in_band(inner: Cells, p: &[i64; 3], lattice: Lattice) -> bool {
+    let c = Cells::of_points(lattice, *p, *p);
+    c.intersects(&inner.grow(QUIET_BAND)) && !inner.contains_box(&c)
+}
+
+/// `inner` grown over the activity `points` that lie in its band, with a cell to spare, so that
+/// they are inside it; `inner` itself when none does.
+fn grow_over_band(inner: Cells, points: &[[i64; 3]], lattice: Lattice) -> Cells {
+    points
+        .iter()
+        .filter(|p| in_band(inner, p, lattice))
+        .fold(inner, |i, p| {
+            i.union(Cells::of_points(lattice, *p, *p).grow(1))
+        })
+}
+
 /// The triangles of `old` and `new` (each ascending by anchor cell) merged by cell, as a mesh
 /// whose vertices are the distinct positions in order of first use, and their cells.
 fn merge_into_mesh(old: impl Iterator<Item = Anchored>, new: Vec<Anchored>) -> (Mesh, Vec<u32>) {
@@ -480,4 +499,51 @@ fn merge_into_mesh(old: impl Iterator<Item = Anchored>, new: Vec<Anchored>) -> (
         push(&mut mesh, nc, nt);
     }
     (mesh, cells)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const INNER: Cells = Cells {
+        lo: [10, 10, 10],
+        hi: [20, 20, 20],
+    };
+
+    #[test]
+    fn points_of_the_band_are_told_from_inside_and_outside() {
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            let unit = if lattice == Lattice::BodyCentred {
+                2
+            } else {
+                1
+            };
+            let at = |c: [i64; 3]| c.map(|v| v * unit + unit / 2);
+            // A point in the middle of the inside, one a cell past the inside (in the band),
+            // one deep outside.
+            assert!(!in_band(INNER, &at([15, 15, 15]), lattice));
+            assert!(in_band(INNER, &at([20, 15, 15]), lattice));
+            assert!(in_band(INNER, &at([15, 15, 9]), lattice));
+            assert!(!in_band(INNER, &at([15, 15, 40]), lattice));
+            // On the inside's last cell the point touches cells past it: in the band.
+            let rim = [20 * unit, 15 * unit, 15 * unit];
+            assert!(in_band(INNER, &rim, lattice), "{lattice:?}");
+        }
+    }
+
+    #[test]
+    fn the_inside_grows_over_the_band_s_activity_and_not_over_the_rest() {
+        let lattice = Lattice::BodyCentred;
+        let inside = [30, 30, 30];
+        let far = [100, 30, 30];
+        assert_eq!(grow_over_band(INNER, &[inside, far], lattice), INNER);
+        let near = [2 * 22 + 1, 31, 31];
+        let grown = grow_over_band(INNER, &[inside, near, far], lattice);
+        assert_ne!(grown, INNER);
+        assert!(grown.contains_box(&INNER));
+        // The point is inside now, with a cell to spare, and the far one still is not.
+        assert!(!in_band(grown, &near, lattice));
+        assert!(grown.contains_box(&Cells::of_points(lattice, near, near).grow(1)));
+        assert!(!grown.contains_box(&Cells::of_points(lattice, far, far)));
+    }
 }
