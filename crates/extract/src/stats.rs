@@ -48,10 +48,11 @@ pub struct Stats {
     pub t_normals_s: f64,
     /// Seconds for the whole extraction.
     pub t_total_s: f64,
-    /// Part of `t_vertex_s` (integrated clustering): the group tables (each crossing's group,
-    /// each group's vertex position); with the checked mode also plain MT's triangle list and
-    /// every crossing's triangles, and the additions' proposals (variants of split islands,
-    /// lone crossings, sliver pairs).
+    /// Part of `t_vertex_s` (checked integrated clustering): the group tables (each crossing's
+    /// group, each group's vertex position), plain MT's triangle list and every crossing's
+    /// triangles, and the additions' proposals (variants of split islands, lone crossings,
+    /// sliver pairs). Integrated-unchecked builds no group tables: its numbering counts in
+    /// `t_vertices_s`.
     pub t_groups_s: f64,
     /// Part of `t_vertex_s` (integrated clustering): the first round of quotient tests of every
     /// settling step (the islands, then each addition), in parallel.
@@ -59,7 +60,7 @@ pub struct Stats {
     /// Part of `t_vertex_s` (integrated clustering): the repair rounds after those, in
     /// parallel.
     pub t_repair_s: f64,
-    /// Part of `t_vertex_s` (integrated clustering): numbering the output vertices.
+    /// Part of `t_vertex_s` (both integrated modes): numbering the output vertices.
     pub t_vertices_s: f64,
     /// Clusters (groups of at least two crossings at one point) found by the vertex pass, plus
     /// the pairs proposed at slivers (checked integrated clustering).

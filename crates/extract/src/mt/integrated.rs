@@ -7,8 +7,9 @@
 //! then lists plain MT's triangles once ([`super::emission::plain_triangles`]), keeps the groups
 //! that pass the exact quotient test, repairing failures by splitting groups in parallel rounds,
 //! and settles its additions the same way ([`crate::quotient`], [`crate::repair`],
-//! [`crate::additions`]); integrated-unchecked keeps every proposal. Every crossing then maps to
-//! an output vertex: its group's (the mean of its crossings) or its own.
+//! [`crate::additions`]); integrated-unchecked keeps every proposal and numbers its vertices
+//! plane by plane, with no group tables ([`keep_all`]). Every crossing then maps to an output
+//! vertex: its group's (the mean of its crossings) or its own.
 //!
 //! ```text
 //!   proposals -> group tables -> plain triangles -> settle islands -> variants -> lone passes
@@ -25,15 +26,11 @@ pub(crate) const SLIVER_PASSES: usize = 2;
 
 /// The group tables of the proposals in `buf.candidates`, every group kept: each crossing's
 /// group, each group's leader (lowest crossing id) and vertex position (the mean of its
-/// crossings), and empty lone tables. With `checked` (integrated clustering) also what the
-/// additions read: every crossing's owner slot and edge (`buf.edge_of`) and the groups that
-/// gave it back ([`crate::quotient::Groups::refused`]); integrated-unchecked leaves them empty.
-pub(crate) fn build_groups(
-    buf: &mut MtBuffers,
-    layout: &Layout,
-    checked: bool,
-    pool: &rayon::ThreadPool,
-) {
+/// crossings), and empty lone tables; also what the additions read: every crossing's owner
+/// slot and edge (`buf.edge_of`) and the groups that gave it back
+/// ([`crate::quotient::Groups::refused`]). Integrated clustering only: integrated-unchecked
+/// numbers its vertices without group tables ([`keep_all`]).
+pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::ThreadPool) {
     use crate::quotient::NONE;
     let crossings = buf.cpos.len();
     let MtBuffers {
@@ -78,10 +75,6 @@ pub(crate) fn build_groups(
     g.base_len.resize(count, 0);
     g.refused.clear();
     g.touched.clear();
-    if !checked {
-        edge_of.clear();
-        return;
-    }
     g.refused.resize(crossings, NONE);
     // Every crossing's edge: plane by plane, points in slot order, edges in bit order, which
     // is the order of the ids.
@@ -90,16 +83,7 @@ pub(crate) fn build_groups(
     // Ids are numbered plane by plane: a plane's first id is the `first` of its first crossed
     // point (or of the next plane's, when it has none), so each plane fills its own slice.
     let planes = layout.s.dims[2];
-    let starts: Vec<usize> = (0..planes)
-        .map(|z| {
-            let r = crossed.rank_in(z, 0);
-            crossed
-                .points
-                .get(r)
-                .map_or(crossings, |p| p.first as usize)
-        })
-        .chain([crossings])
-        .collect();
+    let starts = plane_id_starts(crossed, planes, crossings);
     overwritten(edge_of, crossings, (0, 0), pool);
     let mut parts = Vec::with_capacity(planes);
     let mut rest = &mut edge_of[..];
@@ -154,44 +138,49 @@ pub(crate) fn cluster(
         tile_rule(&mut buf.candidates, layout, keys, rules, stats);
     }
     let step = std::time::Instant::now();
-    build_groups(buf, layout, clustering == Clustering::Integrated, pool);
-    let mut islands = buf.candidates.len();
-    if clustering == Clustering::Integrated {
-        // Plain MT's triangles and every crossing's triangles: the stars of the tests.
-        *plain_processed = plain_triangles(
-            layout,
-            iso,
-            &buf.crossed,
-            &buf.cpos,
-            pool,
-            keep,
-            &mut buf.plain,
-            &mut buf.plain_grad,
-            &mut buf.plain_kept,
-            buf.record.then_some(&mut buf.plain_cell),
-            &mut buf.inc_start,
-            &mut buf.inc,
-            &mut buf.inc_cursor,
-            &mut buf.inc_parts,
-        );
-        // The groups' state changes while the fixed tables (in `buf`) are read.
-        let mut groups = std::mem::take(&mut buf.groups);
-        settle_islands(buf, &mut groups, layout, keys, islands, step, pool, stats);
-        let variant_of = add_variants(buf, &mut groups, layout, islands, stats);
-        revive_and_give_lones(buf, &mut groups, layout, keys, &variant_of, pool, stats);
-        islands += sliver_passes(buf, &mut groups, layout, keys, pool, stats);
-        if buf.record {
-            activity_points(layout, &groups.touched, &buf.edge_of, &mut buf.activity);
-        }
-        buf.groups = groups;
-    } else {
+    if clustering == Clustering::IntegratedUnchecked {
+        // Every proposal is kept: no group tables, no tests.
+        keep_all(buf, layout, &mut mesh.positions, pool);
         buf.plain.clear();
         buf.plain_grad.clear();
         buf.plain_kept.clear();
         buf.inc_start.clear();
         buf.inc.clear();
-        stats.t_groups_s += step.elapsed().as_secs_f64();
+        stats.lone_absorbed = 0;
+        stats.clusters_committed = buf.candidates.len();
+        stats.clusters_rejected_check = 0;
+        stats.t_vertices_s += step.elapsed().as_secs_f64();
+        return;
     }
+    build_groups(buf, layout, pool);
+    let mut islands = buf.candidates.len();
+    // Plain MT's triangles and every crossing's triangles: the stars of the tests.
+    *plain_processed = plain_triangles(
+        layout,
+        iso,
+        &buf.crossed,
+        &buf.cpos,
+        pool,
+        keep,
+        &mut buf.plain,
+        &mut buf.plain_grad,
+        &mut buf.plain_kept,
+        buf.record.then_some(&mut buf.plain_cell),
+        &mut buf.inc_start,
+        &mut buf.inc,
+        &mut buf.inc_cursor,
+        &mut buf.inc_parts,
+    );
+    // The groups' state changes while the fixed tables (in `buf`) are read.
+    let mut groups = std::mem::take(&mut buf.groups);
+    settle_islands(buf, &mut groups, layout, keys, islands, step, pool, stats);
+    let variant_of = add_variants(buf, &mut groups, layout, islands, stats);
+    revive_and_give_lones(buf, &mut groups, layout, keys, &variant_of, pool, stats);
+    islands += sliver_passes(buf, &mut groups, layout, keys, pool, stats);
+    if buf.record {
+        activity_points(layout, &groups.touched, &buf.edge_of, &mut buf.activity);
+    }
+    buf.groups = groups;
     let step = std::time::Instant::now();
     let groups = &buf.groups;
     stats.lone_absorbed = (0..buf.candidates.len())
@@ -207,6 +196,160 @@ pub(crate) fn cluster(
     stats.clusters_rejected_check = islands - stats.clusters_committed;
     stats.t_vertices_s += step.elapsed().as_secs_f64();
     buf.vertex_of = vertex_of;
+}
+
+/// Integrated-unchecked, every proposal kept: each crossing's output vertex (`buf.vertex_of`)
+/// and the vertex positions, numbered as [`vertex_map`] numbers them (in crossing order, a
+/// group where its leader comes), but plane by plane in parallel. A proposal's crossings are
+/// its owner's, so they all lie in the owner's storage plane, whose crossing ids are one range:
+///
+/// ```text
+///   plane z:   ids starts[z] .. starts[z+1]     proposals with `first` in that range
+///   count:     new vertices = crossings - sum over its proposals of (size - 1)
+///   prefix:    plane z's vertices start at the sum of the counts below it
+///   fill:      vertex_of and positions, slice by slice: runs of crossings in no proposal are
+///              copied; an owner with proposals is numbered by the ranks of its crossings
+/// ```
+///
+/// The group tables are left empty.
+pub(crate) fn keep_all(
+    buf: &mut MtBuffers,
+    layout: &Layout,
+    positions: &mut Vec<[f32; 3]>,
+    pool: &rayon::ThreadPool,
+) {
+    let crossings = buf.cpos.len();
+    let planes = layout.s.dims[2];
+    let starts = plane_id_starts(&buf.crossed, planes, crossings);
+    let candidates = &buf.candidates[..];
+    // Proposals come in the order of their owners (by `first`): each plane's are one range.
+    let cand_starts: Vec<usize> = starts
+        .iter()
+        .map(|&s| candidates.partition_point(|c| (c.first as usize) < s))
+        .collect();
+    let counts: Vec<usize> = pool.install(|| {
+        (0..planes)
+            .into_par_iter()
+            .map(|z| {
+                let merged: usize = candidates[cand_starts[z]..cand_starts[z + 1]]
+                    .iter()
+                    .map(|c| c.size() as usize - 1)
+                    .sum();
+                starts[z + 1] - starts[z] - merged
+            })
+            .collect()
+    });
+    let vertices: usize = counts.iter().sum();
+    let g = &mut buf.groups;
+    g.active.clear();
+    g.group_of.clear();
+    g.leader.clear();
+    g.centroid.clear();
+    g.lone.clear();
+    g.lone_start.clear();
+    g.lone_len.clear();
+    g.base_len.clear();
+    g.refused.clear();
+    g.touched.clear();
+    g.vlabel.clear();
+    g.vpos.clear();
+    buf.edge_of.clear();
+    overwritten(&mut buf.vertex_of, crossings, 0, pool);
+    overwritten(positions, vertices, [0.0; 3], pool);
+    // Each plane's slices of the two outputs.
+    let mut parts = Vec::with_capacity(planes);
+    let (mut rest_v, mut rest_p) = (&mut buf.vertex_of[..], &mut positions[..]);
+    for z in 0..planes {
+        let (hv, tv) = rest_v.split_at_mut(starts[z + 1] - starts[z]);
+        let (hp, tp) = rest_p.split_at_mut(counts[z]);
+        parts.push((hv, hp));
+        (rest_v, rest_p) = (tv, tp);
+    }
+    let cpos = &buf.cpos[..];
+    pool.install(|| {
+        parts
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(z, (vertex_of, out))| {
+                let (base, end) = (starts[z], starts[z + 1]);
+                let first_vertex: u32 = counts[..z].iter().sum::<usize>() as u32;
+                let mut next = 0usize;
+                // Crossings `from..to` (ids) that are in no proposal: a vertex each.
+                let singles = |from: usize,
+                               to: usize,
+                               next: &mut usize,
+                               vertex_of: &mut [u32],
+                               out: &mut [[f32; 3]]| {
+                    out[*next..*next + to - from].copy_from_slice(&cpos[from..to]);
+                    for (k, v) in vertex_of[from - base..to - base].iter_mut().enumerate() {
+                        *v = first_vertex + (*next + k) as u32;
+                    }
+                    *next += to - from;
+                };
+                let (mut x, mut h) = (base, cand_starts[z]);
+                while h < cand_starts[z + 1] {
+                    // One owner's proposals (the same `first`), its crossings by rank.
+                    let f = candidates[h].first as usize;
+                    singles(x, f, &mut next, vertex_of, out);
+                    let mut which = [u8::MAX; 16];
+                    let mut e = h;
+                    let mut union = 0u16;
+                    while e < cand_starts[z + 1] && candidates[e].first as usize == f {
+                        let mut m = candidates[e].members;
+                        union |= m;
+                        while m != 0 {
+                            which[m.trailing_zeros() as usize] = (e - h) as u8;
+                            m &= m - 1;
+                        }
+                        e += 1;
+                    }
+                    for (r, &k) in which
+                        .iter()
+                        .enumerate()
+                        .take(16 - union.leading_zeros() as usize)
+                    {
+                        let id = f + r;
+                        if k == u8::MAX {
+                            singles(id, id + 1, &mut next, vertex_of, out);
+                            continue;
+                        }
+                        let c = candidates[h + k as usize];
+                        let leader = c.leader() as usize;
+                        if leader != id {
+                            // The leader has the lowest id of the group: numbered already.
+                            vertex_of[id - base] = vertex_of[leader - base];
+                            continue;
+                        }
+                        let mut sum = glam::Vec3::ZERO;
+                        for m in c.ids() {
+                            sum += glam::Vec3::from(cpos[m as usize]);
+                        }
+                        out[next] = (sum / c.size() as f32).to_array();
+                        vertex_of[id - base] = first_vertex + next as u32;
+                        next += 1;
+                    }
+                    x = f + 16 - union.leading_zeros() as usize;
+                    h = e;
+                }
+                singles(x, end, &mut next, vertex_of, out);
+                debug_assert_eq!(next, out.len());
+            })
+    });
+}
+
+/// The first crossing id of every storage plane, and the number of crossings at the end: ids
+/// are numbered plane by plane, so plane `z`'s are `starts[z]..starts[z + 1]`.
+fn plane_id_starts(crossed: &CrossedIndex, planes: usize, crossings: usize) -> Vec<usize> {
+    (0..planes)
+        .map(|z| {
+            let r = crossed.rank_in(z, 0);
+            crossed
+                .points
+                .get(r)
+                .map_or(crossings, |p| p.first as usize)
+        })
+        .chain([crossings])
+        .collect()
 }
 
 /// The fixed tables of the quotient tests, over the candidates as they are now.

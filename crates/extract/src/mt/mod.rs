@@ -672,6 +672,71 @@ mod tests {
     }
 
     #[test]
+    fn unchecked_numbering_by_planes_is_the_group_tables_numbering() {
+        // `keep_all` (integrated-unchecked: every proposal kept, numbered plane by plane in
+        // parallel) against the group tables and the serial `vertex_map` of integrated
+        // clustering with every group kept: the same vertex of every crossing and the same
+        // positions, bit for bit.
+        let field = wavy();
+        let mut compared = 0;
+        for threads in [1, 2] {
+            let pool = test_pool(threads);
+            for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+                for cells in [[12, 10, 14], [16, 16, 16], [5, 23, 9]] {
+                    let settings = crate::ExtractSettings::new(
+                        crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
+                        lattice,
+                        crate::Clustering::IntegratedUnchecked,
+                    );
+                    let mut stats = Stats::default();
+                    let mut samples = Samples::default();
+                    samples
+                        .sample(&field, &settings, &pool, &mut stats)
+                        .expect("a finite field");
+                    let (mut buf, mut merge, mut mesh) = (
+                        MtBuffers::default(),
+                        MergeBuffers::default(),
+                        Mesh::default(),
+                    );
+                    extract(
+                        &samples, &settings, &pool, &mut buf, &mut merge, &mut mesh, &mut stats,
+                    )
+                    .expect("extraction");
+                    let what = format!("{lattice:?} {cells:?} threads={threads}");
+                    assert!(buf.candidates.len() > 20, "{what}: few proposals");
+                    let l = Layout::new(&samples, lattice);
+                    let mut by_planes = Vec::new();
+                    keep_all(&mut buf, &l, &mut by_planes, &pool);
+                    let planes_map = buf.vertex_of.clone();
+                    build_groups(&mut buf, &l, &pool);
+                    let (mut tables_map, mut by_tables) = (Vec::new(), Vec::new());
+                    let fixed = crate::quotient::Fixed {
+                        l: &l,
+                        cpos: &buf.cpos,
+                        groups: &buf.candidates,
+                        tris: &[],
+                        grad: &[],
+                        inc_start: &[],
+                        inc: &[],
+                        keys: None,
+                    };
+                    let q = crate::quotient::Quotient::new(&fixed, &buf.groups);
+                    vertex_map(&q, &mut tables_map, &mut by_tables, &pool);
+                    assert_eq!(planes_map, tables_map, "{what}");
+                    let bits = |p: &[[f32; 3]]| -> Vec<[u32; 3]> {
+                        p.iter().map(|v| v.map(f32::to_bits)).collect()
+                    };
+                    assert_eq!(bits(&by_planes), bits(&by_tables), "{what}");
+                    // Merged groups: fewer vertices than crossings.
+                    assert!(by_planes.len() < buf.cpos.len(), "{what}");
+                    compared += buf.cpos.len();
+                }
+            }
+        }
+        assert!(compared > 5000, "only {compared} crossings compared");
+    }
+
+    #[test]
     fn a_chunk_maps_its_triangles_from_the_list_as_the_geometry_pass_walks_its_cells() {
         // Integrated clustering in a chunk emits the kept cells' triangles from plain MT's
         // list; the geometry pass over the kept cells, through the same vertex map, is the
