@@ -49,6 +49,7 @@
 pub mod additions;
 pub mod cluster;
 pub mod collapse;
+pub(crate) mod incidence;
 pub mod lattice;
 pub mod mc;
 pub mod measure;

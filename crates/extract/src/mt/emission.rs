@@ -81,7 +81,7 @@ pub(crate) fn emit_layers(
 /// gradient (of the linear interpolant on its source tetrahedron, up to a positive factor) in
 /// `grad`; then every crossing's triangles as a CSR
 /// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order, built in parallel by
-/// [`crate::merge::incidence_parallel`]; `inc_cursor` and `inc_parts` are its working memory). The quotient test reads a group's star from these instead of from the lattice.
+/// [`crate::incidence::incidence_parallel`]; `inc_cursor` and `inc_parts` are its working memory). The quotient test reads a group's star from these instead of from the lattice.
 /// With `keep` (a chunk) also, per triangle, whether its anchor's cell is kept (`kept`), so
 /// that the emission maps the chunk's own triangles from the list too; returns the tetrahedra
 /// with a triangle (of the kept cells, with `keep`).
@@ -141,7 +141,7 @@ pub(crate) fn plain_triangles(
             .sum()
     });
     // Incidence in triangle order, so the table is deterministic.
-    crate::merge::incidence_parallel(
+    crate::incidence::incidence_parallel(
         cpos.len(),
         tris,
         inc_start,

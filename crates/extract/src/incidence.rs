@@ -1,0 +1,220 @@
+//! Every vertex's triangles as a CSR table (`inc[inc_start[v]..inc_start[v + 1]]`), serial
+//! ([`incidence`]) or in parallel with the same result ([`incidence_parallel`]).
+//!
+//! Integrated clustering reads the stars of its quotient tests from the table over plain MT's
+//! triangles ([`crate::mt`]); the mesh-based merge of edge collapse ([`crate::merge`]) builds
+//! one over the mesh it simplifies.
+//!
+//! ```text
+//!   triangles  t0=(a,b,c) t1=(b,c,d) ...      counts -> prefix sums -> inc_start
+//!   inc        [ a: t0 | b: t0 t1 | c: t0 t1 | d: t1 ... ]   (each vertex's in triangle order)
+//! ```
+
+/// Every vertex's triangles as a CSR table: `inc[inc_start[v]..inc_start[v + 1]]` lists the
+/// triangles of `indices` (three per triangle) holding vertex `v`, in triangle order.
+/// `cursor` is working memory.
+pub(crate) fn incidence(
+    vertex_count: usize,
+    indices: &[u32],
+    inc_start: &mut Vec<u32>,
+    inc: &mut Vec<u32>,
+    cursor: &mut Vec<u32>,
+) {
+    inc_start.clear();
+    inc_start.resize(vertex_count + 1, 0);
+    for &v in indices {
+        inc_start[v as usize + 1] += 1;
+    }
+    for i in 0..vertex_count {
+        inc_start[i + 1] += inc_start[i];
+    }
+    inc.clear();
+    inc.resize(indices.len() - indices.len() % 3, 0);
+    cursor.clear();
+    cursor.extend_from_slice(&inc_start[..vertex_count]);
+    for (t, tri) in indices.chunks_exact(3).enumerate() {
+        for &v in tri {
+            inc[cursor[v as usize] as usize] = t as u32;
+            cursor[v as usize] += 1;
+        }
+    }
+}
+
+/// [`incidence`] on `pool`'s threads: the same table, bit for bit, for any thread count.
+///
+/// The list is cut into parts of consecutive triangles. Each part counts its corners over the
+/// range of ids it touches (`parts[p]`); the counts add up to `inc_start`; then, in part order,
+/// each part's counts become its cursors (where its first triangle of each vertex goes: after
+/// the earlier parts' ones), and the parts fill `inc` in parallel. Every (vertex, triangle)
+/// pair has its own place, so the parts never write the same slot, and each vertex's
+/// triangles come in triangle order. The serial steps cost the sum of the parts' id ranges:
+/// meant for lists whose nearby triangles have nearby ids (plain MT's, listed layer by layer,
+/// with ids in storage order); when the ranges add up to more than four times the vertex
+/// count, it falls back to [`incidence`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn incidence_parallel(
+    vertex_count: usize,
+    indices: &[u32],
+    inc_start: &mut Vec<u32>,
+    inc: &mut Vec<u32>,
+    cursor: &mut Vec<u32>,
+    parts: &mut Vec<Vec<u32>>,
+    pool: &rayon::ThreadPool,
+) {
+    use rayon::prelude::*;
+    let tris = indices.len() / 3;
+    let count = 4 * pool.current_num_threads();
+    if count <= 4 || tris < 4096 {
+        return incidence(vertex_count, indices, inc_start, inc, cursor);
+    }
+    let bounds: Vec<usize> = (0..=count).map(|p| tris * p / count).collect();
+    parts.resize_with(count, Vec::new);
+    // Each part's id range and its counts over it.
+    let los: Vec<usize> = pool.install(|| {
+        parts
+            .par_iter_mut()
+            .enumerate()
+            .map(|(p, counts)| {
+                let corners = &indices[3 * bounds[p]..3 * bounds[p + 1]];
+                // The id range in one pass (parts hold at least one triangle).
+                let (lo, hi) = corners
+                    .iter()
+                    .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+                let (lo, hi) = (lo as usize, hi as usize + 1);
+                counts.clear();
+                counts.resize(hi - lo, 0);
+                for &v in corners {
+                    counts[v as usize - lo] += 1;
+                }
+                lo
+            })
+            .collect()
+    });
+    let spans: usize = parts.iter().map(Vec::len).sum();
+    if spans > 4 * vertex_count.max(1)
+        || los
+            .iter()
+            .zip(parts.iter())
+            .any(|(&lo, c)| lo + c.len() > vertex_count)
+    {
+        return incidence(vertex_count, indices, inc_start, inc, cursor);
+    }
+    inc_start.clear();
+    inc_start.resize(vertex_count + 1, 0);
+    for (&lo, counts) in los.iter().zip(parts.iter()) {
+        for (slot, &c) in inc_start[lo + 1..].iter_mut().zip(counts) {
+            *slot += c;
+        }
+    }
+    for i in 0..vertex_count {
+        inc_start[i + 1] += inc_start[i];
+    }
+    // Counts to cursors, part after part.
+    cursor.clear();
+    cursor.extend_from_slice(&inc_start[..vertex_count]);
+    for (&lo, counts) in los.iter().zip(parts.iter_mut()) {
+        for (c, next) in counts.iter_mut().zip(&mut cursor[lo..]) {
+            let n = *c;
+            *c = *next;
+            *next += n;
+        }
+    }
+    // Every slot is written below: a reused table is not cleared first.
+    crate::mt::overwritten(inc, indices.len() - indices.len() % 3, 0, pool);
+    let out = SharedSlots {
+        ptr: inc.as_mut_ptr(),
+        len: inc.len(),
+    };
+    let out = &out;
+    pool.install(|| {
+        parts
+            .par_iter_mut()
+            .zip(los.par_iter())
+            .enumerate()
+            .for_each(|(p, (cursors, &lo))| {
+                for t in bounds[p]..bounds[p + 1] {
+                    for &v in &indices[3 * t..3 * t + 3] {
+                        let c = &mut cursors[v as usize - lo];
+                        out.write(*c as usize, t as u32);
+                        *c += 1;
+                    }
+                }
+            })
+    });
+}
+
+/// Slots of a `u32` slice that threads write in parallel, each slot by one writer only
+/// ([`incidence_parallel`]: every (vertex, triangle) pair has its own slot).
+struct SharedSlots {
+    ptr: *mut u32,
+    len: usize,
+}
+
+// SAFETY: the slots are written through `write` only, each by one thread (see `SharedSlots`),
+// while the slice they point into is borrowed mutably by the function that made them.
+unsafe impl Sync for SharedSlots {}
+
+impl SharedSlots {
+    /// Writes `value` to slot `i` (ignored past the end, which the cursors never reach).
+    #[inline(always)]
+    fn write(&self, i: usize, value: u32) {
+        if i < self.len {
+            // SAFETY: `i` is in bounds, and no other thread writes or reads slot `i` while the
+            // slots are shared (each slot belongs to one (vertex, triangle) pair).
+            unsafe { *self.ptr.add(i) = value };
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A triangle list of `tris` triangles over `n` vertices: local (each triangle's ids within
+    /// `spread` of a point that moves along the list) or not.
+    fn triangle_list(tris: usize, n: usize, spread: usize, seed: u64) -> Vec<u32> {
+        let mut state = seed;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as usize
+        };
+        (0..tris)
+            .flat_map(|t| {
+                let centre = t * n / tris;
+                let mut corner = || {
+                    let lo = centre.saturating_sub(spread);
+                    (lo + next() % (2 * spread + 1)).min(n - 1) as u32
+                };
+                [corner(), corner(), corner()]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn parallel_incidence_equals_the_serial_table_for_any_thread_count() {
+        for (tris, n, spread) in [(20_000, 9_000, 40), (20_000, 9_000, 9_000), (5_000, 3, 1)] {
+            let indices = triangle_list(tris, n, spread, tris as u64 + spread as u64);
+            let (mut start, mut inc, mut cursor) = (Vec::new(), Vec::new(), Vec::new());
+            incidence(n, &indices, &mut start, &mut inc, &mut cursor);
+            for threads in [1, 2, 3, 5] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("a thread pool");
+                let (mut s2, mut i2, mut c2, mut parts) =
+                    (vec![7], vec![7], Vec::new(), Vec::new());
+                incidence_parallel(n, &indices, &mut s2, &mut i2, &mut c2, &mut parts, &pool);
+                assert_eq!(
+                    s2, start,
+                    "starts: {tris} triangles, spread {spread}, {threads} threads"
+                );
+                assert_eq!(
+                    i2, inc,
+                    "table: {tris} triangles, spread {spread}, {threads} threads"
+                );
+            }
+        }
+    }
+}
