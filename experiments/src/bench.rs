@@ -340,6 +340,75 @@ pub struct BenchReport {
     /// The same after the run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load_average_after: Option<[f64; 3]>,
+    /// The ratios the project's performance targets are stated in, per field and size
+    /// ([`tracked_ratios`]), read off `results`.
+    pub tracked: Vec<TrackedRatio>,
+}
+
+/// One of the ratios the performance targets are stated in, for one field and size: body-centred
+/// RMT against plain MT, fast-surface-nets, and itself on one thread.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TrackedRatio {
+    /// Field name.
+    pub field: &'static str,
+    /// Cells per axis.
+    pub n: usize,
+    /// What is divided by what ([`TRACKED`] names them).
+    pub ratio: &'static str,
+    /// The value.
+    pub value: f64,
+}
+
+/// The tracked ratios, in the order [`tracked_ratios`] lists them per field and size:
+/// - integrated (checked) vertex + geometry passes over plain MT's, 1 thread;
+/// - the same for integrated-unchecked;
+/// - integrated ns per sample point over fast-surface-nets' ns per grid point, 1 thread;
+/// - integrated wall time on 1 thread over on 2 threads.
+pub const TRACKED: [&str; 4] = [
+    "integrated / plain MT (vg, 1 thread)",
+    "unchecked / plain MT (vg, 1 thread)",
+    "integrated ns/point / fast-surface-nets (1 thread)",
+    "integrated 1 thread / 2 threads (wall)",
+];
+
+/// The tracked ratios ([`TRACKED`]) of `results`, per field and size in the order they first
+/// appear; a ratio whose rows were not run (e.g. no 2-thread rows) is left out.
+pub fn tracked_ratios(results: &[BenchRow]) -> Vec<TrackedRatio> {
+    let row = |field: &str, n: usize, method: &str, threads: usize| {
+        results
+            .iter()
+            .find(|r| (r.field, r.n, r.method, r.threads) == (field, n, method, threads))
+    };
+    let mut cases: Vec<(&'static str, usize)> = Vec::new();
+    for r in results {
+        if !cases.contains(&(r.field, r.n)) {
+            cases.push((r.field, r.n));
+        }
+    }
+    let integrated = BenchMethod::RmtBcdlIntegrated.name();
+    let unchecked = BenchMethod::RmtBcdlUnchecked.name();
+    let mut out = Vec::new();
+    for (field, n) in cases {
+        let values = [
+            row(field, n, integrated, 1).and_then(|r| r.vertex_geometry_over_plain),
+            row(field, n, unchecked, 1).and_then(|r| r.vertex_geometry_over_plain),
+            row(field, n, integrated, 1).map(|r| r.point_ratio_to_fast_surface_nets),
+            row(field, n, integrated, 1)
+                .zip(row(field, n, integrated, 2))
+                .map(|(one, two)| one.median_s / two.median_s),
+        ];
+        for (ratio, value) in TRACKED.into_iter().zip(values) {
+            if let Some(value) = value {
+                out.push(TrackedRatio {
+                    field,
+                    n,
+                    ratio,
+                    value,
+                });
+            }
+        }
+    }
+    out
 }
 
 /// The 1, 5 and 15 minute load averages from `/proc/loadavg`; `None` where unavailable.
@@ -718,6 +787,7 @@ pub fn run_bench(
         }
     }
     Ok(BenchReport {
+        tracked: tracked_ratios(&results),
         results,
         reps: config.reps,
         placement: config.placement.name(),
@@ -782,6 +852,16 @@ pub fn format_table(report: &BenchReport) -> String {
             alloc,
             r.triangles
         );
+    }
+    if !report.tracked.is_empty() {
+        let _ = writeln!(s, "tracked ratios (body-centred RMT; medians of this run):");
+        for t in &report.tracked {
+            let _ = writeln!(
+                s,
+                "  {:<9} {:>4}  {:<52} {:>6.2}",
+                t.field, t.n, t.ratio, t.value
+            );
+        }
     }
     let load = |l: Option<[f64; 3]>| {
         l.map_or("n/a".to_string(), |[a, b, c]| {
@@ -1019,5 +1099,45 @@ mod tests {
         let table = format_table(&report);
         assert!(table.contains("rmt_bcdl_integrated") && table.contains("rmt_bcdl_unchecked"));
         assert!(table.contains("vg_xmt"));
+        // The tracked ratios: all four per field and size (both thread counts ran), each the
+        // quotient of the rows it names.
+        assert_eq!(
+            report.tracked.len(),
+            2 * TRACKED.len(),
+            "{:?}",
+            report.tracked
+        );
+        let get = |n: usize, method: &str, threads: usize| {
+            report
+                .results
+                .iter()
+                .find(|r| (r.n, r.method, r.threads) == (n, method, threads))
+                .expect("a row")
+        };
+        for t in &report.tracked {
+            let int1 = get(t.n, "rmt_bcdl_integrated", 1);
+            let expected = match TRACKED.iter().position(|&r| r == t.ratio) {
+                Some(0) => int1.vertex_geometry_over_plain.unwrap(),
+                Some(1) => get(t.n, "rmt_bcdl_unchecked", 1)
+                    .vertex_geometry_over_plain
+                    .unwrap(),
+                Some(2) => int1.point_ratio_to_fast_surface_nets,
+                Some(3) => int1.median_s / get(t.n, "rmt_bcdl_integrated", 2).median_s,
+                _ => panic!("unknown ratio {t:?}"),
+            };
+            assert_eq!(t.value, expected, "{t:?}");
+            assert!(table.contains(t.ratio), "{t:?} not in the table");
+        }
+        assert_eq!(json["tracked"].as_array().map(Vec::len), Some(8));
+        // One thread only: no scaling ratio.
+        let one: Vec<BenchRow> = report
+            .results
+            .iter()
+            .filter(|r| r.threads == 1)
+            .cloned()
+            .collect();
+        let tracked = tracked_ratios(&one);
+        assert_eq!(tracked.len(), 2 * 3);
+        assert!(tracked.iter().all(|t| t.ratio != TRACKED[3]));
     }
 }
