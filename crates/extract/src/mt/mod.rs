@@ -398,31 +398,58 @@ mod tests {
             .expect("a thread pool")
     }
 
-    fn plain_mt(
-        field: &impl rmt_fields::ScalarField,
-        lattice: Lattice,
+    /// Settings for `cells` in [-1, 1]^3.
+    fn settings_on(
         cells: [usize; 3],
-        pool: &rayon::ThreadPool,
-    ) -> (crate::ExtractSettings, Samples, MtBuffers, Mesh) {
-        let settings = crate::ExtractSettings::new(
+        lattice: Lattice,
+        clustering: crate::Clustering,
+    ) -> crate::ExtractSettings {
+        crate::ExtractSettings::new(
             crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
             lattice,
-            crate::Clustering::None,
-        );
+            clustering,
+        )
+    }
+
+    /// `field` sampled and extracted with `settings`: the samples, the pass buffers as the
+    /// extraction left them, the mesh and the counters.
+    fn extracted(
+        field: &impl rmt_fields::ScalarField,
+        settings: &crate::ExtractSettings,
+        pool: &rayon::ThreadPool,
+    ) -> (Samples, MtBuffers, Mesh, Stats) {
         let mut stats = Stats::default();
         let mut samples = Samples::default();
         samples
-            .sample(field, &settings, pool, &mut stats)
+            .sample(field, settings, pool, &mut stats)
             .expect("a finite field");
         let (mut buf, mut merge, mut mesh) = (
             MtBuffers::default(),
             MergeBuffers::default(),
             Mesh::default(),
         );
+        let mut counted = Stats::default();
         extract(
-            &samples, &settings, pool, &mut buf, &mut merge, &mut mesh, &mut stats,
+            &samples,
+            settings,
+            pool,
+            &mut buf,
+            &mut merge,
+            &mut mesh,
+            &mut counted,
         )
         .expect("extraction");
+        (samples, buf, mesh, counted)
+    }
+
+    fn plain_mt(
+        field: &impl rmt_fields::ScalarField,
+        lattice: Lattice,
+        cells: [usize; 3],
+        pool: &rayon::ThreadPool,
+    ) -> (crate::ExtractSettings, Samples, MtBuffers, Mesh) {
+        let settings = settings_on(cells, lattice, crate::Clustering::None);
+        let (samples, buf, mesh, _) = extracted(field, &settings, pool);
         (settings, samples, buf, mesh)
     }
 
@@ -683,25 +710,9 @@ mod tests {
             let pool = test_pool(threads);
             for lattice in [Lattice::BodyCentred, Lattice::Simple] {
                 for cells in [[12, 10, 14], [16, 16, 16], [5, 23, 9]] {
-                    let settings = crate::ExtractSettings::new(
-                        crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
-                        lattice,
-                        crate::Clustering::IntegratedUnchecked,
-                    );
-                    let mut stats = Stats::default();
-                    let mut samples = Samples::default();
-                    samples
-                        .sample(&field, &settings, &pool, &mut stats)
-                        .expect("a finite field");
-                    let (mut buf, mut merge, mut mesh) = (
-                        MtBuffers::default(),
-                        MergeBuffers::default(),
-                        Mesh::default(),
-                    );
-                    extract(
-                        &samples, &settings, &pool, &mut buf, &mut merge, &mut mesh, &mut stats,
-                    )
-                    .expect("extraction");
+                    let settings =
+                        settings_on(cells, lattice, crate::Clustering::IntegratedUnchecked);
+                    let (samples, mut buf, _, _) = extracted(&field, &settings, &pool);
                     let what = format!("{lattice:?} {cells:?} threads={threads}");
                     assert!(buf.candidates.len() > 20, "{what}: few proposals");
                     let l = Layout::new(&samples, lattice);
@@ -750,33 +761,9 @@ mod tests {
                 ([16, 16, 16], [0, 3, 5], [9, 16, 12]),
                 ([9, 13, 11], [2, 0, 0], [9, 7, 6]),
             ] {
-                let mut settings = crate::ExtractSettings::new(
-                    crate::Grid::new(cells, glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)),
-                    lattice,
-                    crate::Clustering::Integrated,
-                );
+                let mut settings = settings_on(cells, lattice, crate::Clustering::Integrated);
                 settings.keep_cells = Some(CellRange { lo, hi });
-                let mut stats = Stats::default();
-                let mut samples = Samples::default();
-                samples
-                    .sample(&field, &settings, &pool, &mut stats)
-                    .expect("a finite field");
-                let (mut buf, mut merge, mut mesh) = (
-                    MtBuffers::default(),
-                    MergeBuffers::default(),
-                    Mesh::default(),
-                );
-                let mut listed = Stats::default();
-                extract(
-                    &samples,
-                    &settings,
-                    &pool,
-                    &mut buf,
-                    &mut merge,
-                    &mut mesh,
-                    &mut listed,
-                )
-                .expect("extraction");
+                let (samples, buf, mesh, listed) = extracted(&field, &settings, &pool);
                 let l = Layout::new(&samples, lattice);
                 let mut walked = Mesh::default();
                 let mut reference = Stats::default();
