@@ -153,8 +153,7 @@ pub(crate) struct SliverProposals {
 /// whose aspect ratio exceeds [`SLIVER_AR`]) whose shortest edge it shares, picks the other
 /// end of the shortest such edge (then the lower label): a kept group takes it as a lone
 /// crossing; a crossing left alone that picked it back forms a pair with it. A function of the
-/// current state around each crossing, so order-free. The tile rule keeps groups and pairs
-/// inside one tile.
+/// current state around each crossing, so order-free.
 ///
 /// A crossing skips the sliver edges that lead to the group that last gave it back
 /// ([`crate::quotient::Groups::refused`]) and takes its next-shortest one. The sliver passes
@@ -172,7 +171,7 @@ pub(crate) fn sliver_proposals(
     let q = Quotient::new(f, g);
     let pick = |x: u32| -> u32 {
         let (slot, dir) = edge_of[x as usize];
-        if !q.alone(x) || !q.joinable(x) || !q.inner(slot as usize, dir) {
+        if !q.alone(x) || !q.inner(slot as usize, dir) {
             return NONE;
         }
         let mut best: Option<(f32, u32)> = None;
@@ -223,13 +222,8 @@ pub(crate) fn sliver_proposals(
         }
         let h = g.group_of[u as usize];
         if h != NONE && g.active[h as usize] != 0 {
-            if q.same_tile(x, h) {
-                out.lones.push((h, Lone { id: x }));
-            }
-        } else if x < u
-            && choice[u as usize] == x
-            && f.keys.is_none_or(|k| k[x as usize] == k[u as usize])
-        {
+            out.lones.push((h, Lone { id: x }));
+        } else if x < u && choice[u as usize] == x {
             out.pairs.push((x, u));
         }
     }
@@ -238,8 +232,8 @@ pub(crate) fn sliver_proposals(
 
 /// Gives every inner crossing left alone (in no kept group) to the nearest kept group it shares
 /// a triangle with, up to [`MAX_LONES`] lone crossings per group (lowest ids first); returns the
-/// groups to test: those that took some, and (with `want_dirty`) the groups around them. `edge_of` gives every
-/// crossing's owner slot and edge; the tile rule keeps groups inside one tile.
+/// groups to test: those that took some, and (with `want_dirty`) the groups around them.
+/// `edge_of` gives every crossing's owner slot and edge.
 pub(crate) fn give_lones(
     f: &Fixed,
     g: &mut Groups,
@@ -251,14 +245,14 @@ pub(crate) fn give_lones(
     let found: Vec<(u32, Lone)> = pool.install(|| {
         (0..edge_of.len())
             .into_par_iter()
-            .filter(|&x| q.alone(x as u32) && q.joinable(x as u32))
+            .filter(|&x| q.alone(x as u32))
             .filter_map(|x| {
                 let (slot, dir) = edge_of[x];
                 if !q.inner(slot as usize, dir) {
                     return None;
                 }
                 let refused = q.g.refused[x];
-                let h = q.nearest_group(x as u32, |h| h != refused && q.same_tile(x as u32, h))?;
+                let h = q.nearest_group(x as u32, |h| h != refused)?;
                 Some((h, Lone { id: x as u32 }))
             })
             .collect()
@@ -473,7 +467,6 @@ mod tests {
                 grad: &[],
                 inc_start: &[],
                 inc: &[],
-                keys: None,
             };
             // The state before: some groups kept, each with a few lones already.
             let mut g = Groups {

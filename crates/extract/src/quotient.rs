@@ -64,9 +64,6 @@ pub(crate) struct Fixed<'a> {
     pub(crate) grad: &'a [[f32; 3]],
     pub(crate) inc_start: &'a [u32],
     pub(crate) inc: &'a [u32],
-    /// The tile rule's key of every crossing (chunked extraction), or `None`: a group holds
-    /// crossings of one key only, never [`crate::tiles::NO_TILE`].
-    pub(crate) keys: Option<&'a [u64]>,
 }
 
 /// The state of the groups, changed between rounds: which are kept, every crossing's group,
@@ -232,7 +229,6 @@ pub(crate) struct Quotient<'a> {
     grad: &'a [[f32; 3]],
     inc_start: &'a [u32],
     inc: &'a [u32],
-    keys: Option<&'a [u64]>,
     pub(crate) g: &'a Groups,
 }
 
@@ -247,7 +243,6 @@ impl<'a> Quotient<'a> {
             grad: f.grad,
             inc_start: f.inc_start,
             inc: f.inc,
-            keys: f.keys,
             g,
         }
     }
@@ -512,20 +507,6 @@ impl Quotient<'_> {
         }
     }
 
-    /// Whether crossing `x` may be grouped at all (the tile rule).
-    #[inline]
-    pub(crate) fn joinable(&self, x: u32) -> bool {
-        self.keys
-            .is_none_or(|k| k[x as usize] != crate::tiles::NO_TILE)
-    }
-
-    /// Whether crossing `x` (joinable) may join group `h` (the tile rule).
-    #[inline]
-    pub(crate) fn same_tile(&self, x: u32, h: u32) -> bool {
-        self.keys
-            .is_none_or(|k| k[x as usize] == k[self.groups[h as usize].leader() as usize])
-    }
-
     /// Whether crossing `x` is in no kept group.
     #[inline]
     pub(crate) fn alone(&self, x: u32) -> bool {
@@ -555,7 +536,7 @@ impl Quotient<'_> {
 
     /// The active group that lone crossing `x` joins: of the groups with a crossing in a
     /// triangle of `x`, the one whose vertex is nearest (then the lowest index), among those
-    /// `allowed` (not the one that gave it back; the tile rule).
+    /// `allowed` (not the one that gave it back).
     pub(crate) fn nearest_group(&self, x: u32, allowed: impl Fn(u32) -> bool) -> Option<u32> {
         let px = glam::Vec3::from(self.cpos[x as usize]);
         let mut best: Option<(f32, u32)> = None;

@@ -185,7 +185,7 @@ pub struct ExtractSettings {
     /// How vertex normals are computed.
     pub normals: NormalMode,
     /// Tile rule for chunked extraction: merges (groups, edge collapses) only inside one tile.
-    /// `None` (the default) leaves the output unchanged.
+    /// `None` (the default) leaves the output unchanged. Not with integrated clustering.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tiles: Option<Tiling>,
     /// Keep only the triangles anchored in these grid cells (chunked extraction); `None` keeps
@@ -196,19 +196,20 @@ pub struct ExtractSettings {
 
 /// The tile rule of chunked extraction (see `crates/terrain` for the world that uses it).
 ///
-/// The repair rounds of integrated clustering and the edge collapses of post-processing let a
-/// decision depend on decisions further and further away, so without a rule a sub-box may not
-/// reproduce the whole volume's mesh and a local edit may change groups far from it. With a
-/// tiling, space is cut into tiles of `size` cells (global cell coordinates: tile `t` covers
-/// cells `t * size .. (t + 1) * size` per axis), and a group (or a collapse) is allowed only when
-/// every crossing it involves has its *footprint* (the tetrahedra around its lattice edge, where
-/// all triangles touching it come from) inside one and the same tile ([`crate::tiles`]).
+/// The edge collapses of post-processing (and the welds before meshopt) let a decision depend on
+/// decisions further and further away, so without a rule a sub-box may not reproduce the whole
+/// volume's mesh and a local edit may change merges far from it. With a tiling, space is cut
+/// into tiles of `size` cells (global cell coordinates: tile `t` covers cells
+/// `t * size .. (t + 1) * size` per axis), and a group of integrated-unchecked clustering (or a
+/// collapse) is allowed only when every crossing it involves has its *footprint* (the tetrahedra
+/// around its lattice edge, where all triangles touching it come from) inside one and the same
+/// tile ([`crate::tiles`]). The tiles then never interact, and a tile's merges see only the
+/// samples of its closed box. The price: crossings whose footprint crosses a tile face are never
+/// merged (about half a cell to a cell on each side of every tile face).
 ///
-/// A group's quotient test then reads only tetrahedra of its tile, and the groups it sees are of
-/// the same tile: the tiles never interact, and a tile's tests and repairs see only the samples
-/// of its closed box. Priorities follow the storage order of the owner points, which is the same
-/// in any box containing the tile. The price: crossings whose footprint crosses a tile face are
-/// never merged (about half a cell to a cell on each side of every tile face).
+/// Integrated clustering takes no tiles ([`ExtractSettings::check`] refuses them): its chunks
+/// are the whole volume's mesh without them (`rmt-terrain`'s exact seams), so its tile rule was
+/// dead code and is gone.
 ///
 /// For a sub-box to reproduce the whole volume's triangles bit for bit, its positions must be
 /// computed exactly in both (e.g. unit cell spacing and integer box corners, as the terrain
@@ -298,6 +299,17 @@ impl ExtractSettings {
                 )));
             }
         }
+        if self.tiles.is_some()
+            && self.method == Method::Mt
+            && self.clustering == Clustering::Integrated
+        {
+            return Err(ExtractError::InvalidSettings(
+                "integrated clustering takes no tiles: a chunk extracted with a halo (keep_cells) \
+                 is the whole volume's mesh without them (rmt-terrain's exact seams); tiles are \
+                 for integrated-unchecked, post-processed and meshopt clustering"
+                    .into(),
+            ));
+        }
         if let Some(k) = self.keep_cells {
             if (0..3).any(|a| k.lo[a] >= k.hi[a] || k.hi[a] > self.grid.cells[a]) {
                 return Err(ExtractError::InvalidSettings(format!(
@@ -320,6 +332,19 @@ mod tests {
         s.tiles = Some(Tiling::new([0, 4, 4], [0; 3]));
         assert!(s.check().unwrap_err().to_string().contains("tile size"));
         s.tiles = None;
+        // Integrated clustering refuses tiles; the modes that cluster under them take them.
+        for (clustering, refused) in [
+            (Clustering::Integrated, true),
+            (Clustering::IntegratedUnchecked, false),
+            (Clustering::Postprocessed, false),
+        ] {
+            let mut t = ExtractSettings::new(Grid::cube(8, 1.0), Lattice::BodyCentred, clustering);
+            t.tiles = Some(Tiling::new([4; 3], [0; 3]));
+            match t.check() {
+                Err(e) => assert!(refused && e.to_string().contains("no tiles"), "{e}"),
+                Ok(()) => assert!(!refused, "{clustering:?}"),
+            }
+        }
         s.keep_cells = Some(CellRange {
             lo: [0; 3],
             hi: [9, 8, 8],

@@ -361,22 +361,36 @@ fn kept_cells_partition_the_triangles() {
     }
 }
 
-/// A tiling keeps the mesh closed and manifold and only removes merges: integrated clustering
-/// under tiles leaves at least as many triangles as without, fewer than plain MT.
+/// A tiling only removes merges: integrated-unchecked and post-processed clustering under tiles
+/// leave at least as many triangles as without, fewer than plain MT, and post-processed
+/// clustering stays closed and manifold (integrated-unchecked has no such guarantee, tiled or
+/// not). Integrated clustering takes no tiles (its chunks are exact without them): the
+/// extraction refuses them with an error that says so.
 #[test]
 fn tiles_keep_clustering_closed_and_local() {
-    use rmt_extract::{ExtractSettings, Tiling};
+    use rmt_extract::{ExtractSettings, Extractor, Tiling};
     let sphere = Sphere::new(Vec3::new(0.1, -0.05, 0.02), 0.7);
     for lattice in LATTICES {
         let grid = Grid::cube(24, 1.0);
         let (_, plain, _) = run(&sphere, grid, lattice, Clustering::None);
-        let (_, free, _) = run(&sphere, grid, lattice, Clustering::Integrated);
+        for clustering in [Clustering::IntegratedUnchecked, Clustering::Postprocessed] {
+            let what = format!("{lattice:?} {clustering:?} tiled");
+            let (_, free, _) = run(&sphere, grid, lattice, clustering);
+            let mut s = ExtractSettings::new(grid, lattice, clustering);
+            s.tiles = Some(Tiling::new([8; 3], [0; 3]));
+            let (_, tiled, r) = run_settings(&sphere, &s);
+            if clustering == Clustering::Postprocessed {
+                assert_clean(&what, &r);
+            }
+            assert!(tiled.triangles >= free.triangles, "{what}");
+            assert!(tiled.triangles < plain.triangles * 7 / 10, "{what}");
+        }
         let mut s = ExtractSettings::new(grid, lattice, Clustering::Integrated);
         s.tiles = Some(Tiling::new([8; 3], [0; 3]));
-        let (_, tiled, r) = run_settings(&sphere, &s);
-        assert_clean(&format!("{lattice:?} tiled"), &r);
-        assert!(tiled.triangles >= free.triangles, "{lattice:?}");
-        assert!(tiled.triangles < plain.triangles * 7 / 10, "{lattice:?}");
+        let err = Extractor::new()
+            .extract(&sphere, &s, &mut rmt_mesh::Mesh::default())
+            .expect_err("integrated clustering refuses tiles");
+        assert!(err.to_string().contains("no tiles"), "{err}");
     }
 }
 

@@ -7,14 +7,16 @@
 //!
 //! `clustering` is none / integrated / integrated-unchecked / postprocessed (default
 //! integrated), on the body-centred lattice, 256 x 64 x 256 cells in chunks of 32; `chunks` is
-//! how many surface chunks to time (default 8). Chunks under the tile rule (`Seams::Tiles`),
-//! each extracted on its own: what a tile-seam edit costs per chunk.
+//! how many surface chunks to time (default 8). Each chunk is extracted on its own
+//! (`World::extract_chunk`) under the mode's seams: the tile rule for every mode but integrated
+//! clustering (what a tile-seam edit costs per chunk), and for integrated clustering, which has
+//! exact seams only, the chunk and its halo with the global rule.
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use rmt_extract::{Clustering, Extractor, Lattice};
 use rmt_fields::{SvobodaParams, SvobodaTerrain};
 use rmt_mesh::Mesh;
-use rmt_terrain::{Seams, World, WorldSettings};
+use rmt_terrain::{World, WorldSettings};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -35,8 +37,7 @@ fn main() -> Result<()> {
     let cells = [256, 64, 256];
     let h = 8.0 / 256.0;
     let origin = Vec3::new(0.0, -32.0 * h, 0.0);
-    let settings = WorldSettings::new(cells, origin, h, Lattice::BodyCentred, clustering)
-        .with_seams(Seams::Tiles);
+    let settings = WorldSettings::new(cells, origin, h, Lattice::BodyCentred, clustering);
     let world = World::new(&SvobodaTerrain::new(SvobodaParams::default()), settings)?;
     // The chunks are extracted on a one-thread pool, from inside it, as `World::remesh_dirty`
     // does: the extractor's parallel passes then run inline, with no hand-off between threads.

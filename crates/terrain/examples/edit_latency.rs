@@ -10,8 +10,8 @@
 //! ```
 //!
 //! `--seams` defaults to the world's default: exact for integrated clustering of marching
-//! tetrahedra (the chunks are the whole volume's mesh; a stroke re-extracts a box), tiles for the
-//! other modes (each marked chunk re-extracted under the tile rule).
+//! tetrahedra (its only seams: the chunks are the whole volume's mesh; a stroke re-extracts a
+//! box), tiles for the other modes (each marked chunk re-extracted under the tile rule).
 //!
 //! `--placement pinned` binds the world's workers to their own CPUs (`rmt_extract::threads`);
 //! `--pause-ms` idles before each timed stroke, as a player does between strokes (the workers

@@ -19,21 +19,19 @@
 //! a triangle of the whole volume; when every chunk is exact and their triangles add up to the
 //! whole's, the chunks are the whole volume, bit for bit. Printed per halo: the chunks with a
 //! triangle that is not the whole's, those triangles, the chunks' triangles over the whole's,
-//! and the median time of one chunk. The first line is the terrain world's way, for comparison:
-//! the tile rule (tiles = chunks) and a halo of one cell. Its chunks reproduce the whole volume
-//! *under the tile rule* (the world's invariant), so most of their triangles are not the
-//! global rule's.
+//! and the median time of one chunk. (Until integrated clustering stopped taking tiles, a first
+//! line gave the tile rule with a halo of one cell, for comparison: its chunks reproduced the
+//! whole volume only *under the tile rule*, at 1.15-1.50 times the triangles.)
 //!
 //! A halo that suffices on these fields is not a proof: the repair rounds are not bounded, so
 //! a chunk needs a rule (or a certificate) to be exact by construction. This measures how far
 //! the global rule is from that in practice. The world's exact seams (`rmt_terrain::Seams`)
 //! take the certificate route: a box is trusted inside a band where clustering did nothing.
-//! (The "tile rule" line below names the tile rule explicitly, whatever the world's default.)
 
 use std::collections::HashSet;
 
 use glam::Vec3;
-use rmt_extract::{CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Tiling};
+use rmt_extract::{CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice};
 use rmt_fields::{
     Asteroid, AsteroidParams, RandomField, ScalarField, SvobodaParams, SvobodaTerrain,
 };
@@ -78,12 +76,12 @@ struct Row {
     median_s: f64,
 }
 
-/// The whole volume's triangle count, and one row per configuration `(halo, tiled)`.
+/// The whole volume's triangle count, and one row per halo width.
 fn measure(
     field: &dyn ScalarField,
     cells: [usize; 3],
     chunk: usize,
-    runs: &[(usize, bool)],
+    runs: &[usize],
 ) -> Result<(usize, Vec<Row>), Box<dyn std::error::Error>> {
     // The whole volume, with the global rule.
     let mut whole = Extractor::new();
@@ -96,7 +94,7 @@ fn measure(
     let mut ex = Extractor::new();
     let mut out = Mesh::default();
     let mut rows = Vec::new();
-    for &(halo, tiled) in runs {
+    for &halo in runs {
         let mut row = Row::default();
         let mut times = Vec::new();
         for cz in 0..counts[2] {
@@ -108,9 +106,6 @@ fn measure(
                     let s0 = [0, 1, 2].map(|a| lo[a].saturating_sub(halo));
                     let s1 = [0, 1, 2].map(|a| (hi[a] + halo).min(cells[a]));
                     let mut st = settings(s0, s1);
-                    if tiled {
-                        st.tiles = Some(Tiling::new([chunk; 3], s0));
-                    }
                     st.keep_cells = Some(CellRange {
                         lo: [0, 1, 2].map(|a| lo[a] - s0[a]),
                         hi: [0, 1, 2].map(|a| hi[a] - s0[a]),
@@ -134,14 +129,6 @@ fn measure(
         rows.push(row);
     }
     Ok((whole_tris.len(), rows))
-}
-
-fn name(tiled: bool) -> &'static str {
-    if tiled {
-        "tile rule, halo"
-    } else {
-        "global rule, halo"
-    }
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -170,11 +157,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if chunk == 0 {
         return Err("chunk must be at least 1".into());
     }
-    // The terrain world's way first (the tile rule with tiles = chunks, a halo of one cell),
-    // then the global rule with each halo.
-    let runs: Vec<(usize, bool)> = std::iter::once((1, true))
-        .chain(halos.iter().map(|&h| (h, false)))
-        .collect();
+    // The global rule with each halo.
+    let runs = halos;
     if random {
         // The property tests' random fields, `fields` of them from seed 0, on 12^3 cells.
         let fields = number(4, "fields", 200)?;
@@ -198,16 +182,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!(
             "random fields 0..{fields}, {cells:?} cells, chunks of {chunk}^3, BCDL integrated"
         );
-        for (k, &(halo, tiled)) in runs.iter().enumerate() {
+        for (k, &halo) in runs.iter().enumerate() {
             let t = totals[k];
             println!(
-                "{} {halo}: {} of {fields} fields with an inexact chunk ({} of {} chunks, \
-                 {} triangles)",
-                name(tiled),
-                failing[k],
-                t.inexact,
-                t.chunks,
-                t.wrong
+                "global rule, halo {halo}: {} of {fields} fields with an inexact chunk ({} of {} \
+                 chunks, {} triangles)",
+                failing[k], t.inexact, t.chunks, t.wrong
             );
         }
         return Ok(());
@@ -239,11 +219,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "{object} {cells:?} cells, chunks of {chunk}^3, BCDL integrated, whole volume: {whole} \
          triangles"
     );
-    for (r, &(halo, tiled)) in rows.iter().zip(&runs) {
+    for (r, &halo) in rows.iter().zip(&runs) {
         println!(
-            "{} {halo}: {} of {} chunks with triangles not in the whole ({} triangles); \
-             chunks' triangles over the whole's {:.4}; median chunk {:.2} ms",
-            name(tiled),
+            "global rule, halo {halo}: {} of {} chunks with triangles not in the whole ({} \
+             triangles); chunks' triangles over the whole's {:.4}; median chunk {:.2} ms",
             r.inexact,
             r.chunks,
             r.wrong,

@@ -11,8 +11,9 @@
 //!   chunks are the whole volume's own mesh, with no rule at the seams, so chunking costs no
 //!   triangle. An edit re-extracts a box around it and keeps the triangles near the edit only
 //!   where the box is provably the whole volume's (`world/exact.rs`, summed up below).
-//! - [`Seams::Tiles`] (every mode): each chunk is extracted on its own under the tile rule,
-//!   which keeps groups inside one chunk, at the price of triangles along every seam.
+//! - [`Seams::Tiles`] (every other mode; integrated clustering refuses it, since exact seams
+//!   make its tile rule dead): each chunk is extracted on its own under the tile rule, which
+//!   keeps groups inside one chunk, at the price of triangles along every seam.
 //!
 //! # Exact seams
 //!
@@ -37,17 +38,17 @@
 //!   the cell above the face of a body-centred tetrahedron), and a chunk keeps the triangles of its
 //!   own cells. Every chunk applies the same rule in global cells, so every triangle is kept by
 //!   exactly one chunk.
-//! - **Tiles = chunks.** Integrated clustering, lone-crossing absorption, welds and edge
-//!   collapses commit one after another, each seeing the earlier ones, so without a rule a
-//!   decision could depend on far-away ones. Both the whole extraction and the chunks therefore
+//! - **Tiles = chunks.** Integrated-unchecked clustering, welds and edge collapses commit
+//!   decisions that may depend on far-away ones (edge collapse commits one after another, each
+//!   seeing the earlier ones). Both the whole extraction and the chunks therefore
 //!   run under the tile rule [`rmt_extract::Tiling`] with tiles equal to the chunks: a merge is
 //!   allowed only when the tetrahedra around the edges of all its crossings lie inside one
 //!   chunk. Merges then touch only tetrahedra inside their chunk, never interact across chunks,
 //!   and a chunk's mesh depends only on the samples of its cells and halo. The cost: crossings
 //!   whose tetrahedra cross a chunk face are never clustered (a band about one to two cells wide
 //!   along every seam stays plain marching tetrahedra), in the whole extraction as in the
-//!   chunks. On a 48^3 sphere with 32^3 tiles that is +23% triangles (body-centred) and +11%
-//!   (simple) over untiled integrated clustering.
+//!   chunks. (When integrated clustering still took tiles, a 48^3 sphere with 32^3 tiles had
+//!   +23% triangles, body-centred, and +11%, simple, over untiled integrated clustering.)
 //! - **Halo.** One cell on each side (clipped at the world box): the tetrahedra of body-centred
 //!   faces on a chunk face need the centre of the neighbouring cell, and cluster proposals of the
 //!   points on a chunk face need all 14 neighbours. Body-centred ghost centres sit on the halo's

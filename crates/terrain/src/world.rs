@@ -31,8 +31,9 @@ pub const HALO: usize = 1;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Seams {
     /// The tile rule with tiles equal to the chunks (see the crate doc): every chunk is meshed
-    /// on its own, and no group crosses a chunk face. Any mode; the chunks equal the whole
-    /// volume *under the tile rule*, which costs triangles along the seams.
+    /// on its own, and no group crosses a chunk face. Every mode but integrated clustering of
+    /// marching tetrahedra (which has exact seams only); the chunks equal the whole volume
+    /// *under the tile rule*, which costs triangles along the seams.
     Tiles,
     /// The whole volume's own mesh (integrated clustering of marching tetrahedra, no tile rule),
     /// cut by anchor cell; an edit re-extracts a box around it and keeps what is provably the
@@ -71,7 +72,7 @@ pub struct WorldSettings {
     /// `rmt_extract::threads`).
     pub placement: ThreadPlacement,
     /// How chunks meet: [`Seams::Exact`] for integrated clustering of marching tetrahedra (the
-    /// default there), [`Seams::Tiles`] for every mode.
+    /// only seams there), [`Seams::Tiles`] for every other mode (the default there).
     pub seams: Seams,
 }
 
@@ -191,6 +192,16 @@ impl WorldSettings {
                  {:?} clustering); use Seams::Tiles",
                 self.method, self.clustering
             )));
+        }
+        if self.seams == Seams::Tiles
+            && self.method == Method::Mt
+            && self.clustering == Clustering::Integrated
+        {
+            return Err(TerrainError::Unsupported(
+                "integrated clustering has exact seams only: its chunks are the whole volume's \
+                 mesh, with no tile rule; use Seams::Exact (the default)"
+                    .into(),
+            ));
         }
         self.world_grid().check()?;
         self.unit_settings().check()?;

@@ -101,8 +101,6 @@ struct Case {
     h: f32,
     threads: usize,
     field: RandomField,
-    /// Integrated clustering under the tile rule instead of its default exact seams.
-    tiles: bool,
 }
 
 fn case() -> impl Strategy<Value = Case> {
@@ -114,20 +112,16 @@ fn case() -> impl Strategy<Value = Case> {
         prop_oneof![Just(0.1f32), Just(0.25), Just(0.37)],
         1usize..3,
         field(),
-        any::<bool>(),
     )
-        .prop_map(
-            |(mode, cells, chunk, origin, h, threads, field, tiles)| Case {
-                mode,
-                cells,
-                chunk,
-                origin,
-                h,
-                threads,
-                field,
-                tiles,
-            },
-        )
+        .prop_map(|(mode, cells, chunk, origin, h, threads, field)| Case {
+            mode,
+            cells,
+            chunk,
+            origin,
+            h,
+            threads,
+            field,
+        })
 }
 
 fn settings(c: &Case) -> WorldSettings {
@@ -137,11 +131,7 @@ fn settings(c: &Case) -> WorldSettings {
     } else {
         WorldSettings::new(c.cells, c.origin, c.h, lattice, clustering)
     };
-    let s = if c.tiles {
-        s.with_seams(Seams::Tiles)
-    } else {
-        s
-    };
+    // Each mode's own seams: exact for integrated clustering, tiles for the others.
     s.with_chunk(c.chunk).with_threads(c.threads)
 }
 
@@ -303,14 +293,15 @@ fn integrated_clustering_still_merges_inside_chunks() {
 #[test]
 fn output_does_not_depend_on_the_thread_count() {
     let field = FnField(|p: Vec3| p.y - 1.0 - 0.3 * (3.0 * p.x).sin() * (2.0 * p.z).cos());
-    // 64 x 16 x 64 cells: exact seams' boxes are smaller than the world there.
-    let run = |threads: usize, seams: Seams| {
+    // 64 x 16 x 64 cells: exact seams' boxes are smaller than the world there. Tile seams with
+    // the two modes that cluster under them.
+    let run = |threads: usize, (clustering, seams): (Clustering, Seams)| {
         let s = WorldSettings::new(
             [64, 16, 64],
             Vec3::ZERO,
             0.125,
             Lattice::BodyCentred,
-            Clustering::Integrated,
+            clustering,
         )
         .with_chunk(8)
         .with_threads(threads)
@@ -328,24 +319,28 @@ fn output_does_not_depend_on_the_thread_count() {
             .map(|c| c.to_bits())
             .collect()
     };
-    for seams in [Seams::Exact, Seams::Tiles] {
-        let (a, ca, boxes) = run(1, seams);
+    for mode in [
+        (Clustering::Integrated, Seams::Exact),
+        (Clustering::IntegratedUnchecked, Seams::Tiles),
+        (Clustering::Postprocessed, Seams::Tiles),
+    ] {
+        let (a, ca, boxes) = run(1, mode);
         assert!(a.triangle_count() > 0);
         assert!(
             ca.iter().any(|&c| c > 0),
-            "{seams:?}: strokes re-meshed nothing"
+            "{mode:?}: strokes re-meshed nothing"
         );
-        if seams == Seams::Exact {
+        if mode.1 == Seams::Exact {
             assert!(
                 boxes.iter().any(|&c| c > 0 && c < 64 * 16 * 64),
-                "{seams:?}: no stroke re-meshed with a box smaller than the world"
+                "{mode:?}: no stroke re-meshed with a box smaller than the world"
             );
         }
         for threads in [2, 8] {
-            let (b, cb, _) = run(threads, seams);
-            assert_eq!(ca, cb, "{seams:?}, {threads} threads");
-            assert_eq!(a.indices, b.indices, "{seams:?}, {threads} threads");
-            assert!(bits(&a) == bits(&b), "{seams:?}, {threads} threads");
+            let (b, cb, _) = run(threads, mode);
+            assert_eq!(ca, cb, "{mode:?}, {threads} threads");
+            assert_eq!(a.indices, b.indices, "{mode:?}, {threads} threads");
+            assert!(bits(&a) == bits(&b), "{mode:?}, {threads} threads");
         }
     }
 }
@@ -360,7 +355,7 @@ fn a_small_brush_marks_only_nearby_chunks() {
         Vec3::ZERO,
         0.125,
         Lattice::Simple,
-        Clustering::Integrated,
+        Clustering::IntegratedUnchecked,
     )
     .with_chunk(8)
     .with_seams(Seams::Tiles);
@@ -403,7 +398,7 @@ fn one_chunk_extracted_alone_is_the_chunk_of_the_world() {
         Vec3::splat(-1.5),
         0.25,
         Lattice::BodyCentred,
-        Clustering::Integrated,
+        Clustering::IntegratedUnchecked,
     )
     .with_chunk(6)
     .with_seams(Seams::Tiles);

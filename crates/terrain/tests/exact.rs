@@ -160,7 +160,8 @@ fn a_stroke_re_extracts_a_box_and_stays_exact() {
     }
 }
 
-/// Exact seams need integrated clustering of marching tetrahedra; other modes say so.
+/// Exact seams need integrated clustering of marching tetrahedra, and it takes no other; the
+/// other modes and tiles with integrated clustering say so.
 #[test]
 fn exact_seams_refuse_other_modes() {
     let sphere = rmt_fields::Sphere::new(Vec3::ZERO, 0.5);
@@ -189,5 +190,19 @@ fn exact_seams_refuse_other_modes() {
     }
     let mc = WorldSettings::marching_cubes([8; 3], Vec3::splat(-1.0), 0.25);
     assert!(World::new(&sphere, mc.with_seams(Seams::Exact)).is_err());
+    // And integrated clustering has exact seams only: the tile rule would be dead code there.
+    let integrated = WorldSettings::new(
+        [8; 3],
+        Vec3::splat(-1.0),
+        0.25,
+        Lattice::BodyCentred,
+        Clustering::Integrated,
+    );
+    assert_eq!(integrated.seams, Seams::Exact);
+    let err = World::new(&sphere, integrated.with_seams(Seams::Tiles))
+        .err()
+        .expect("refused");
+    assert!(matches!(err, TerrainError::Unsupported(_)), "{err}");
+    assert!(err.to_string().contains("exact seams only"), "{err}");
     let _ = sphere.sample(Vec3::ZERO);
 }

@@ -111,12 +111,14 @@ pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::T
     });
 }
 
-/// The clustering steps between the vertex pass and the emission (`propose`): the proposals
-/// under the tile rule, the group tables, and with integrated (checked) clustering plain MT's
-/// triangle list, the islands' quotient tests and repair ([`crate::repair`]), then the
-/// additions ([`crate::additions`]); at the end every crossing's output vertex
+/// The clustering steps between the vertex pass and the emission (`propose`): with
+/// integrated-unchecked, the proposals under the tile rule (`keys`: its keys, when tiled) and
+/// the numbering ([`keep_all`]); with integrated (checked) clustering the group tables, plain
+/// MT's triangle list, the islands' quotient tests and repair ([`crate::repair`]), then the
+/// additions ([`crate::additions`]). At the end every crossing's output vertex
 /// (`buf.vertex_of`) and the vertex positions (`mesh.positions`; the crossings' own move to
-/// `buf.cpos`). `keys`: the tile rule's keys, when tiled. Counts the tetrahedra that the
+/// `buf.cpos`). Integrated clustering takes no tiles: its chunks are exact without them
+/// ([`crate::ExtractSettings::check`] refuses the combination). Counts the tetrahedra that the
 /// triangle list read into `plain_processed`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cluster(
@@ -124,7 +126,6 @@ pub(crate) fn cluster(
     layout: &Layout,
     iso: f32,
     clustering: Clustering,
-    rules: Rules,
     keys: Option<&[u64]>,
     keep: Option<CellRange>,
     mesh: &mut Mesh,
@@ -134,8 +135,9 @@ pub(crate) fn cluster(
 ) {
     // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
     std::mem::swap(&mut mesh.positions, &mut buf.cpos);
+    debug_assert!(keys.is_none() || clustering == Clustering::IntegratedUnchecked);
     if let Some(keys) = keys {
-        tile_rule(&mut buf.candidates, layout, keys, rules, stats);
+        tile_rule(&mut buf.candidates, keys, stats);
     }
     let step = std::time::Instant::now();
     if clustering == Clustering::IntegratedUnchecked {
@@ -173,10 +175,10 @@ pub(crate) fn cluster(
     );
     // The groups' state changes while the fixed tables (in `buf`) are read.
     let mut groups = std::mem::take(&mut buf.groups);
-    settle_islands(buf, &mut groups, layout, keys, islands, step, pool, stats);
+    settle_islands(buf, &mut groups, layout, islands, step, pool, stats);
     let variant_of = add_variants(buf, &mut groups, layout, islands, stats);
-    revive_and_give_lones(buf, &mut groups, layout, keys, &variant_of, pool, stats);
-    islands += sliver_passes(buf, &mut groups, layout, keys, pool, stats);
+    revive_and_give_lones(buf, &mut groups, layout, &variant_of, pool, stats);
+    islands += sliver_passes(buf, &mut groups, layout, pool, stats);
     if buf.record {
         activity_points(layout, &groups.touched, &buf.edge_of, &mut buf.activity);
     }
@@ -188,7 +190,7 @@ pub(crate) fn cluster(
         .map(|gi| usize::from(groups.lone_len[gi]))
         .sum();
     let mut vertex_of = std::mem::take(&mut buf.vertex_of);
-    let fixed = fixed(buf, layout, keys);
+    let fixed = fixed(buf, layout);
     let q = crate::quotient::Quotient::new(&fixed, groups);
     vertex_map(&q, &mut vertex_of, &mut mesh.positions, pool);
     // An island is kept whole, or as one of its variants (at most one of them is kept).
@@ -353,11 +355,7 @@ fn plane_id_starts(crossed: &CrossedIndex, planes: usize, crossings: usize) -> V
 }
 
 /// The fixed tables of the quotient tests, over the candidates as they are now.
-fn fixed<'a>(
-    buf: &'a MtBuffers,
-    layout: &'a Layout<'a>,
-    keys: Option<&'a [u64]>,
-) -> crate::quotient::Fixed<'a> {
+fn fixed<'a>(buf: &'a MtBuffers, layout: &'a Layout<'a>) -> crate::quotient::Fixed<'a> {
     crate::quotient::Fixed {
         l: layout,
         cpos: &buf.cpos,
@@ -366,7 +364,6 @@ fn fixed<'a>(
         grad: &buf.plain_grad,
         inc_start: &buf.inc_start,
         inc: &buf.inc,
-        keys,
     }
 }
 
@@ -377,18 +374,11 @@ fn count(stats: &mut Stats, settled: crate::repair::Settled) {
     stats.t_repair_s += settled.t_repair_s;
 }
 
-/// Tile rule: a group only inside one tile. With integrated clustering a candidate across
-/// tiles is dropped (its crossings may still join a group of their tile as lone crossings);
-/// integrated-unchecked keeps it without one crossing when that leaves two or more of one tile
-/// (the first such crossing in bit order), as the dissertation's commit did.
-fn tile_rule(
-    candidates: &mut Vec<Candidate>,
-    layout: &Layout,
-    keys: &[u64],
-    rules: Rules,
-    stats: &mut Stats,
-) {
-    let t = layout.t;
+/// Tile rule of integrated-unchecked (the only clustering mode of marching tetrahedra that
+/// takes tiles): a group only inside one tile. A candidate across tiles is kept without one
+/// crossing when that leaves two or more of one tile (the first such crossing in bit order), as
+/// the dissertation's commit did, and dropped otherwise.
+fn tile_rule(candidates: &mut Vec<Candidate>, keys: &[u64], stats: &mut Stats) {
     let mut kept = Vec::with_capacity(candidates.len());
     let mut ids = Vec::with_capacity(14);
     for c in candidates.drain(..) {
@@ -398,7 +388,7 @@ fn tile_rule(
             kept.push(c);
             continue;
         }
-        let without_one = (rules == Rules::Dissertation && ids.len() > 2)
+        let without_one = (ids.len() > 2)
             .then(|| {
                 let mut d = c.dirs;
                 (0..ids.len()).find_map(|i| {
@@ -411,8 +401,8 @@ fn tile_rule(
             })
             .flatten();
         match without_one {
-            Some(r) if t.is_connected(r.dirs) || rules == Rules::Dissertation => kept.push(r),
-            _ => stats.clusters_rejected_prefilter += 1,
+            Some(r) => kept.push(r),
+            None => stats.clusters_rejected_prefilter += 1,
         }
     }
     *candidates = kept;
@@ -426,13 +416,12 @@ fn settle_islands(
     buf: &MtBuffers,
     groups: &mut crate::quotient::Groups,
     layout: &Layout,
-    keys: Option<&[u64]>,
     islands: usize,
     step: std::time::Instant,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
-    let fixed = fixed(buf, layout, keys);
+    let fixed = fixed(buf, layout);
     groups.relabel(&fixed, pool);
     crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
     if buf.record {
@@ -479,12 +468,11 @@ fn revive_and_give_lones(
     buf: &MtBuffers,
     groups: &mut crate::quotient::Groups,
     layout: &Layout,
-    keys: Option<&[u64]>,
     variant_of: &[u32],
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
-    let fixed = fixed(buf, layout, keys);
+    let fixed = fixed(buf, layout);
     let dirty = crate::additions::revive(&fixed, groups, variant_of, pool);
     let settled = crate::repair::settle(&fixed, groups, dirty, crate::repair::Phase::Islands, pool);
     count(stats, settled);
@@ -513,7 +501,6 @@ fn sliver_passes(
     buf: &mut MtBuffers,
     groups: &mut crate::quotient::Groups,
     layout: &Layout,
-    keys: Option<&[u64]>,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) -> usize {
@@ -523,13 +510,9 @@ fn sliver_passes(
     groups.refused.fill(crate::quotient::NONE);
     for _ in 0..SLIVER_PASSES {
         let step = std::time::Instant::now();
-        mark_deciders(&fixed(buf, layout, keys), groups, &buf.edge_of, pool);
-        let props = crate::additions::sliver_proposals(
-            &fixed(buf, layout, keys),
-            groups,
-            &buf.edge_of,
-            pool,
-        );
+        mark_deciders(&fixed(buf, layout), groups, &buf.edge_of, pool);
+        let props =
+            crate::additions::sliver_proposals(&fixed(buf, layout), groups, &buf.edge_of, pool);
         if props.lones.is_empty() && props.pairs.is_empty() {
             break;
         }
@@ -545,7 +528,7 @@ fn sliver_passes(
         }
         pairs += props.pairs.len();
         stats.clusters_proposed += props.pairs.len();
-        let fixed = fixed(buf, layout, keys);
+        let fixed = fixed(buf, layout);
         groups.add_pairs(&fixed, born, &props.pairs);
         let mut dirty = crate::additions::attach(&fixed, groups, props.lones, true, pool);
         let new: Vec<u32> = (born as u32..fixed.groups.len() as u32).collect();
@@ -578,7 +561,7 @@ fn mark_deciders(
     pool.install(|| {
         touched.par_iter_mut().enumerate().for_each(|(x, t)| {
             let (slot, dir) = edge_of[x];
-            if q.alone(x as u32) && q.joinable(x as u32) && q.inner(slot as usize, dir) {
+            if q.alone(x as u32) && q.inner(slot as usize, dir) {
                 *t = 1;
             }
         })

@@ -173,7 +173,6 @@ pub fn extract(
             &layout,
             settings.iso,
             clustering,
-            rules,
             keys,
             settings.keep_cells,
             mesh,
@@ -729,7 +728,6 @@ mod tests {
                         grad: &[],
                         inc_start: &[],
                         inc: &[],
-                        keys: None,
                     };
                     let q = crate::quotient::Quotient::new(&fixed, &buf.groups);
                     vertex_map(&q, &mut tables_map, &mut by_tables, &pool);
