@@ -99,6 +99,22 @@ pub(crate) struct Groups {
 }
 
 impl Groups {
+    /// Empties every table (their memory is kept for the next extraction).
+    pub(crate) fn clear(&mut self) {
+        self.active.clear();
+        self.group_of.clear();
+        self.leader.clear();
+        self.centroid.clear();
+        self.lone.clear();
+        self.lone_start.clear();
+        self.lone_len.clear();
+        self.base_len.clear();
+        self.refused.clear();
+        self.vlabel.clear();
+        self.vpos.clear();
+        self.touched.clear();
+    }
+
     /// Bytes held.
     pub(crate) fn bytes(&self) -> usize {
         self.active.len() * 3

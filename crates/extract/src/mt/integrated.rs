@@ -53,13 +53,7 @@ pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::T
     pool.install(|| {
         candidates
             .par_iter()
-            .map(|c| {
-                let mut sum = glam::Vec3::ZERO;
-                for id in c.ids() {
-                    sum += glam::Vec3::from(cpos[id as usize]);
-                }
-                (sum / c.size() as f32).to_array()
-            })
+            .map(|&c| mean_position(c, cpos))
             .collect_into_vec(&mut g.centroid)
     });
     g.leader.clear();
@@ -241,20 +235,15 @@ pub(crate) fn keep_all(
             })
             .collect()
     });
-    let vertices: usize = counts.iter().sum();
-    let g = &mut buf.groups;
-    g.active.clear();
-    g.group_of.clear();
-    g.leader.clear();
-    g.centroid.clear();
-    g.lone.clear();
-    g.lone_start.clear();
-    g.lone_len.clear();
-    g.base_len.clear();
-    g.refused.clear();
-    g.touched.clear();
-    g.vlabel.clear();
-    g.vpos.clear();
+    // Where each plane's vertices start, and their number at the end.
+    let vstarts: Vec<usize> = std::iter::once(0)
+        .chain(counts.iter().scan(0, |acc, &n| {
+            *acc += n;
+            Some(*acc)
+        }))
+        .collect();
+    let vertices = vstarts[planes];
+    buf.groups.clear();
     buf.edge_of.clear();
     overwritten(&mut buf.vertex_of, crossings, 0, pool);
     overwritten(positions, vertices, [0.0; 3], pool);
@@ -274,7 +263,7 @@ pub(crate) fn keep_all(
             .enumerate()
             .for_each(|(z, (vertex_of, out))| {
                 let (base, end) = (starts[z], starts[z + 1]);
-                let first_vertex: u32 = counts[..z].iter().sum::<usize>() as u32;
+                let first_vertex = vstarts[z] as u32;
                 let mut next = 0usize;
                 // Crossings `from..to` (ids) that are in no proposal: a vertex each.
                 let singles = |from: usize,
@@ -322,11 +311,7 @@ pub(crate) fn keep_all(
                             vertex_of[id - base] = vertex_of[leader - base];
                             continue;
                         }
-                        let mut sum = glam::Vec3::ZERO;
-                        for m in c.ids() {
-                            sum += glam::Vec3::from(cpos[m as usize]);
-                        }
-                        out[next] = (sum / c.size() as f32).to_array();
+                        out[next] = mean_position(c, cpos);
                         vertex_of[id - base] = first_vertex + next as u32;
                         next += 1;
                     }
@@ -337,6 +322,15 @@ pub(crate) fn keep_all(
                 debug_assert_eq!(next, out.len());
             })
     });
+}
+
+/// The mean of the positions of proposal `c`'s crossings: its group's vertex.
+fn mean_position(c: Candidate, cpos: &[[f32; 3]]) -> [f32; 3] {
+    let mut sum = glam::Vec3::ZERO;
+    for id in c.ids() {
+        sum += glam::Vec3::from(cpos[id as usize]);
+    }
+    (sum / c.size() as f32).to_array()
 }
 
 /// The first crossing id of every storage plane, and the number of crossings at the end: ids
