@@ -60,6 +60,11 @@ pub fn assert_clean(what: &str, r: &ValidationReport) {
 /// left out: they are zero-volume regions (a single sample point with f = T, outside, walled in by
 /// inside points), which any mesh of the same topology must draw flat.
 pub fn flat_triangles_inside(mesh: &Mesh, grid: &Grid) -> usize {
+    flat_inside(mesh, grid).len()
+}
+
+/// The triangles [`flat_triangles_inside`] counts.
+pub fn flat_inside(mesh: &Mesh, grid: &Grid) -> Vec<[u32; 3]> {
     let p = |i: u32| glam::Vec3::from(mesh.positions[i as usize]);
     // Components by union-find over triangle edges.
     let mut parent: Vec<usize> = (0..mesh.positions.len()).collect();
@@ -102,5 +107,15 @@ pub fn flat_triangles_inside(mesh: &Mesh, grid: &Grid) -> usize {
                     .iter()
                     .any(|&i| on_box_boundary(grid, mesh.positions[i as usize]))
         })
-        .count()
+        .map(|t| [t[0], t[1], t[2]])
+        .collect()
+}
+
+/// A pinch: two corners of the triangle at one position. In a mesh of a field without exact
+/// ties, crossings coincide only where the surface passes exactly through a sample point (every
+/// crossing of an edge from that point lies on it), so a flat pinch is the surface touching a
+/// sample point, not a sliver between distinct crossings.
+pub fn is_pinch(mesh: &Mesh, t: &[u32; 3]) -> bool {
+    let p = |i: u32| mesh.positions[i as usize];
+    p(t[0]) == p(t[1]) || p(t[1]) == p(t[2]) || p(t[2]) == p(t[0])
 }
