@@ -1,16 +1,17 @@
 //! Prints a hash of the output mesh (positions, indices, main counters) for a fixed set of
 //! fields, sizes, lattices, clustering modes and thread counts, with and without the tile rule of
-//! chunked worlds (integrated clustering takes no tiles: its chunk lines, "kept", keep the same
-//! cells without them): run it before and after a change
+//! chunked worlds (integrated clustering, checked or not, takes no tiles: its chunk lines,
+//! "kept", keep the same cells without them): run it before and after a change
 //! that must not change the meshes and compare the two listings.
 //! `cargo run --release -p rmt-extract --example mesh_hashes [lean] [dense]` (`lean`: extractors
 //! with [`rmt_extract::BufferPolicy::Lean`]; `dense`: [`rmt_extract::Sampling::Dense`] instead of
 //! the default sparse sampling; every listing must equal the default one). Marching cubes, the
 //! meshopt mode and the terrains come after the original listing, so an older listing is a
 //! prefix-free subset: compare with `comm`. `mesh_hashes.txt` beside this file is the listing
-//! of the last change that meant to change meshes: integrated clustering stopped taking tiles,
-//! so its 42 "tiled" lines became "kept" lines (the same cells, no tile rule, fewer
-//! triangles); every other line is as the order-free integrated clustering left it.
+//! of the last change that meant to change meshes: integrated-unchecked clustering stopped
+//! taking tiles (as integrated clustering had before it), so its 42 "tiled" lines became "kept"
+//! lines (the same cells, no tile rule, fewer triangles); every other line is as the
+//! order-free integrated clustering left it.
 use rmt_extract::{
     BufferPolicy, CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Method,
     NormalMode, Sampling, Tiling,
@@ -76,9 +77,14 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             s.method = method;
                             s.threads = threads;
                             s.normals = NormalMode::Skip;
-                            // Integrated clustering takes no tiles (its chunks are exact
-                            // without them): its chunk keeps the cells only ("kept").
-                            let tiles = tiled && clustering != Clustering::Integrated;
+                            // Integrated clustering, checked or not, takes no tiles (its
+                            // chunks are exact without them): its chunk keeps the cells only
+                            // ("kept").
+                            let tiles = tiled
+                                && !matches!(
+                                    clustering,
+                                    Clustering::Integrated | Clustering::IntegratedUnchecked
+                                );
                             if tiled {
                                 // The tile rule of chunked worlds, for a sub-box at global cell
                                 // (5, 0, 3) of a larger volume, keeping the triangles of some cells.

@@ -287,11 +287,12 @@ impl Extractor {
         Ok(stats)
     }
 
-    /// Sets whether extractions record, for integrated clustering of marching tetrahedra, the
-    /// anchor cell of every output triangle ([`Extractor::triangle_cells`]) and where the
-    /// clustering did anything after its proposals ([`Extractor::activity`]); other modes
-    /// record nothing. Off by default: it costs a pass over the crossings per lone and sliver
-    /// pass, and four bytes per triangle. The meshes do not depend on it.
+    /// Sets whether extractions record, for marching tetrahedra with integrated clustering
+    /// (checked or not) or none, the anchor cell of every output triangle
+    /// ([`Extractor::triangle_cells`]) and where the clustering did anything after its
+    /// proposals ([`Extractor::activity`]: always empty unless checked); other modes record
+    /// nothing. Off by default: it costs a pass over the crossings per lone and sliver pass,
+    /// and four bytes per triangle. The meshes do not depend on it.
     ///
     /// Activity is what makes a sub-box's result checkable against the whole volume's: where
     /// neither did anything after the proposals, both kept their proposals, which depend on

@@ -184,8 +184,9 @@ pub struct ExtractSettings {
     pub threads: usize,
     /// How vertex normals are computed.
     pub normals: NormalMode,
-    /// Tile rule for chunked extraction: merges (groups, edge collapses) only inside one tile.
-    /// `None` (the default) leaves the output unchanged. Not with integrated clustering.
+    /// Tile rule for chunked extraction: edge collapses (and meshopt's welds) only inside one
+    /// tile. `None` (the default) leaves the output unchanged. Not with integrated clustering,
+    /// checked or not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tiles: Option<Tiling>,
     /// Keep only the triangles anchored in these grid cells (chunked extraction); `None` keeps
@@ -200,16 +201,15 @@ pub struct ExtractSettings {
 /// decisions further and further away, so without a rule a sub-box may not reproduce the whole
 /// volume's mesh and a local edit may change merges far from it. With a tiling, space is cut
 /// into tiles of `size` cells (global cell coordinates: tile `t` covers cells
-/// `t * size .. (t + 1) * size` per axis), and a group of integrated-unchecked clustering (or a
-/// collapse) is allowed only when every crossing it involves has its *footprint* (the tetrahedra
-/// around its lattice edge, where all triangles touching it come from) inside one and the same
-/// tile ([`crate::tiles`]). The tiles then never interact, and a tile's merges see only the
+/// `t * size .. (t + 1) * size` per axis), and a collapse is allowed only when every crossing it
+/// involves has its *footprint* (the tetrahedra around its lattice edge, where all triangles
+/// touching it come from) inside one and the same tile ([`crate::tiles`]). The tiles then never interact, and a tile's merges see only the
 /// samples of its closed box. The price: crossings whose footprint crosses a tile face are never
 /// merged (about half a cell to a cell on each side of every tile face).
 ///
-/// Integrated clustering takes no tiles ([`ExtractSettings::check`] refuses them): its chunks
-/// are the whole volume's mesh without them (`rmt-terrain`'s exact seams), so its tile rule was
-/// dead code and is gone.
+/// Integrated clustering, checked or unchecked, takes no tiles ([`ExtractSettings::check`]
+/// refuses them): its groups depend on nearby samples only, so its chunks are the whole
+/// volume's mesh without them (`rmt-terrain`'s exact seams), and its tile rule is gone.
 ///
 /// For a sub-box to reproduce the whole volume's triangles bit for bit, its positions must be
 /// computed exactly in both (e.g. unit cell spacing and integer box corners, as the terrain
@@ -301,14 +301,17 @@ impl ExtractSettings {
         }
         if self.tiles.is_some()
             && self.method == Method::Mt
-            && self.clustering == Clustering::Integrated
+            && matches!(
+                self.clustering,
+                Clustering::Integrated | Clustering::IntegratedUnchecked
+            )
         {
-            return Err(ExtractError::InvalidSettings(
-                "integrated clustering takes no tiles: a chunk extracted with a halo (keep_cells) \
-                 is the whole volume's mesh without them (rmt-terrain's exact seams); tiles are \
-                 for integrated-unchecked, post-processed and meshopt clustering"
-                    .into(),
-            ));
+            return Err(ExtractError::InvalidSettings(format!(
+                "{} clustering takes no tiles: a chunk extracted with a halo (keep_cells) is the \
+                 whole volume's mesh without them (rmt-terrain's exact seams); tiles are for \
+                 post-processed and meshopt clustering",
+                self.clustering.name()
+            )));
         }
         if let Some(k) = self.keep_cells {
             if (0..3).any(|a| k.lo[a] >= k.hi[a] || k.hi[a] > self.grid.cells[a]) {
@@ -332,11 +335,12 @@ mod tests {
         s.tiles = Some(Tiling::new([0, 4, 4], [0; 3]));
         assert!(s.check().unwrap_err().to_string().contains("tile size"));
         s.tiles = None;
-        // Integrated clustering refuses tiles; the modes that cluster under them take them.
+        // Integrated clustering (checked or not) refuses tiles; the post-processes take them.
         for (clustering, refused) in [
             (Clustering::Integrated, true),
-            (Clustering::IntegratedUnchecked, false),
+            (Clustering::IntegratedUnchecked, true),
             (Clustering::Postprocessed, false),
+            (Clustering::Meshopt, false),
         ] {
             let mut t = ExtractSettings::new(Grid::cube(8, 1.0), Lattice::BodyCentred, clustering);
             t.tiles = Some(Tiling::new([4; 3], [0; 3]));

@@ -8,6 +8,14 @@ use rmt_mesh::Mesh;
 
 const LATTICES: [Lattice; 2] = [Lattice::BodyCentred, Lattice::Simple];
 
+/// The modes that record anchor cells: marching tetrahedra with integrated clustering (checked
+/// or not) or none.
+const RECORDING: [Clustering; 3] = [
+    Clustering::Integrated,
+    Clustering::IntegratedUnchecked,
+    Clustering::None,
+];
+
 /// Extracts `field` with `settings`, recording or not: the mesh, the anchor cells, the activity.
 fn extract(
     field: &dyn ScalarField,
@@ -37,15 +45,18 @@ fn fields() -> Vec<RandomField> {
 
 #[test]
 fn recording_leaves_the_mesh_as_it_is() {
-    for lattice in LATTICES {
-        for f in fields() {
-            let s = ExtractSettings::new(Grid::cube(12, 1.0), lattice, Clustering::Integrated);
-            let (plain, cells, _) = extract(&f, &s, false);
-            assert!(cells.is_empty(), "nothing is recorded unless asked");
-            let (recorded, cells, _) = extract(&f, &s, true);
-            assert_eq!(plain.positions, recorded.positions, "{lattice:?} {f:?}");
-            assert_eq!(plain.indices, recorded.indices, "{lattice:?} {f:?}");
-            assert_eq!(cells.len(), recorded.triangle_count());
+    for clustering in RECORDING {
+        for lattice in LATTICES {
+            for f in fields() {
+                let s = ExtractSettings::new(Grid::cube(12, 1.0), lattice, clustering);
+                let (plain, cells, _) = extract(&f, &s, false);
+                assert!(cells.is_empty(), "nothing is recorded unless asked");
+                let (recorded, cells, _) = extract(&f, &s, true);
+                let what = format!("{clustering:?} {lattice:?} {f:?}");
+                assert_eq!(plain.positions, recorded.positions, "{what}");
+                assert_eq!(plain.indices, recorded.indices, "{what}");
+                assert_eq!(cells.len(), recorded.triangle_count(), "{what}");
+            }
         }
     }
 }
@@ -70,9 +81,9 @@ fn recorded_cells_are_the_anchors_that_keep_cells_selects() {
         },
     ];
     let mut checked = 0;
-    for lattice in LATTICES {
+    for (lattice, clustering) in LATTICES.into_iter().flat_map(|l| RECORDING.map(|c| (l, c))) {
         for f in fields().into_iter().take(8) {
-            let s = ExtractSettings::new(Grid::cube(n, 1.0), lattice, Clustering::Integrated);
+            let s = ExtractSettings::new(Grid::cube(n, 1.0), lattice, clustering);
             let (mesh, cells, _) = extract(&f, &s, true);
             let all = corners(&mesh);
             for r in boxes {
@@ -89,13 +100,17 @@ fn recorded_cells_are_the_anchors_that_keep_cells_selects() {
                 let mut k = s;
                 k.keep_cells = Some(r);
                 let (kept, kept_cells, _) = extract(&f, &k, true);
-                assert_eq!(corners(&kept), want, "{lattice:?} {r:?} {f:?}");
+                assert_eq!(
+                    corners(&kept),
+                    want,
+                    "{clustering:?} {lattice:?} {r:?} {f:?}"
+                );
                 assert!(kept_cells.iter().all(|&c| inside(c)));
                 checked += want.len();
             }
         }
     }
-    assert!(checked > 1000, "the boxes hold triangles: {checked}");
+    assert!(checked > 3000, "the boxes hold triangles: {checked}");
 }
 
 /// A sphere's proposals all pass at once (no activity); fields where groups fail, lone crossings
@@ -133,8 +148,23 @@ fn activity_is_where_clustering_worked_and_does_not_depend_on_threads() {
         }
     }
     assert!(active > 0, "some random field keeps its clustering busy");
-    // Other modes record nothing.
-    let s = ExtractSettings::new(Grid::cube(12, 1.0), Lattice::BodyCentred, Clustering::None);
-    let (_, cells, activity) = extract(&fields()[0], &s, true);
-    assert!(cells.is_empty() && activity.is_empty());
+    // Integrated-unchecked keeps its proposals and plain MT has none: anchor cells, no
+    // activity. Post-processes change the triangles afterwards: nothing is recorded.
+    for (clustering, records_cells) in [
+        (Clustering::IntegratedUnchecked, true),
+        (Clustering::None, true),
+        (Clustering::Postprocessed, false),
+    ] {
+        for f in fields() {
+            let s = ExtractSettings::new(Grid::cube(12, 1.0), Lattice::BodyCentred, clustering);
+            let (mesh, cells, activity) = extract(&f, &s, true);
+            let want = if records_cells {
+                mesh.triangle_count()
+            } else {
+                0
+            };
+            assert_eq!(cells.len(), want, "{clustering:?} {f:?}");
+            assert!(activity.is_empty(), "{clustering:?} {f:?}");
+        }
+    }
 }

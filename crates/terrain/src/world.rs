@@ -31,12 +31,12 @@ pub const HALO: usize = 1;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Seams {
     /// The tile rule with tiles equal to the chunks (see the crate doc): every chunk is meshed
-    /// on its own, and no group crosses a chunk face. Every mode but integrated clustering of
-    /// marching tetrahedra (which has exact seams only); the chunks equal the whole volume
-    /// *under the tile rule*, which costs triangles along the seams.
+    /// on its own, and no collapse crosses a chunk face. Every mode but integrated clustering
+    /// of marching tetrahedra, checked or not (which has exact seams only); the chunks equal
+    /// the whole volume *under the tile rule*, which costs triangles along the seams.
     Tiles,
-    /// The whole volume's own mesh (integrated clustering of marching tetrahedra, no tile rule),
-    /// cut by anchor cell; an edit re-extracts a box around it and keeps what is provably the
+    /// The whole volume's own mesh (marching tetrahedra with integrated clustering, checked or
+    /// not, or with none; no tile rule), cut by anchor cell; an edit re-extracts a box around it and keeps what is provably the
     /// whole volume's (see `world/exact.rs`). The chunks equal the whole volume extracted at
     /// once, with no triangle added at the seams. The first meshing (and one after
     /// [`World::mark_all_dirty`]) extracts the whole volume at once: its working memory is about
@@ -71,8 +71,9 @@ pub struct WorldSettings {
     /// parallel speed after the pool has been idle between strokes, see
     /// `rmt_extract::threads`).
     pub placement: ThreadPlacement,
-    /// How chunks meet: [`Seams::Exact`] for integrated clustering of marching tetrahedra (the
-    /// only seams there), [`Seams::Tiles`] for every other mode (the default there).
+    /// How chunks meet: [`Seams::Exact`] for integrated clustering of marching tetrahedra,
+    /// checked or not (the only seams there; plain marching tetrahedra takes them too),
+    /// [`Seams::Tiles`] for every other mode (the default there).
     pub seams: Seams,
 }
 
@@ -98,7 +99,7 @@ impl WorldSettings {
             iso: 0.0,
             threads: 1,
             placement: ThreadPlacement::Os,
-            seams: if clustering == Clustering::Integrated {
+            seams: if integrated(clustering) {
                 Seams::Exact
             } else {
                 Seams::Tiles
@@ -185,23 +186,21 @@ impl WorldSettings {
             ));
         }
         if self.seams == Seams::Exact
-            && !(self.method == Method::Mt && self.clustering == Clustering::Integrated)
+            && !(self.method == Method::Mt
+                && (integrated(self.clustering) || self.clustering == Clustering::None))
         {
             return Err(TerrainError::Unsupported(format!(
-                "exact seams need integrated clustering of marching tetrahedra (got {:?} with \
-                 {:?} clustering); use Seams::Tiles",
+                "exact seams need marching tetrahedra with integrated clustering (checked or \
+                 not) or none (got {:?} with {:?} clustering); use Seams::Tiles",
                 self.method, self.clustering
             )));
         }
-        if self.seams == Seams::Tiles
-            && self.method == Method::Mt
-            && self.clustering == Clustering::Integrated
-        {
-            return Err(TerrainError::Unsupported(
-                "integrated clustering has exact seams only: its chunks are the whole volume's \
-                 mesh, with no tile rule; use Seams::Exact (the default)"
-                    .into(),
-            ));
+        if self.seams == Seams::Tiles && self.method == Method::Mt && integrated(self.clustering) {
+            return Err(TerrainError::Unsupported(format!(
+                "{} clustering has exact seams only: its chunks are the whole volume's mesh, \
+                 with no tile rule; use Seams::Exact (the default)",
+                self.clustering.name()
+            )));
         }
         self.world_grid().check()?;
         self.unit_settings().check()?;
@@ -230,6 +229,14 @@ impl WorldSettings {
         s.tiles = (self.seams == Seams::Tiles).then(|| Tiling::new([self.chunk; 3], [0; 3]));
         s
     }
+}
+
+/// Integrated clustering, checked or not: the modes with exact seams only.
+fn integrated(clustering: Clustering) -> bool {
+    matches!(
+        clustering,
+        Clustering::Integrated | Clustering::IntegratedUnchecked
+    )
 }
 
 /// What one [`World::remesh_dirty`] did.

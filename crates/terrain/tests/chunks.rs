@@ -293,8 +293,8 @@ fn integrated_clustering_still_merges_inside_chunks() {
 #[test]
 fn output_does_not_depend_on_the_thread_count() {
     let field = FnField(|p: Vec3| p.y - 1.0 - 0.3 * (3.0 * p.x).sin() * (2.0 * p.z).cos());
-    // 64 x 16 x 64 cells: exact seams' boxes are smaller than the world there. Tile seams with
-    // the two modes that cluster under them.
+    // 64 x 16 x 64 cells: exact seams' boxes are smaller than the world there. Exact seams with
+    // the modes that take them, tile seams with plain MT and edge collapse.
     let run = |threads: usize, (clustering, seams): (Clustering, Seams)| {
         let s = WorldSettings::new(
             [64, 16, 64],
@@ -321,7 +321,9 @@ fn output_does_not_depend_on_the_thread_count() {
     };
     for mode in [
         (Clustering::Integrated, Seams::Exact),
-        (Clustering::IntegratedUnchecked, Seams::Tiles),
+        (Clustering::IntegratedUnchecked, Seams::Exact),
+        (Clustering::None, Seams::Exact),
+        (Clustering::None, Seams::Tiles),
         (Clustering::Postprocessed, Seams::Tiles),
     ] {
         let (a, ca, boxes) = run(1, mode);
@@ -355,7 +357,7 @@ fn a_small_brush_marks_only_nearby_chunks() {
         Vec3::ZERO,
         0.125,
         Lattice::Simple,
-        Clustering::IntegratedUnchecked,
+        Clustering::Postprocessed,
     )
     .with_chunk(8)
     .with_seams(Seams::Tiles);
@@ -398,7 +400,7 @@ fn one_chunk_extracted_alone_is_the_chunk_of_the_world() {
         Vec3::splat(-1.5),
         0.25,
         Lattice::BodyCentred,
-        Clustering::IntegratedUnchecked,
+        Clustering::Postprocessed,
     )
     .with_chunk(6)
     .with_seams(Seams::Tiles);

@@ -1,5 +1,6 @@
 //! Exact seams ([`Seams::Exact`]): after every stroke the chunk meshes are the whole edited
-//! volume's integrated clustering, bit for bit, though a stroke re-extracts only a box around
+//! volume's mesh (integrated clustering, checked or not, or plain marching tetrahedra), bit for
+//! bit, though a stroke re-extracts only a box around
 //! it; and the box is much smaller than the world when the clustering is quiet around it.
 //!
 //! Case counts scale with `RMT_CASES` (default 60 worlds).
@@ -42,10 +43,16 @@ proptest! {
 
     /// Random fields of the extraction's property tests (blobs, waves, thin shells and tubes,
     /// sheets, stairs; some quantised, with samples exactly on the threshold) on worlds of 36
-    /// to 64 cells across, strokes of 1 to 5 cells anywhere, then all of them undone.
+    /// to 64 cells across, strokes of 1 to 5 cells anywhere, then all of them undone; integrated
+    /// clustering in half the worlds, integrated-unchecked or none in the others.
     #[test]
     fn chunks_equal_the_whole_volume_after_every_stroke(
         seed in any::<u64>(),
+        clustering in prop_oneof![
+            2 => Just(Clustering::Integrated),
+            1 => Just(Clustering::IntegratedUnchecked),
+            1 => Just(Clustering::None),
+        ],
         cells in [36usize..65, 12usize..25, 36usize..65],
         chunk in 4usize..13,
         simple in any::<bool>(),
@@ -57,10 +64,16 @@ proptest! {
         let origin = Vec3::ZERO;
         let size = Vec3::new(cells[0] as f32, cells[1] as f32, cells[2] as f32) * h;
         let field = RandomField::from_seed(seed).in_box(origin + 0.5 * size, 0.5 * size.max_element());
-        let s = WorldSettings::new(cells, origin, h, lattice, Clustering::Integrated)
+        let s = WorldSettings::new(cells, origin, h, lattice, clustering)
             .with_chunk(chunk)
             .with_threads(threads);
-        prop_assert_eq!(s.seams, Seams::Exact);
+        if clustering == Clustering::None {
+            // Plain marching tetrahedra takes either seams; the tile rule is the default there.
+            prop_assert_eq!(s.seams, Seams::Tiles);
+        } else {
+            prop_assert_eq!(s.seams, Seams::Exact);
+        }
+        let s = s.with_seams(Seams::Exact);
         let mut world = World::new(&field, s).expect("world builds");
         world.remesh_dirty().expect("remesh runs");
         prop_assert!(exact(&world), "first meshing, seed {}", seed);
@@ -86,7 +99,7 @@ proptest! {
             if stats.boxes > 1 {
                 GREW.fetch_add(1, Ordering::Relaxed);
             }
-            prop_assert!(exact(&world), "stroke {} of seed {}, {:?}, {:?} cells, chunk {}", k, seed, lattice, cells, chunk);
+            prop_assert!(exact(&world), "stroke {} of seed {}, {:?}, {:?}, {:?} cells, chunk {}", k, seed, clustering, lattice, cells, chunk);
         }
         // Undoing every stroke, last first, brings the first mesh back, exactly.
         for record in records.iter().rev() {
@@ -160,16 +173,13 @@ fn a_stroke_re_extracts_a_box_and_stays_exact() {
     }
 }
 
-/// Exact seams need integrated clustering of marching tetrahedra, and it takes no other; the
-/// other modes and tiles with integrated clustering say so.
+/// Exact seams need marching tetrahedra with integrated clustering (checked or not) or none,
+/// and integrated clustering takes no other; the other modes, and tiles with integrated
+/// clustering, say so.
 #[test]
 fn exact_seams_refuse_other_modes() {
     let sphere = rmt_fields::Sphere::new(Vec3::ZERO, 0.5);
-    for clustering in [
-        Clustering::None,
-        Clustering::IntegratedUnchecked,
-        Clustering::Postprocessed,
-    ] {
+    for clustering in [Clustering::Postprocessed, Clustering::Meshopt] {
         let s = WorldSettings::new(
             [8; 3],
             Vec3::splat(-1.0),
@@ -186,23 +196,41 @@ fn exact_seams_refuse_other_modes() {
             .err()
             .expect("refused");
         assert!(matches!(err, TerrainError::Unsupported(_)), "{err}");
-        assert!(err.to_string().contains("exact seams"), "{err}");
+        if clustering == Clustering::Postprocessed {
+            assert!(err.to_string().contains("exact seams"), "{err}");
+        }
     }
     let mc = WorldSettings::marching_cubes([8; 3], Vec3::splat(-1.0), 0.25);
     assert!(World::new(&sphere, mc.with_seams(Seams::Exact)).is_err());
-    // And integrated clustering has exact seams only: the tile rule would be dead code there.
-    let integrated = WorldSettings::new(
+    // And integrated clustering, checked or not, has exact seams only: it has no tile rule.
+    for clustering in [Clustering::Integrated, Clustering::IntegratedUnchecked] {
+        let integrated = WorldSettings::new(
+            [8; 3],
+            Vec3::splat(-1.0),
+            0.25,
+            Lattice::BodyCentred,
+            clustering,
+        );
+        assert_eq!(integrated.seams, Seams::Exact);
+        let err = World::new(&sphere, integrated.with_seams(Seams::Tiles))
+            .err()
+            .expect("refused");
+        assert!(matches!(err, TerrainError::Unsupported(_)), "{err}");
+        assert!(err.to_string().contains("exact seams only"), "{err}");
+    }
+    // Plain marching tetrahedra takes both.
+    let plain = WorldSettings::new(
         [8; 3],
         Vec3::splat(-1.0),
         0.25,
         Lattice::BodyCentred,
-        Clustering::Integrated,
+        Clustering::None,
     );
-    assert_eq!(integrated.seams, Seams::Exact);
-    let err = World::new(&sphere, integrated.with_seams(Seams::Tiles))
-        .err()
-        .expect("refused");
-    assert!(matches!(err, TerrainError::Unsupported(_)), "{err}");
-    assert!(err.to_string().contains("exact seams only"), "{err}");
+    for seams in [Seams::Tiles, Seams::Exact] {
+        assert!(
+            World::new(&sphere, plain.with_seams(seams)).is_ok(),
+            "{seams:?}"
+        );
+    }
     let _ = sphere.sample(Vec3::ZERO);
 }

@@ -18,7 +18,8 @@
 use super::*;
 
 /// The geometry pass over the lattice, writing the final triangles into `mesh` (with `propose`,
-/// through the groups' vertex map, collapsed triangles dropped), only those of the cells `keep`.
+/// through the groups' vertex map, collapsed triangles dropped), only those of the cells `keep`;
+/// with `cells`, each written triangle's anchor cell too (linear index over the grid's cells).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn emit_layers(
     layout: &Layout,
@@ -28,6 +29,7 @@ pub(crate) fn emit_layers(
     propose: bool,
     buf: &MtBuffers,
     mesh: &mut Mesh,
+    mut cells: Option<&mut Vec<u32>>,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
@@ -41,12 +43,19 @@ pub(crate) fn emit_layers(
         positions, indices, ..
     } = mesh;
     overwritten(indices, 3 * triangles, 0, pool);
+    let record = cells.is_some();
+    if let Some(cells) = cells.as_deref_mut() {
+        overwritten(cells, triangles, 0, pool);
+    }
     let mut parts = Vec::with_capacity(layers);
     let mut rest = &mut indices[..];
+    let mut rest_cells = cells.as_deref_mut().map_or(&mut [][..], |c| &mut c[..]);
     for &n in &counts {
         let (head, tail) = rest.split_at_mut(3 * n);
-        parts.push(head);
+        let (head_cells, tail_cells) = rest_cells.split_at_mut(if record { n } else { 0 });
+        parts.push((head, record.then_some(head_cells)));
         rest = tail;
+        rest_cells = tail_cells;
     }
     let (positions, map) = if propose {
         (&buf.cpos[..], Some(&buf.vertex_of[..]))
@@ -57,8 +66,10 @@ pub(crate) fn emit_layers(
         parts
             .into_par_iter()
             .enumerate()
-            .map(|(k, out)| {
-                geometry_layer(layout, k, iso, keep, crossed, positions, map, out, None)
+            .map(|(k, (out, cells))| {
+                geometry_layer(
+                    layout, k, iso, keep, crossed, positions, map, out, None, cells,
+                )
             })
             .collect()
     });
@@ -68,10 +79,16 @@ pub(crate) fn emit_layers(
         let (mut from, mut to) = (0, 0);
         for (&n, &(_, w)) in counts.iter().zip(&written) {
             indices.copy_within(3 * from..3 * (from + w), 3 * to);
+            if let Some(cells) = cells.as_deref_mut() {
+                cells.copy_within(from..from + w, to);
+            }
             from += n;
             to += w;
         }
         indices.truncate(3 * to);
+        if let Some(cells) = cells {
+            cells.truncate(to);
+        }
         stats.discarded += triangles - to;
     }
 }
@@ -134,9 +151,21 @@ pub(crate) fn plain_triangles(
                 let list = ListOut {
                     grad,
                     kept: keep.map(|range| (range, kept)),
-                    cells: record.then_some(cells),
                 };
-                geometry_layer(layout, k, iso, None, crossed, cpos, None, out, Some(list)).0
+                let cells = record.then_some(cells);
+                geometry_layer(
+                    layout,
+                    k,
+                    iso,
+                    None,
+                    crossed,
+                    cpos,
+                    None,
+                    out,
+                    Some(list),
+                    cells,
+                )
+                .0
             })
             .sum()
     });
@@ -278,6 +307,7 @@ pub(crate) fn geometry_layer(
     map: Option<&[u32]>,
     out: &mut [u32],
     list: Option<ListOut<'_>>,
+    cells: Option<&mut [u32]>,
 ) -> (usize, usize) {
     let plane = l.s.dims[0] * l.s.dims[1];
     // The crossed points of the storage planes this layer reads, copied into a dense window (one
@@ -308,6 +338,7 @@ pub(crate) fn geometry_layer(
             z0,
             out,
             list,
+            cells,
         )
     })
 }
@@ -327,11 +358,10 @@ pub(crate) struct ListOut<'s> {
     /// In a chunk: the kept cells, and per triangle 1 when its anchor's cell is one of them
     /// (the triangles the chunk emits), else 0.
     pub(crate) kept: Option<(CellRange, &'s mut [u8])>,
-    /// When recording: per triangle, its anchor cell (linear index, x fastest).
-    pub(crate) cells: Option<&'s mut [u32]>,
 }
 
-/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`.
+/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`; with
+/// `cells`, each triangle written gets its anchor cell there (linear index, x fastest).
 /// Returns the tetrahedra with a triangle (when listing in a chunk, those of kept cells) and
 /// the triangles written.
 #[allow(clippy::too_many_arguments)]
@@ -347,6 +377,7 @@ pub(crate) fn geometry_in_window(
     z0: usize,
     out: &mut [u32],
     mut list: Option<ListOut<'_>>,
+    mut cells: Option<&mut [u32]>,
 ) -> (usize, usize) {
     let v = &l.s.values;
     let plane = l.s.dims[0] * l.s.dims[1];
@@ -357,7 +388,7 @@ pub(crate) fn geometry_in_window(
     let mark = list
         .as_ref()
         .and_then(|list| list.kept.as_ref().map(|k| k.0));
-    let cells_wanted = list.as_ref().is_some_and(|list| list.cells.is_some());
+    let cells_wanted = cells.is_some();
     let [nx, ny, _] = l.s.cells;
     let mut tet =
         |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool, kept: bool, cell: u32| {
@@ -386,9 +417,9 @@ pub(crate) fn geometry_in_window(
                             if let Some((_, flags)) = list.kept.as_mut() {
                                 flags[w / 3] = u8::from(kept);
                             }
-                            if let Some(cells) = list.cells.as_mut() {
-                                cells[w / 3] = cell;
-                            }
+                        }
+                        if let Some(cells) = cells.as_deref_mut() {
+                            cells[w / 3] = cell;
                         }
                         out[w..w + 3].copy_from_slice(t);
                         w += 3;
@@ -400,6 +431,9 @@ pub(crate) fn geometry_in_window(
                     for t in &tris[..n] {
                         let q = t.map(|i| map[i as usize]);
                         if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
+                            if let Some(cells) = cells.as_deref_mut() {
+                                cells[w / 3] = cell;
+                            }
                             out[w..w + 3].copy_from_slice(&q);
                             w += 3;
                         }
@@ -531,7 +565,18 @@ pub(crate) fn emit(
             );
         }
     } else {
-        emit_layers(layout, iso, keep, crossed, propose, buf, mesh, pool, stats);
+        // Recording: the anchor cells, unless a post-process changes the triangles after.
+        let record = buf.record
+            && matches!(
+                clustering,
+                Clustering::None | Clustering::Integrated | Clustering::IntegratedUnchecked
+            );
+        let mut cells = std::mem::take(&mut buf.tri_cells);
+        let out = record.then_some(&mut cells);
+        emit_layers(
+            layout, iso, keep, crossed, propose, buf, mesh, out, pool, stats,
+        );
+        buf.tri_cells = cells;
     }
     if clustering == Clustering::IntegratedUnchecked {
         // Without the test a vertex may lose all its triangles.

@@ -106,13 +106,12 @@ pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::T
 }
 
 /// The clustering steps between the vertex pass and the emission (`propose`): with
-/// integrated-unchecked, the proposals under the tile rule (`keys`: its keys, when tiled) and
-/// the numbering ([`keep_all`]); with integrated (checked) clustering the group tables, plain
+/// integrated-unchecked, the numbering of the proposals ([`keep_all`]); with integrated (checked) clustering the group tables, plain
 /// MT's triangle list, the islands' quotient tests and repair ([`crate::repair`]), then the
 /// additions ([`crate::additions`]). At the end every crossing's output vertex
 /// (`buf.vertex_of`) and the vertex positions (`mesh.positions`; the crossings' own move to
-/// `buf.cpos`). Integrated clustering takes no tiles: its chunks are exact without them
-/// ([`crate::ExtractSettings::check`] refuses the combination). Counts the tetrahedra that the
+/// `buf.cpos`). Integrated clustering, checked or not, takes no tiles: its chunks are exact
+/// without them ([`crate::ExtractSettings::check`] refuses the combination). Counts the tetrahedra that the
 /// triangle list read into `plain_processed`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cluster(
@@ -120,7 +119,6 @@ pub(crate) fn cluster(
     layout: &Layout,
     iso: f32,
     clustering: Clustering,
-    keys: Option<&[u64]>,
     keep: Option<CellRange>,
     mesh: &mut Mesh,
     stats: &mut Stats,
@@ -129,10 +127,6 @@ pub(crate) fn cluster(
 ) {
     // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
     std::mem::swap(&mut mesh.positions, &mut buf.cpos);
-    debug_assert!(keys.is_none() || clustering == Clustering::IntegratedUnchecked);
-    if let Some(keys) = keys {
-        tile_rule(&mut buf.candidates, keys, stats);
-    }
     let step = std::time::Instant::now();
     if clustering == Clustering::IntegratedUnchecked {
         // Every proposal is kept: no group tables, no tests.
@@ -368,40 +362,6 @@ fn count(stats: &mut Stats, settled: crate::repair::Settled) {
     stats.t_repair_s += settled.t_repair_s;
 }
 
-/// Tile rule of integrated-unchecked (the only clustering mode of marching tetrahedra that
-/// takes tiles): a group only inside one tile. A candidate across tiles is kept without one
-/// crossing when that leaves two or more of one tile (the first such crossing in bit order), as
-/// the dissertation's commit did, and dropped otherwise.
-fn tile_rule(candidates: &mut Vec<Candidate>, keys: &[u64], stats: &mut Stats) {
-    let mut kept = Vec::with_capacity(candidates.len());
-    let mut ids = Vec::with_capacity(14);
-    for c in candidates.drain(..) {
-        ids.clear();
-        ids.extend(c.ids());
-        if crate::tiles::same_tile(keys, &ids) {
-            kept.push(c);
-            continue;
-        }
-        let without_one = (ids.len() > 2)
-            .then(|| {
-                let mut d = c.dirs;
-                (0..ids.len()).find_map(|i| {
-                    let bit = d & d.wrapping_neg();
-                    d &= d - 1;
-                    let rest: Vec<u32> =
-                        (0..ids.len()).filter(|&j| j != i).map(|j| ids[j]).collect();
-                    crate::tiles::same_tile(keys, &rest).then(|| c.restrict(c.dirs & !bit))
-                })
-            })
-            .flatten();
-        match without_one {
-            Some(r) => kept.push(r),
-            None => stats.clusters_rejected_prefilter += 1,
-        }
-    }
-    *candidates = kept;
-}
-
 /// The islands: every crossing's quotient vertex, the lone crossings of the proposal (crossings
 /// in no island join a neighbouring one), then the quotient tests and repair rounds of all
 /// `islands`. The group tables' time, from `step` on, counts until the tests start.
@@ -540,7 +500,7 @@ fn sliver_passes(
 }
 
 /// Recording the activity: marks every crossing that the next lone or sliver pass considers
-/// (an inner crossing in no kept group, which the tile rule lets join one), whatever it finds.
+/// (an inner crossing in no kept group), whatever it finds.
 fn mark_deciders(
     f: &crate::quotient::Fixed,
     g: &mut crate::quotient::Groups,

@@ -173,7 +173,6 @@ pub fn extract(
             &layout,
             settings.iso,
             clustering,
-            keys,
             settings.keep_cells,
             mesh,
             stats,
@@ -263,17 +262,13 @@ fn allocate(samples: &Samples, buf: &mut MtBuffers, stats: &mut Stats) -> Result
     Ok(())
 }
 
-/// The tile rule's key of every crossing (chunked extraction with clustering or collapse), in
-/// `keys`; empty otherwise.
+/// The tile rule's key of every crossing (chunked extraction with edge collapse), in `keys`;
+/// empty otherwise.
 fn tile_keys(samples: &Samples, settings: &ExtractSettings, buf: &MtBuffers, keys: &mut Vec<u64>) {
     let plane = samples.dims[0] * samples.dims[1];
     let planes = samples.dims[2];
-    let grouped = matches!(
-        settings.clustering,
-        Clustering::Integrated | Clustering::IntegratedUnchecked | Clustering::Postprocessed
-    );
     if let Some(tiling) = &settings.tiles {
-        if grouped {
+        if settings.clustering == Clustering::Postprocessed {
             let crossed = &buf.crossed;
             crate::tiles::crossing_keys(
                 samples,
@@ -773,6 +768,7 @@ mod tests {
                     true,
                     &buf,
                     &mut walked,
+                    None,
                     &pool,
                     &mut reference,
                 );

@@ -1,5 +1,6 @@
 //! Exact chunks ([`Seams::Exact`]): the chunk meshes are the whole volume's integrated
-//! clustering (the global rule, no tiles), cut by anchor cell; an edit re-extracts a box around
+//! clustering (the global rule, no tiles; checked or not, or plain marching tetrahedra), cut by
+//! anchor cell; an edit re-extracts a box around
 //! it and keeps the result only where it is provably the whole volume's.
 //!
 //! # Why a box can be trusted
@@ -10,7 +11,9 @@
 //! only. The extractor records its *activity* ([`rmt_extract::Extractor::set_recording`]): the
 //! points whose crossings a step changed, found in a failing group, or considered as crossings
 //! left alone. On most fields almost nothing happens after the proposals (on the edit terrain,
-//! 6 crossings in a million cells).
+//! 6 crossings in a million cells). Integrated-unchecked clustering keeps its proposals and
+//! plain marching tetrahedra makes none, so they have no activity at all: the argument below
+//! holds with nothing after the proposals.
 //!
 //! An edit changes samples inside a box `E`. The world re-extracts a box `B` around it and looks
 //! for a *quiet band* `Q`, a shell around `E` of [`QUIET_BAND`] cells, at least
@@ -359,7 +362,9 @@ impl World {
         let out = out?;
         if out.cells.len() != out.mesh.triangle_count() {
             return Err(TerrainError::Unsupported(
-                "exact chunks need the anchor cells of integrated clustering".into(),
+                "exact chunks need the anchor cells of marching tetrahedra with integrated \
+                 clustering or none"
+                    .into(),
             ));
         }
         Ok(out)
