@@ -69,9 +69,10 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Extract in chunks of C^3 cells, weld the chunks and compare with the whole volume
-    /// extracted at once. Integrated clustering of marching tetrahedra has exact seams (the
-    /// chunks are the whole volume's own mesh, cut by anchor cell); the other modes mesh each
-    /// chunk on its own, in parallel, under the tile rule (merges never cross a chunk face).
+    /// extracted at once. Integrated clustering of marching tetrahedra, checked or not, has
+    /// exact seams (the chunks are the whole volume's own mesh, cut by anchor cell); the other
+    /// modes mesh each chunk on its own, in parallel, under the tile rule (collapses never cross
+    /// a chunk face).
     /// Needs cubic cells; adds the keys `chunk_size`, `chunks`, `t_chunked_s`, `t_whole_s`,
     /// `whole_triangles`, `chunked_equals_whole`.
     #[arg(long, value_name = "C")]

@@ -6,8 +6,8 @@
 //! method, lattice and clustering. With integrated clustering of marching tetrahedra (checked or
 //! not) the world has exact seams ([`Seams::Exact`]): its chunks are the whole volume's own
 //! mesh, and an edit re-extracts a box around it; the other modes mesh every chunk under the
-//! tile rule (no collapse crosses a chunk face). Either way the welded chunks equal the whole-volume extraction with the
-//! world's rule; [`ChunkedExtraction::identical`] reports that comparison for every run.
+//! tile rule (no collapse crosses a chunk face). Either way the welded chunks equal the
+//! whole-volume extraction with the world's rule; [`ChunkedExtraction::identical`] reports that comparison for every run.
 
 use anyhow::{bail, Context, Result};
 use rmt_extract::Method;
