@@ -505,51 +505,40 @@ pub(crate) fn emit(
             let q = [t[0], t[1], t[2]].map(|i| map[i as usize]);
             (q[0] != q[1] && q[1] != q[2] && q[0] != q[2]).then_some(q)
         };
-        let counts: Vec<usize> = pool.install(|| {
+        // One pass: each run of listed triangles maps its own into its part (reused between
+        // extractions), then the parts are joined in order.
+        let runs = plain.len().div_ceil(CHUNK);
+        let parts = &mut buf.emit_parts;
+        if parts.len() < runs {
+            parts.resize_with(runs, Vec::new);
+        }
+        pool.install(|| {
             plain
                 .par_chunks(CHUNK)
+                .zip(parts[..runs].par_iter_mut())
                 .enumerate()
-                .map(|(c, ts)| {
+                .for_each(|(c, (ts, out))| {
+                    out.clear();
                     let first = c * CHUNK / 3;
-                    ts.chunks_exact(3)
-                        .enumerate()
-                        .filter(|(i, t)| mapped(t, first + i).is_some())
-                        .count()
+                    for (i, t) in ts.chunks_exact(3).enumerate() {
+                        if let Some(q) = mapped(t, first + i) {
+                            out.extend_from_slice(&q);
+                        }
+                    }
                 })
-                .collect()
         });
         // The plain triangles the emission stands for: all, or the kept cells' ones.
         let listed = match kept {
             Some(k) => k.iter().filter(|&&f| f != 0).count(),
             None => plain.len() / 3,
         };
-        let emitted: usize = counts.iter().sum();
         let indices = &mut mesh.indices;
-        overwritten(indices, 3 * emitted, 0, pool);
-        let mut parts = Vec::with_capacity(counts.len());
-        let mut rest = &mut indices[..];
-        for &n in &counts {
-            let (head, tail) = rest.split_at_mut(3 * n);
-            parts.push(head);
-            rest = tail;
+        indices.clear();
+        indices.reserve(parts[..runs].iter().map(Vec::len).sum());
+        for part in &parts[..runs] {
+            indices.extend_from_slice(part);
         }
-        pool.install(|| {
-            plain
-                .par_chunks(CHUNK)
-                .zip(parts.into_par_iter())
-                .enumerate()
-                .for_each(|(c, (ts, out))| {
-                    let first = c * CHUNK / 3;
-                    for (q, o) in ts
-                        .chunks_exact(3)
-                        .enumerate()
-                        .filter_map(|(i, t)| mapped(t, first + i))
-                        .zip(out.chunks_exact_mut(3))
-                    {
-                        o.copy_from_slice(&q);
-                    }
-                })
-        });
+        let emitted = indices.len() / 3;
         stats.tetrahedra_processed += plain_processed;
         stats.discarded += listed - emitted;
         if buf.record {

@@ -87,6 +87,8 @@ pub struct MtBuffers {
     vertex_of: Vec<u32>,
     /// Working memory of the vertex compaction (integrated-unchecked).
     scratch: Vec<u32>,
+    /// The emission's output, one part per run of listed triangles ([`emission::emit`]).
+    emit_parts: Vec<Vec<u32>>,
     /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
     /// of padding: 64 points are tested for crossings at once with a few word operations.
     inside: Vec<u64>,
