@@ -264,9 +264,11 @@ pub(crate) fn vertex_plane(
             delta.iter().copied().min().unwrap_or(0),
             delta.iter().copied().max().unwrap_or(0),
         );
-        // One point with at least one crossed edge: owned crossings, flags, proposals.
+        // One point with at least one crossed edge: owned crossings, flags, proposals. `border`:
+        // the neighbours whose edges exist, for a point off the regular run (`None`: all 14, and
+        // every edge inner).
         let point = |sx: usize,
-                     valid: u16,
+                     border: Option<u16>,
                      owned: &mut Vec<u32>,
                      crossed_bits: &mut [u64],
                      counts: &mut PlaneCounts,
@@ -275,6 +277,7 @@ pub(crate) fn vertex_plane(
             let i = row + sx;
             let f = v[i];
             let inside = f < iso;
+            let valid = border.unwrap_or(FULL);
             let (mut own, mut crossed) = (0u16, 0u16);
             let mut bits = valid;
             while bits != 0 {
@@ -298,7 +301,12 @@ pub(crate) fn vertex_plane(
             let first = counts.crossings as u32;
             counts.crossings += own.count_ones() as usize;
             if let Some(rules) = propose.filter(|_| own.count_ones() >= 2) {
-                let inner = l.inner_dirs(l.coords(sx, sy, z)) & valid;
+                // Only the islands rule reads which edges are inner (all of them in the regular
+                // run).
+                let inner = match (rules, border) {
+                    (Rules::Islands, Some(valid)) => l.inner_dirs(l.coords(sx, sy, z)) & valid,
+                    _ => valid,
+                };
                 counts.proposals.add(cluster::propose(
                     l.t, first, i as u32, valid, inner, own, crossed, rules, cands,
                 ));
@@ -316,7 +324,7 @@ pub(crate) fn vertex_plane(
                 return;
             }
             counts.edges += valid.count_ones() as usize;
-            point(sx, valid, owned, crossed_bits, counts, cands);
+            point(sx, Some(valid), owned, crossed_bits, counts, cands);
         };
         // The points tested 64 at a time: the whole row where every neighbour slot of it is in
         // storage (the test may then let through a border point whose only difference is with a
@@ -348,16 +356,16 @@ pub(crate) fn vertex_plane(
                 while block != 0 {
                     let x = sx + block.trailing_zeros() as usize;
                     block &= block - 1;
-                    let valid = if x >= lo && x < hi {
-                        FULL
+                    let border = if x >= lo && x < hi {
+                        None
                     } else {
                         let (exists, valid) = l.border_info(l.coords(x, sy, z));
                         if !exists {
                             continue;
                         }
-                        valid
+                        Some(valid)
                     };
-                    point(x, valid, owned, crossed_bits, &mut counts, &mut cands);
+                    point(x, border, owned, crossed_bits, &mut counts, &mut cands);
                 }
                 sx += len;
             }
