@@ -726,6 +726,8 @@ mod tests {
                         inc_start: &[],
                         inc: &[],
                     };
+                    // Every crossing's quotient vertex, which the numbering reads.
+                    buf.groups.relabel(&fixed, &pool);
                     let q = crate::quotient::Quotient::new(&fixed, &buf.groups);
                     vertex_map(&q, &mut tables_map, &mut by_tables, &pool);
                     assert_eq!(planes_map, tables_map, "{what}");
