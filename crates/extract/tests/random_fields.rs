@@ -155,16 +155,11 @@ proptest! {
 /// group again, integrated clustering kept 2 of the flat triangles.
 #[test]
 fn a_surface_through_a_sample_point_leaves_no_flat_triangle() {
-    let f = RandomField {
-        family: Family::Tube(
-            Vec3::new(0.022448422, 0.017358119, 0.039132856),
-            0.30765688,
-            0.07673736,
-        ),
-        quantum: 0.0,
-        centre: Vec3::ZERO,
-        half: 1.0,
-    };
+    let f = unquantised(Family::Tube(
+        Vec3::new(0.022448422, 0.017358119, 0.039132856),
+        0.30765688,
+        0.07673736,
+    ));
     let field = FnField(|p| f.sample(p));
     let grid = Grid::cube(13, 1.0);
     let (plain, _, r0) = run(&field, grid, Lattice::BodyCentred, Clustering::None);
@@ -184,16 +179,11 @@ fn a_surface_through_a_sample_point_leaves_no_flat_triangle() {
 /// integrated clustering keeps fewer than plain MT, all of them at that point.
 #[test]
 fn five_crossings_at_one_sample_point_keep_flat_triangles() {
-    let f = RandomField {
-        family: Family::Shell(
-            Vec3::new(-0.21239313, 0.19933902, -0.08827235),
-            0.60631937,
-            0.08575261,
-        ),
-        quantum: 0.0,
-        centre: Vec3::ZERO,
-        half: 1.0,
-    };
+    let f = unquantised(Family::Shell(
+        Vec3::new(-0.21239313, 0.19933902, -0.08827235),
+        0.60631937,
+        0.08575261,
+    ));
     let field = FnField(|p| f.sample(p));
     let grid = Grid::cube(9, 1.0);
     let point = [4.0f32 / 9.0, 0.0, 0.0];
@@ -293,4 +283,14 @@ fn partitions(n: usize) -> Vec<Vec<usize>> {
             .collect();
     }
     out
+}
+
+/// A field of `family` over [-1, 1]^3, not quantised (a case a long run found, replayed).
+fn unquantised(family: Family) -> RandomField {
+    RandomField {
+        family,
+        quantum: 0.0,
+        centre: Vec3::ZERO,
+        half: 1.0,
+    }
 }

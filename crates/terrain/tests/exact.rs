@@ -179,14 +179,17 @@ fn a_stroke_re_extracts_a_box_and_stays_exact() {
 #[test]
 fn exact_seams_refuse_other_modes() {
     let sphere = rmt_fields::Sphere::new(Vec3::ZERO, 0.5);
-    for clustering in [Clustering::Postprocessed, Clustering::Meshopt] {
-        let s = WorldSettings::new(
+    let settings = |clustering| {
+        WorldSettings::new(
             [8; 3],
             Vec3::splat(-1.0),
             0.25,
             Lattice::BodyCentred,
             clustering,
-        );
+        )
+    };
+    for clustering in [Clustering::Postprocessed, Clustering::Meshopt] {
+        let s = settings(clustering);
         assert_eq!(
             s.seams,
             Seams::Tiles,
@@ -204,13 +207,7 @@ fn exact_seams_refuse_other_modes() {
     assert!(World::new(&sphere, mc.with_seams(Seams::Exact)).is_err());
     // And integrated clustering, checked or not, has exact seams only: it has no tile rule.
     for clustering in [Clustering::Integrated, Clustering::IntegratedUnchecked] {
-        let integrated = WorldSettings::new(
-            [8; 3],
-            Vec3::splat(-1.0),
-            0.25,
-            Lattice::BodyCentred,
-            clustering,
-        );
+        let integrated = settings(clustering);
         assert_eq!(integrated.seams, Seams::Exact);
         let err = World::new(&sphere, integrated.with_seams(Seams::Tiles))
             .err()
@@ -219,13 +216,7 @@ fn exact_seams_refuse_other_modes() {
         assert!(err.to_string().contains("exact seams only"), "{err}");
     }
     // Plain marching tetrahedra takes both.
-    let plain = WorldSettings::new(
-        [8; 3],
-        Vec3::splat(-1.0),
-        0.25,
-        Lattice::BodyCentred,
-        Clustering::None,
-    );
+    let plain = settings(Clustering::None);
     for seams in [Seams::Tiles, Seams::Exact] {
         assert!(
             World::new(&sphere, plain.with_seams(seams)).is_ok(),
