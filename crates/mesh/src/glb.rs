@@ -55,7 +55,7 @@ pub enum GlbError {
 
 /// The mesh as a binary glTF file (see the [module documentation](self)).
 pub fn to_glb(mesh: &Mesh) -> Result<Vec<u8>, GlbError> {
-    let normals = crate::io::check_writable(mesh).map_err(|e| GlbError::Invalid(e.to_string()))?;
+    let normals = crate::check_writable(mesh).map_err(|e| GlbError::Invalid(e.to_string()))?;
     let vertex_bytes = mesh.positions.len() * 12;
     let normal_bytes = if normals { vertex_bytes } else { 0 };
     let index_bytes = mesh.indices.len() * 4;

@@ -31,7 +31,7 @@
 //! assert!(String::from_utf8(bytes).unwrap().ends_with("3 0 1 2\n"));
 //! ```
 
-use crate::Mesh;
+use crate::{check_writable, Mesh};
 use std::fs::{self, OpenOptions};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -112,35 +112,6 @@ pub enum MeshIoError {
         /// The file.
         path: PathBuf,
     },
-}
-
-/// Checks that `mesh` can be written; returns whether it has normals to write.
-pub(crate) fn check_writable(mesh: &Mesh) -> io::Result<bool> {
-    let invalid = |msg: String| Err(io::Error::new(io::ErrorKind::InvalidInput, msg));
-    if !mesh.normals.is_empty() && mesh.normals.len() != mesh.positions.len() {
-        return invalid(format!(
-            "mesh has {} normals for {} vertices",
-            mesh.normals.len(),
-            mesh.positions.len()
-        ));
-    }
-    if mesh.triangle_count() * 3 != mesh.indices.len() {
-        return invalid(format!(
-            "index count {} is not a multiple of 3",
-            mesh.indices.len()
-        ));
-    }
-    if let Some(&i) = mesh
-        .indices
-        .iter()
-        .find(|&&i| i as usize >= mesh.positions.len())
-    {
-        return invalid(format!(
-            "index {i} out of range for {} vertices",
-            mesh.positions.len()
-        ));
-    }
-    Ok(!mesh.normals.is_empty())
 }
 
 fn write_ply_header(

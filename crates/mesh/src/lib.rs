@@ -180,3 +180,33 @@ impl Mesh {
             .extend(acc.into_iter().map(|n| n.normalize_or_zero().to_array()));
     }
 }
+
+/// Checks that `mesh` can be written (one normal per vertex or none, whole triangles, indices in
+/// range); returns whether it has normals to write. Shared by the writers of [`io`] and [`glb`].
+pub(crate) fn check_writable(mesh: &Mesh) -> std::io::Result<bool> {
+    let invalid = |msg: String| Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, msg));
+    if !mesh.normals.is_empty() && mesh.normals.len() != mesh.positions.len() {
+        return invalid(format!(
+            "mesh has {} normals for {} vertices",
+            mesh.normals.len(),
+            mesh.positions.len()
+        ));
+    }
+    if mesh.triangle_count() * 3 != mesh.indices.len() {
+        return invalid(format!(
+            "index count {} is not a multiple of 3",
+            mesh.indices.len()
+        ));
+    }
+    if let Some(&i) = mesh
+        .indices
+        .iter()
+        .find(|&&i| i as usize >= mesh.positions.len())
+    {
+        return invalid(format!(
+            "index {i} out of range for {} vertices",
+            mesh.positions.len()
+        ));
+    }
+    Ok(!mesh.normals.is_empty())
+}
