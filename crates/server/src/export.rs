@@ -17,7 +17,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::store::iso_utc;
+use crate::clock::iso_utc;
 use crate::study::Study;
 
 /// A participant as exported.

@@ -5,13 +5,15 @@
 //! - [`study`]: the questions of a run folder and each participant's plan (order seeded by the
 //!   token, left/right swaps balanced across participants);
 //! - [`store`]: the SQLite store (WAL, one transaction per answer) and its rules;
+//! - [`clock`]: the time stamps the store and the export write;
 //! - [`export`]: the stored answers as the files `experiments analyse` reads;
 //! - [`survey`]: the survey's routes (participants, animations, admin);
 //! - [`studio`]: the studio's routes (live extraction, compare, sculpt; three.js page) on a
 //!   [`studio::Backend`] that the application provides;
 //! - [`http`]: what any page of this crate shares (JSON errors, bounded bodies, tokens, embedded
-//!   assets, running a router). Another page (a studio) would be one more router module beside
-//!   [`survey`], merged into the same server.
+//!   assets, running a router);
+//! - [`serve`]: the connection loop both servers run on: read timeouts, a connection cap, size
+//!   limits, and one JSON error shape for everything refused.
 //!
 //! ```no_run
 //! use std::path::Path;
@@ -27,8 +29,10 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod clock;
 pub mod export;
 pub mod http;
+pub mod serve;
 pub mod store;
 pub mod studio;
 pub mod study;
