@@ -87,7 +87,8 @@ impl Brush {
         Ok(())
     }
 
-    /// The new value of a sample `value` at distance `d` from the centre (scaled by `dt`).
+    /// The new value of a sample `value` at distance `d` from the centre (scaled by `dt`),
+    /// finite when `value` is: a change that overflows `f32` stops at `-f32::MAX` or `f32::MAX`.
     #[inline]
     pub fn apply(&self, value: f32, d: f32, dt: f32) -> f32 {
         let s = d / self.radius;
@@ -96,10 +97,20 @@ impl Brush {
         }
         let w = (1.0 - s * s) * (1.0 - s * s);
         let delta = self.strength * dt * w;
-        let v = match self.mode {
+        let mut v = match self.mode {
             BrushMode::Add => value - delta,
             BrushMode::Subtract => value + delta,
         };
+        if !v.is_finite() && value.is_finite() {
+            // The f32 arithmetic overflowed (to infinity, or inf * 0 = NaN): again in f64, where
+            // a product of finite f32s cannot, stopping at the largest finite f32.
+            let delta = f64::from(self.strength) * f64::from(dt) * f64::from(w);
+            let v64 = match self.mode {
+                BrushMode::Add => f64::from(value) - delta,
+                BrushMode::Subtract => f64::from(value) + delta,
+            };
+            v = v64.clamp(-f64::from(f32::MAX), f64::from(f32::MAX)) as f32;
+        }
         match self.clamp {
             Some(c) => v.clamp(-c, c),
             None => v,
@@ -120,6 +131,17 @@ mod tests {
         assert!(mid < 1.0 && mid > 1.0 - 1.5);
         let s = Brush::subtract(Vec3::ZERO, 2.0, 3.0).with_clamp(1.2);
         assert_eq!(s.apply(1.0, 0.0, 0.5), 1.2);
+    }
+
+    #[test]
+    fn overflowing_changes_stop_at_the_largest_finite_value() {
+        let b = Brush::add(Vec3::ZERO, 1.0, f32::MAX);
+        assert_eq!(b.apply(-f32::MAX, 0.0, f32::MAX), -f32::MAX);
+        let s = Brush::subtract(Vec3::ZERO, 1.0, 3e38);
+        assert_eq!(s.apply(1.0, 0.0, 3e38), f32::MAX);
+        // Near the rim: a small weight times an infinite product.
+        let v = s.apply(1.0, 1.0 - f32::EPSILON / 2.0, 3e38);
+        assert!(v.is_finite() && v >= 1.0, "{v}");
     }
 
     #[test]

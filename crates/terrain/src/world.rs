@@ -366,13 +366,14 @@ impl World {
         self.chunks.get(i)
     }
 
-    /// The cells `lo .. hi` of chunk `i`.
+    /// The cells `lo .. hi` of chunk `i` (an empty range for `i` past the last chunk).
     pub fn chunk_cells(&self, i: usize) -> CellRange {
         let [nx, ny, _] = self.counts;
         let c = [i % nx, (i / nx) % ny, i / (nx * ny)];
         let size = self.settings.chunk;
-        let lo = c.map(|c| c * size);
-        let hi = [0, 1, 2].map(|a| (lo[a] + size).min(self.settings.cells[a]));
+        // Saturating: an index past the last chunk gives an empty range at the far corner.
+        let lo = [0, 1, 2].map(|a| c[a].saturating_mul(size).min(self.settings.cells[a]));
+        let hi = [0, 1, 2].map(|a| lo[a].saturating_add(size).min(self.settings.cells[a]));
         CellRange { lo, hi }
     }
 
@@ -389,6 +390,10 @@ impl World {
     /// ([`LatticeTables::offsets`]; on the simple lattice they include the axes, the edges of
     /// marching cubes); points within two lattice steps of the box faces, where ghosts stand in
     /// for missing points, always count.
+    ///
+    /// Any finite brush is accepted: one entirely outside the world changes nothing and marks
+    /// nothing (`Ok(0)`), and changed values are kept finite ([`Brush::apply`]). A non-finite
+    /// centre, radius, strength, clamp or time step is an error ([`Brush::check`]).
     pub fn apply_brush(&mut self, brush: &Brush, dt: f32) -> Result<usize, TerrainError> {
         brush.check(dt)?;
         self.last_edit = None;
@@ -397,8 +402,11 @@ impl World {
         let body = lattice == Lattice::BodyCentred;
         // Lattice coordinates: half cells on the body-centred lattice, cells on the simple one.
         let scale = if body { 2.0 } else { 1.0 };
-        let cu = (brush.centre - s.origin) / s.h * scale;
-        let ru = brush.radius / s.h * scale;
+        // In f64, where no finite f32 centre, radius or cell size overflows (|x| / h stays below
+        // 3e38 / 1e-45), and clipped to the box in floating point before any cast to integers:
+        // a saturating cast of a far centre followed by the +-1 below would wrap.
+        let h = f64::from(s.h);
+        let ru = f64::from(brush.radius) / h * scale;
         let mut lo = [0i64; 3];
         let mut hi = [0i64; 3];
         let mut bmin = [0i64; 3];
@@ -409,9 +417,15 @@ impl World {
             } else {
                 (0, s.cells[a] as i64)
             };
+            let cu = (f64::from(brush.centre[a]) - f64::from(s.origin[a])) / h * scale;
             // One extra point each side: ghosts sit on the box faces, off their lattice spot.
-            lo[a] = ((cu[a] - ru).floor() as i64 - 1).clamp(bmin[a], bmax[a]);
-            hi[a] = ((cu[a] + ru).ceil() as i64 + 1).clamp(bmin[a], bmax[a]);
+            let (l, u) = ((cu - ru).floor() - 1.0, (cu + ru).ceil() + 1.0);
+            if !(l <= bmax[a] as f64 && u >= bmin[a] as f64) {
+                // The brush lies entirely outside the world: nothing changes.
+                return Ok(0);
+            }
+            lo[a] = l.max(bmin[a] as f64) as i64;
+            hi[a] = u.min(bmax[a] as f64) as i64;
         }
         // Old values of the stroke's box (dense, x fastest), for the neighbour test below.
         let size = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1) as usize);
