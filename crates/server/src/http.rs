@@ -1,7 +1,6 @@
-//! HTTP pieces shared by every page this crate serves (the survey now; a later studio would add
-//! its own router next to [`crate::survey`] and reuse these): JSON errors, bounded JSON bodies,
-//! tokens, embedded assets, and running a router on tokio in the foreground or in a background
-//! thread.
+//! HTTP pieces shared by every page this crate serves (the survey and the studio): JSON errors,
+//! bounded JSON bodies, tokens, embedded assets, and running a router on tokio in the foreground
+//! or in a background thread, under the connection [`Limits`] of [`crate::serve`].
 
 use std::net::SocketAddr;
 use std::thread::JoinHandle;
@@ -12,6 +11,8 @@ use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Router;
 use serde::de::DeserializeOwned;
+
+pub use crate::serve::Limits;
 
 /// An error reply: a status and a message, sent as `{"error": "..."}`.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -176,8 +177,8 @@ fn runtime() -> std::io::Result<tokio::runtime::Runtime> {
         .build()
 }
 
-/// Serves `router` on `addr` until Ctrl-C; `bound` is called with the actual address (useful
-/// with port 0) once the socket listens.
+/// Serves `router` on `addr` until Ctrl-C under the default [`Limits`]; `bound` is called with
+/// the actual address (useful with port 0) once the socket listens.
 pub fn serve_until_ctrl_c(
     router: Router,
     addr: SocketAddr,
@@ -186,11 +187,10 @@ pub fn serve_until_ctrl_c(
     runtime()?.block_on(async move {
         let listener = tokio::net::TcpListener::bind(addr).await?;
         bound(listener.local_addr()?);
-        axum::serve(listener, router)
-            .with_graceful_shutdown(async {
-                let _ = tokio::signal::ctrl_c().await;
-            })
-            .await
+        crate::serve::serve(listener, router, Limits::default(), async {
+            let _ = tokio::signal::ctrl_c().await;
+        })
+        .await
     })
 }
 
@@ -233,8 +233,14 @@ impl Drop for Running {
     }
 }
 
-/// Starts `router` on `addr` (port 0 picks a free port) in a background thread.
+/// Starts `router` on `addr` (port 0 picks a free port) in a background thread, under the
+/// default [`Limits`].
 pub fn spawn(router: Router, addr: SocketAddr) -> std::io::Result<Running> {
+    spawn_with(router, addr, Limits::default())
+}
+
+/// [`spawn`] under `limits`.
+pub fn spawn_with(router: Router, addr: SocketAddr, limits: Limits) -> std::io::Result<Running> {
     let listener = std::net::TcpListener::bind(addr)?;
     listener.set_nonblocking(true)?;
     let addr = listener.local_addr()?;
@@ -244,11 +250,10 @@ pub fn spawn(router: Router, addr: SocketAddr) -> std::io::Result<Running> {
         .spawn(move || {
             runtime()?.block_on(async move {
                 let listener = tokio::net::TcpListener::from_std(listener)?;
-                axum::serve(listener, router)
-                    .with_graceful_shutdown(async {
-                        let _ = rx.await;
-                    })
-                    .await
+                crate::serve::serve(listener, router, limits, async {
+                    let _ = rx.await;
+                })
+                .await
             })
         })?;
     Ok(Running {

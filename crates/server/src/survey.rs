@@ -23,12 +23,13 @@
 //! Blinding: nothing a participant can fetch names a configuration. The page and script are
 //! static; the session lists questions by number with the two anonymous animation names (sides
 //! already swapped); the animations are served by those names from the run's `render/` folder
-//! and nothing else of the run folder is reachable.
+//! and nothing else of the run folder is reachable. Every animation is served at the same size
+//! ([`pad_gif`]), so sizes do not tell configurations apart either.
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
@@ -59,6 +60,8 @@ pub struct Survey {
     render_dir: PathBuf,
     admin_token: String,
     names: BTreeSet<String>,
+    /// The size every animation is served at ([`pad_gif`]): the largest plus [`GIF_PAD_MIN`].
+    gif_size: OnceLock<usize>,
 }
 
 impl Survey {
@@ -71,6 +74,7 @@ impl Survey {
             render_dir,
             admin_token,
             names,
+            gif_size: OnceLock::new(),
         })
     }
 
@@ -83,6 +87,55 @@ impl Survey {
     pub fn admin_token(&self) -> &str {
         &self.admin_token
     }
+
+    /// The size every animation is served at: the largest file of the study plus
+    /// [`GIF_PAD_MIN`] (taken at the first request; blocking file system calls).
+    pub fn gif_size(&self) -> usize {
+        *self.gif_size.get_or_init(|| {
+            let largest = self
+                .names
+                .iter()
+                .filter_map(|n| std::fs::metadata(self.render_dir.join(format!("{n}.gif"))).ok())
+                .map(|m| usize::try_from(m.len()).unwrap_or(usize::MAX))
+                .max()
+                .unwrap_or(0);
+            largest.saturating_add(GIF_PAD_MIN)
+        })
+    }
+}
+
+/// Bytes [`pad_gif`] adds at least (it cannot add 1, 2 or 4).
+pub const GIF_PAD_MIN: usize = 5;
+
+/// Pads a GIF to exactly `size` bytes with one comment extension (sub-blocks of spaces) before
+/// its trailer. Decoders skip comments, so the image is unchanged; the survey serves every
+/// animation at the same size so that a file's size (about 0.9 MB for one configuration, 1.2 MB
+/// for another) tells a participant nothing. `size` must be the GIF's length, or at least
+/// [`GIF_PAD_MIN`] more; otherwise, or for bytes that do not end with the GIF trailer, nothing
+/// changes and the result is `false`.
+pub fn pad_gif(gif: &mut Vec<u8>, size: usize) -> bool {
+    if size == gif.len() {
+        return true;
+    }
+    if size < gif.len().saturating_add(GIF_PAD_MIN) || gif.last() != Some(&0x3B) {
+        return false;
+    }
+    // Introducer, label and terminator take 3 bytes; the other m are n sub-blocks, each a length
+    // byte and 1 to 255 bytes of data (m >= 2, so n <= m / 2 and every block gets a byte).
+    let m = size - gif.len() - 3;
+    let n = m.div_ceil(256);
+    let data = m - n;
+    let mut ext = Vec::with_capacity(m + 3);
+    ext.extend_from_slice(&[0x21, 0xFE]);
+    for k in 0..n {
+        let len = data / n + usize::from(k < data % n);
+        ext.push(u8::try_from(len).unwrap_or(u8::MAX));
+        ext.resize(ext.len() + len, b' ');
+    }
+    ext.push(0);
+    let trailer = gif.len() - 1;
+    gif.splice(trailer..trailer, ext);
+    gif.len() == size
 }
 
 /// The survey's router.
@@ -237,9 +290,23 @@ async fn gif(
         .filter(|n| survey.names.contains(*n))
         .ok_or_else(|| ApiError::not_found(format!("no such animation: {file}")))?;
     let path = survey.render_dir.join(format!("{name}.gif"));
-    let bytes = tokio::fs::read(&path)
+    let mut bytes = tokio::fs::read(&path)
         .await
         .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?;
+    let size = {
+        let survey = survey.clone();
+        tokio::task::spawn_blocking(move || survey.gif_size())
+            .await
+            .map_err(ApiError::internal)?
+    };
+    if !pad_gif(&mut bytes, size) {
+        // Changed on disk since the size was taken, or not a GIF: served as it is.
+        eprintln!(
+            "{}: {} bytes, not padded to {size} (re-rendered while serving?)",
+            path.display(),
+            bytes.len()
+        );
+    }
     let mut response = bytes.into_response();
     let h = response.headers_mut();
     h.insert(header::CONTENT_TYPE, HeaderValue::from_static("image/gif"));
@@ -372,4 +439,28 @@ async fn admin_export(
         h.insert(header::CONTENT_DISPOSITION, v);
     }
     Ok(response)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn padding_reaches_every_size_from_the_minimum_on() {
+        let gif = b"GIF89a...;".to_vec();
+        for extra in [0, 5, 6, 7, 258, 259, 260, 261, 514, 515, 70_000] {
+            let mut g = gif.clone();
+            assert!(pad_gif(&mut g, gif.len() + extra), "{extra}");
+            assert_eq!(g.len(), gif.len() + extra);
+            assert_eq!(g.last(), Some(&0x3B));
+            assert!(g.starts_with(&gif[..gif.len() - 1]));
+        }
+        for extra in [1, 2, 3, 4] {
+            let mut g = gif.clone();
+            assert!(!pad_gif(&mut g, gif.len() + extra));
+            assert_eq!(g, gif);
+        }
+        let mut not_gif = b"abc".to_vec();
+        assert!(!pad_gif(&mut not_gif, 100));
+    }
 }

@@ -103,7 +103,13 @@ fn a_participant_session_end_to_end_over_every_route() {
         let r = get(addr, &format!("/gif/{name}.gif"), None).unwrap();
         assert_eq!(r.status, 200);
         assert_eq!(r.header("content-type"), Some("image/gif"));
-        assert_eq!(r.body, fixture::TINY_GIF);
+        // Padded to the study's common size with a comment before the trailer.
+        let mut padded = fixture::TINY_GIF.to_vec();
+        assert!(rmt_server::survey::pad_gif(
+            &mut padded,
+            fixture::TINY_GIF.len() + rmt_server::survey::GIF_PAD_MIN
+        ));
+        assert_eq!(r.body, padded);
         assert!(r.header("cache-control").unwrap().contains("max-age"));
     }
 

@@ -38,6 +38,7 @@ use axum::Router;
 use rmt_mesh::Mesh;
 use rmt_terrain::World;
 use serde_json::{json, Value};
+use tokio::sync::{OwnedSemaphorePermit, Semaphore};
 
 use crate::http::{asset, json_body, random_token, ApiError};
 use sculpt::{BrushRequest, EditOutcome, Session, Sessions};
@@ -80,22 +81,38 @@ pub trait Backend: Send + Sync + 'static {
     fn world(&self, params: &Params) -> Result<(World, Value), BackendError>;
 }
 
-/// The studio's state: the backend, the sculpt sessions, and a lock that runs one extraction
-/// at a time (each one already uses every core).
+/// The studio's state: the backend, the sculpt sessions (each behind its own lock, so strokes
+/// on different sessions run side by side), and the extraction slots: as many extractions (and
+/// sculpt worlds being built) run at once as the machine has cores; more wait for a slot.
 pub struct Studio {
     backend: Box<dyn Backend>,
     sessions: Mutex<Sessions>,
-    extracting: Mutex<()>,
+    slots: Arc<Semaphore>,
 }
 
 impl Studio {
-    /// A studio on `backend`.
+    /// A studio on `backend`, with one extraction slot per core.
     pub fn new(backend: impl Backend) -> Self {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        Self::with_slots(backend, cores)
+    }
+
+    /// A studio on `backend` running at most `slots` extractions at once.
+    pub fn with_slots(backend: impl Backend, slots: usize) -> Self {
         Self {
             backend: Box::new(backend),
             sessions: Mutex::new(Sessions::new(MAX_SESSIONS)),
-            extracting: Mutex::new(()),
+            slots: Arc::new(Semaphore::new(slots.max(1))),
         }
+    }
+
+    /// Waits for an extraction slot.
+    async fn slot(&self) -> Result<OwnedSemaphorePermit, ApiError> {
+        self.slots
+            .clone()
+            .acquire_owned()
+            .await
+            .map_err(ApiError::internal)
     }
 }
 
@@ -236,7 +253,6 @@ async fn schema(State(studio): State<Arc<Studio>>) -> Response {
 }
 
 fn extract(studio: &Studio, params: &Params) -> Result<Extracted, ApiError> {
-    let _one_at_a_time = studio.extracting.lock().unwrap_or_else(|e| e.into_inner());
     studio.backend.extract(params).map_err(backend_error)
 }
 
@@ -252,7 +268,9 @@ async fn mesh(State(studio): State<Arc<Studio>>, RawQuery(q): RawQuery) -> Respo
                 )))
             }
         };
+        let slot = studio.slot().await?;
         blocking(move || {
+            let _slot = slot;
             let start = std::time::Instant::now();
             let Extracted { mesh, mut summary } = extract(&studio, &params)?;
             let ratios = if ratios {
@@ -329,7 +347,9 @@ async fn export(State(studio): State<Arc<Studio>>, RawQuery(q): RawQuery) -> Res
     let run = async move {
         let mut params = parse_query(q.as_deref())?;
         let format = export_format(&mut params)?;
+        let slot = studio.slot().await?;
         blocking(move || {
+            let _slot = slot;
             let Extracted { mesh, summary } = extract(&studio, &params)?;
             let (bytes, ct) = export_file(&mesh, &format)?;
             let object = summary
@@ -371,14 +391,13 @@ fn sculpt_header(id: &str, s: &Session, outcome: Option<&EditOutcome>) -> Value 
 async fn sculpt_new(State(studio): State<Arc<Studio>>, RawQuery(q): RawQuery) -> Response {
     let run = async move {
         let params = parse_query(q.as_deref())?;
+        let slot = studio.slot().await?;
         blocking(move || {
             let start = std::time::Instant::now();
-            let (world, description) = {
-                let _one = studio.extracting.lock().unwrap_or_else(|e| e.into_inner());
-                studio.backend.world(&params).map_err(backend_error)?
-            };
+            let (world, description) = studio.backend.world(&params).map_err(backend_error)?;
             let session = Session::new(world, description)
                 .map_err(|m| backend_error(BackendError::Failed(m)))?;
+            drop(slot);
             let id = random_token().map_err(ApiError::internal)?;
             let mut header = sculpt_header(&id, &session, None);
             if let Value::Object(m) = &mut header {
@@ -413,10 +432,17 @@ async fn sculpt_edit(
     edit: Edit,
 ) -> Response {
     blocking(move || {
-        let mut sessions = studio.sessions.lock().unwrap_or_else(|e| e.into_inner());
-        let session = sessions.get_mut(&id).ok_or_else(|| {
-            ApiError::not_found("no such sculpt session (it may have expired); start a new one")
-        })?;
+        // The sessions' lock only to find the session; the stroke holds the session's own.
+        let session = studio
+            .sessions
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(&id)
+            .ok_or_else(|| {
+                ApiError::not_found("no such sculpt session (it may have expired); start a new one")
+            })?;
+        let mut session = session.lock().unwrap_or_else(|e| e.into_inner());
+        let session = &mut *session;
         let outcome = match (&brush, edit) {
             (Some(b), _) => session.stroke(b).map_err(ApiError::bad_request)?,
             (None, Edit::Undo) => session
@@ -469,13 +495,13 @@ async fn sculpt_export(
             )));
         }
         blocking(move || {
-            let mesh = {
-                let mut sessions = studio.sessions.lock().unwrap_or_else(|e| e.into_inner());
-                let session = sessions
-                    .get_mut(&id)
-                    .ok_or_else(|| ApiError::not_found("no such sculpt session"))?;
-                session.welded()
-            };
+            let session = studio
+                .sessions
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .get(&id)
+                .ok_or_else(|| ApiError::not_found("no such sculpt session"))?;
+            let mesh = session.lock().unwrap_or_else(|e| e.into_inner()).welded();
             let (bytes, ct) = export_file(&mesh, &format)?;
             Ok(file_reply(bytes, ct, &format!("terrain.{format}")))
         })

@@ -3,6 +3,7 @@
 //! the strokes' changed values ([`rmt_terrain::StrokeRecord`]).
 
 use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use glam::Vec3;
@@ -90,7 +91,7 @@ pub struct Session {
     undone: Vec<StrokeRecord>,
     /// What the world was built from (sent back to the page).
     pub description: serde_json::Value,
-    /// Last use, for evicting idle sessions.
+    /// Time of the last edit.
     pub last_used: Instant,
 }
 
@@ -220,9 +221,12 @@ impl Session {
     }
 }
 
+/// A session behind its own lock: strokes on different sessions run side by side.
+pub type SharedSession = Arc<Mutex<Session>>;
+
 /// Sessions by id, at most `capacity` (the least recently used one goes first).
 pub struct Sessions {
-    map: HashMap<String, Session>,
+    map: HashMap<String, (SharedSession, Instant)>,
     capacity: usize,
 }
 
@@ -241,7 +245,7 @@ impl Sessions {
             let oldest = self
                 .map
                 .iter()
-                .min_by_key(|(_, s)| s.last_used)
+                .min_by_key(|(_, (_, used))| *used)
                 .map(|(k, _)| k.clone());
             match oldest {
                 Some(k) => {
@@ -250,12 +254,15 @@ impl Sessions {
                 None => break,
             }
         }
-        self.map.insert(id, session);
+        self.map
+            .insert(id, (Arc::new(Mutex::new(session)), Instant::now()));
     }
 
-    /// The session `id`.
-    pub fn get_mut(&mut self, id: &str) -> Option<&mut Session> {
-        self.map.get_mut(id)
+    /// The session `id` (marked as used now).
+    pub fn get(&mut self, id: &str) -> Option<SharedSession> {
+        let (session, used) = self.map.get_mut(id)?;
+        *used = Instant::now();
+        Some(session.clone())
     }
 
     /// Number of sessions.

@@ -95,7 +95,8 @@ fn bad(message: &str) -> std::io::Error {
     std::io::Error::new(std::io::ErrorKind::InvalidData, message.to_string())
 }
 
-fn parse(raw: &[u8]) -> std::io::Result<Reply> {
+/// Parses a whole reply (head and body) as read from the socket.
+pub fn parse(raw: &[u8]) -> std::io::Result<Reply> {
     let end = raw
         .windows(4)
         .position(|w| w == b"\r\n\r\n")
