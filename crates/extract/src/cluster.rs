@@ -21,9 +21,6 @@
 
 use crate::lattice::LatticeTables;
 
-/// All 14 neighbour bits.
-pub const FULL: u16 = 0x3FFF;
-
 /// A proposed group: some of the nearby crossings of one point, to be merged into one vertex,
 /// named by crossing id so that no lookup is needed to find them.
 ///
@@ -217,6 +214,7 @@ pub fn propose(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lattice::FULL;
     use crate::Lattice;
 
     /// `propose` at a point with id 0 and slot 0 whose 14 neighbours exist and whose edges are

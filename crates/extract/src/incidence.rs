@@ -120,7 +120,7 @@ pub(crate) fn incidence_parallel(
         }
     }
     // Every slot is written below: a reused table is not cleared first.
-    crate::mt::overwritten(inc, indices.len() - indices.len() % 3, 0, pool);
+    crate::util::overwritten(inc, indices.len() - indices.len() % 3, 0, pool);
     let out = SharedSlots {
         ptr: inc.as_mut_ptr(),
         len: inc.len(),

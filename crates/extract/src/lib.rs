@@ -63,6 +63,7 @@ pub mod simplify;
 pub mod stats;
 pub mod threads;
 pub mod tiles;
+pub(crate) mod util;
 
 pub use measure::{measure, Measurement};
 pub use samples::{Samples, Sampling};

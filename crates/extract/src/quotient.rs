@@ -36,7 +36,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::cluster::Candidate;
-use crate::mt::Layout;
+use crate::mt::layout::Layout;
 
 /// "No group" in the crossing-to-group table.
 pub(crate) const NONE: u32 = u32::MAX;

@@ -152,24 +152,6 @@ pub(crate) fn plane_words(plane: usize) -> usize {
     plane.div_ceil(64) + 1
 }
 
-/// Calls `visit(n)` for each set bit `n < len` of the bit set `words` counted from bit `start`.
-#[inline(always)]
-pub(crate) fn for_each_bit(words: &[u64], start: usize, len: usize, mut visit: impl FnMut(usize)) {
-    let mut n = 0;
-    while n < len {
-        let take = (len - n).min(64);
-        let mut bits = bits_at(words, start + n);
-        if take < 64 {
-            bits &= (1u64 << take) - 1;
-        }
-        while bits != 0 {
-            visit(n + bits.trailing_zeros() as usize);
-            bits &= bits - 1;
-        }
-        n += take;
-    }
-}
-
 /// Bit k set where `values[k] < iso` (at most 64 values). A full word is built a byte at a time,
 /// which the compiler turns into wide comparisons (about 40% faster than bit by bit).
 #[inline(always)]
@@ -189,19 +171,6 @@ pub(crate) fn inside_word(values: &[f32], iso: f32) -> u64 {
             .iter()
             .enumerate()
             .fold(0u64, |x, (k, &f)| x | (u64::from(f < iso) << k)),
-    }
-}
-
-/// The 64 bits of `words` starting at bit `pos` (bit k = slot `pos + k`); `words` has one word
-/// of padding past the last slot.
-#[inline(always)]
-pub(crate) fn bits_at(words: &[u64], pos: usize) -> u64 {
-    let (w, s) = (pos >> 6, pos & 63);
-    let lo = words[w] >> s;
-    if s == 0 {
-        lo
-    } else {
-        lo | (words[w + 1] << (64 - s))
     }
 }
 

@@ -12,7 +12,8 @@
 //!        v1
 //! ```
 
-use super::*;
+use crate::lattice::{LatticeTables, Offset, FULL};
+use crate::{Lattice, Samples};
 
 /// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
 pub(crate) const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];

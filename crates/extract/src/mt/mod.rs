@@ -28,15 +28,17 @@
 use rayon::prelude::*;
 use rmt_mesh::Mesh;
 
-use crate::cluster::{self, Candidate, ProposalCounts, Rules, FULL};
-use crate::lattice::{LatticeTables, Offset};
+use crate::cluster::{self, Candidate, ProposalCounts, Rules};
+use crate::lattice::Offset;
+use crate::lattice::FULL;
 use crate::merge::MergeBuffers;
+use crate::util::{bits_at, for_each_bit, overwritten};
 use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
 
 mod crossings;
 mod emission;
 mod integrated;
-mod layout;
+pub(crate) mod layout;
 
 use crossings::*;
 use emission::*;
@@ -222,22 +224,6 @@ pub fn extract(
         mesh.indices.shrink_to_fit();
     }
     Ok(())
-}
-
-/// Sets `v` to length `n` for a pass that then writes every element: elements kept from an
-/// earlier extraction are not cleared (a reused buffer costs no memset), new ones are zeroed in
-/// parallel (first touches of fresh memory included).
-pub(crate) fn overwritten<T: Copy + Send + Sync>(
-    v: &mut Vec<T>,
-    n: usize,
-    zero: T,
-    pool: &rayon::ThreadPool,
-) {
-    v.truncate(n);
-    let more = n - v.len();
-    if more > 0 {
-        pool.install(|| v.par_extend(rayon::iter::repeat_n(zero, more)));
-    }
 }
 
 /// Allocation: the per-slot tables sized to the sample array (timed as allocation).
@@ -871,30 +857,6 @@ mod tests {
                     slot / plane,
                     "slot {slot}, plane {plane}"
                 );
-            }
-        }
-    }
-
-    #[test]
-    fn for_each_bit_visits_exactly_the_set_bits_from_any_start() {
-        let mut words = vec![0u64; 6];
-        let set: Vec<usize> = (0..320).filter(|i| (i * 7 + i / 3) % 5 == 0).collect();
-        for &i in &set {
-            words[i >> 6] |= 1 << (i & 63);
-        }
-        for start in [0, 1, 13, 63, 64, 65, 200] {
-            for len in [0, 1, 5, 63, 64, 65, 100, 320 - start] {
-                if start + len > 320 {
-                    continue;
-                }
-                let mut seen = Vec::new();
-                for_each_bit(&words, start, len, |n| seen.push(start + n));
-                let want: Vec<usize> = set
-                    .iter()
-                    .copied()
-                    .filter(|&i| i >= start && i < start + len)
-                    .collect();
-                assert_eq!(seen, want, "start {start} len {len}");
             }
         }
     }
