@@ -2,7 +2,7 @@
 //! ([`incidence`]) or in parallel with the same result ([`incidence_parallel`]).
 //!
 //! Integrated clustering reads the stars of its quotient tests from the table over plain MT's
-//! triangles ([`crate::mt`]); the mesh-based merge of edge collapse ([`crate::merge`]) builds
+//! triangles ([`crate::mt`]); the mesh-based merge of edge collapse ([`crate::post::merge`]) builds
 //! one over the mesh it simplifies.
 //!
 //! ```text

@@ -48,18 +48,16 @@
 
 pub mod additions;
 pub mod cluster;
-pub mod collapse;
 pub(crate) mod incidence;
 pub mod lattice;
 pub mod mc;
 pub mod measure;
-pub mod merge;
-pub mod mt;
+pub(crate) mod mt;
+pub(crate) mod post;
 pub mod quotient;
 pub mod repair;
 pub mod samples;
 pub mod settings;
-pub mod simplify;
 pub mod stats;
 pub mod threads;
 pub mod tiles;
@@ -142,7 +140,7 @@ pub enum BufferPolicy {
 pub struct Extractor {
     pub(crate) samples: Samples,
     pub(crate) mt: mt::MtBuffers,
-    pub(crate) merge: merge::MergeBuffers,
+    pub(crate) merge: post::MergeBuffers,
     /// Thread pools by worker count; `true` marks a pool given by [`Extractor::set_pool`] (the
     /// caller's: kept when the placement changes).
     pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>, bool)>,
@@ -362,15 +360,36 @@ impl Extractor {
                 mc::extract(&self.samples, settings, &pool, mesh, stats);
             }
             settings::Method::Mt => {
-                mt::extract(
-                    &self.samples,
+                // Marching tetrahedra (with its clustering), then the post-processing modes on
+                // its mesh.
+                let emitted =
+                    mt::extract(&self.samples, settings, &pool, &mut self.mt, mesh, stats)?;
+                let keys = settings.tiles.is_some().then_some(&emitted.tile_keys[..]);
+                post::process(
                     settings,
-                    &pool,
-                    &mut self.mt,
+                    keys,
+                    emitted.near_points,
                     &mut self.merge,
                     mesh,
                     stats,
-                )?;
+                );
+                let lean = self.mt.lean;
+                stats.bytes_edges = emitted.table_bytes
+                    + if !lean
+                        && matches!(
+                            settings.clustering,
+                            Clustering::Postprocessed | Clustering::Meshopt
+                        )
+                    {
+                        self.merge.bytes()
+                    } else {
+                        0
+                    };
+                if lean {
+                    self.merge = post::MergeBuffers::default();
+                    mesh.positions.shrink_to_fit();
+                    mesh.indices.shrink_to_fit();
+                }
             }
         }
         let t = std::time::Instant::now();

@@ -21,6 +21,10 @@
 
 use super::*;
 
+/// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
+/// sample points): the meshoptimizer mode welds them first ([`crate::post`]).
+pub(crate) const WELD: f32 = 1e-4;
+
 /// A point with a crossed edge: the id of its first owned crossing and its owned crossings (bit d:
 /// the crossing on the edge to neighbour d). `id(C, d) = first + popcount(owned & ((1 << d) - 1))`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

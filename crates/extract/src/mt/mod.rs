@@ -7,7 +7,6 @@
 //!           --integrated::cluster-----> groups tested in the quotient, output vertices
 //!                                        (with clustering)               (parallel rounds)
 //!           --emission::emit----------> triangles, collapsed ones dropped (parallel over layers)
-//!           --post_process------------> edge collapse or meshopt (post-processed modes)
 //! ```
 //!
 //! - `layout`: the lattice in storage terms (neighbour deltas, tetrahedron templates, the
@@ -31,7 +30,6 @@ use rmt_mesh::Mesh;
 use crate::cluster::{self, Candidate, ProposalCounts, Rules};
 use crate::lattice::Offset;
 use crate::lattice::FULL;
-use crate::merge::MergeBuffers;
 use crate::util::{bits_at, for_each_bit, overwritten};
 use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
 
@@ -39,6 +37,8 @@ mod crossings;
 mod emission;
 mod integrated;
 pub(crate) mod layout;
+
+pub(crate) use crossings::WELD;
 
 use crossings::*;
 use emission::*;
@@ -122,22 +122,18 @@ impl MtBuffers {
     }
 }
 
-/// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
-/// sample points): the meshoptimizer mode welds them first.
-const WELD: f32 = 1e-4;
-
 /// Extracts the surface of `samples` with marching tetrahedra (and clustering) into `mesh`:
 /// allocation, the vertex pass (`crossings::vertex_pass`), clustering
-/// (`integrated::cluster`), the emission (`emission::emit`), then post-processing.
+/// (`integrated::cluster`), the emission (`emission::emit`). The post-processing modes run
+/// after it, on the mesh ([`crate::post`]).
 pub fn extract(
     samples: &Samples,
     settings: &ExtractSettings,
     pool: &rayon::ThreadPool,
     buf: &mut MtBuffers,
-    merge: &mut MergeBuffers,
     mesh: &mut Mesh,
     stats: &mut Stats,
-) -> Result<(), ExtractError> {
+) -> Result<Emitted, ExtractError> {
     let layout = Layout::cached(samples, settings.lattice, &mut buf.border);
     let clustering = settings.clustering;
     let propose = matches!(
@@ -167,7 +163,6 @@ pub fn extract(
     )?;
     let mut keys: Vec<u64> = Vec::new();
     tile_keys(samples, settings, buf, &mut keys);
-    let keys = settings.tiles.is_some().then_some(&keys[..]);
     // Clustering: which proposals become one vertex (counted in the vertex pass).
     // Tetrahedra with a triangle, counted by the pass that wrote plain MT's triangles.
     let mut plain_processed = 0;
@@ -202,28 +197,36 @@ pub fn extract(
     stats.t_geometry_s += t.elapsed().as_secs_f64();
     let lean_bytes = release_tables(buf, pool);
     stats.clusters_rejected = stats.clusters_rejected_prefilter + stats.clusters_rejected_check;
-    post_process(settings, keys, near_points, merge, mesh, stats);
-    stats.bytes_edges = if buf.lean {
+    let table_bytes = if buf.lean {
         // Measured before they were released.
         lean_bytes
     } else {
         buf.table_bytes()
-            + if matches!(clustering, Clustering::Postprocessed | Clustering::Meshopt) {
-                merge.bytes()
-            } else {
-                0
-            }
     };
     if buf.lean {
-        *merge = MergeBuffers::default();
         *buf = MtBuffers {
             lean: true,
             ..MtBuffers::default()
         };
-        mesh.positions.shrink_to_fit();
-        mesh.indices.shrink_to_fit();
     }
-    Ok(())
+    Ok(Emitted {
+        near_points,
+        tile_keys: keys,
+        table_bytes,
+    })
+}
+
+/// What marching tetrahedra hands on besides the mesh: what the post-processing reads
+/// ([`crate::post::process`]) and the bytes of its tables.
+pub(crate) struct Emitted {
+    /// Crossings within [`WELD`] of their owner (surfaces through sample points).
+    pub(crate) near_points: usize,
+    /// The tile rule's key of every crossing (chunked extraction with edge collapse); empty
+    /// otherwise.
+    pub(crate) tile_keys: Vec<u64>,
+    /// Bytes of the per-point tables, measured before [`crate::BufferPolicy::Lean`] released
+    /// them.
+    pub(crate) table_bytes: usize,
 }
 
 /// Allocation: the per-slot tables sized to the sample array (timed as allocation).
@@ -302,63 +305,6 @@ fn release_tables(buf: &mut MtBuffers, pool: &rayon::ThreadPool) -> usize {
     lean_bytes
 }
 
-/// Post-processing (counted in the geometry pass, as in the dissertation): edge collapse, or
-/// meshopt after welding coincident crossings.
-fn post_process(
-    settings: &ExtractSettings,
-    keys: Option<&[u64]>,
-    near_points: usize,
-    merge: &mut MergeBuffers,
-    mesh: &mut Mesh,
-    stats: &mut Stats,
-) {
-    let clustering = settings.clustering;
-    if clustering == Clustering::Postprocessed {
-        let t = std::time::Instant::now();
-        let h = settings.grid.h();
-        let (collapses, dropped) = crate::collapse::collapse_short_edges_tiled(
-            merge,
-            mesh,
-            settings.collapse_threshold * h,
-            keys,
-        );
-        stats.collapses = collapses;
-        stats.discarded += dropped;
-        stats.t_geometry_s += t.elapsed().as_secs_f64();
-    } else if clustering == Clustering::Meshopt {
-        let t = std::time::Instant::now();
-        if near_points > 0 {
-            // meshoptimizer tells vertices apart by index: crossings on top of each other (the
-            // surface through sample points) would look like seams and open holes. Weld them
-            // first, under the exact check (integrated clustering groups them as one island).
-            weld_coincident(merge, mesh, settings, None, stats);
-        }
-        stats.discarded +=
-            crate::simplify::meshopt_simplify(mesh, settings.grid.h(), settings.collapse_threshold);
-        stats.t_geometry_s += t.elapsed().as_secs_f64();
-    }
-}
-
-/// Welds crossings closer than `WELD` grid spacings (crossings on top of each other where the
-/// surface passes through sample points) under the exact check, following the tile rule when
-/// `tile_keys` is given; counted as collapses.
-fn weld_coincident(
-    merge: &mut MergeBuffers,
-    mesh: &mut Mesh,
-    settings: &ExtractSettings,
-    tile_keys: Option<&[u64]>,
-    stats: &mut Stats,
-) {
-    let (welds, dropped) = crate::collapse::collapse_short_edges_tiled(
-        merge,
-        mesh,
-        WELD * settings.grid.h(),
-        tile_keys,
-    );
-    stats.collapses += welds;
-    stats.discarded += dropped;
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -405,22 +351,9 @@ mod tests {
         samples
             .sample(field, settings, pool, &mut stats)
             .expect("a finite field");
-        let (mut buf, mut merge, mut mesh) = (
-            MtBuffers::default(),
-            MergeBuffers::default(),
-            Mesh::default(),
-        );
+        let (mut buf, mut mesh) = (MtBuffers::default(), Mesh::default());
         let mut counted = Stats::default();
-        extract(
-            &samples,
-            settings,
-            pool,
-            &mut buf,
-            &mut merge,
-            &mut mesh,
-            &mut counted,
-        )
-        .expect("extraction");
+        extract(&samples, settings, pool, &mut buf, &mut mesh, &mut counted).expect("extraction");
         (samples, buf, mesh, counted)
     }
 
