@@ -46,16 +46,12 @@
 //! Orientation convention: triangles are counter-clockwise seen from the side of increasing
 //! field value, so their right-hand normals point outward for a signed distance field.
 
-pub mod additions;
-pub mod cluster;
 pub(crate) mod incidence;
 pub mod lattice;
 pub mod mc;
 pub mod measure;
 pub(crate) mod mt;
 pub(crate) mod post;
-pub mod quotient;
-pub mod repair;
 pub mod samples;
 pub mod settings;
 pub mod stats;

@@ -9,7 +9,7 @@
 //! per slot, a rank per 64 slots, and per crossed point its 14 owned-crossing bits and the id of
 //! its first owned crossing), so `id(C, d) = first(C) + popcount(owned(C) & ((1 << d) - 1))`
 //! with no table per slot beyond those bits. With clustering, the pass also proposes clusters
-//! ([`crate::cluster`]).
+//! ([`crate::mt::clustering::proposal`]).
 //!
 //! ```text
 //!   S1 (out)        C owns the crossings on C-S1 and C-S2 (it is nearer T than S1 and S2);
@@ -280,7 +280,7 @@ pub(crate) fn vertex_plane(
                     (Rules::Islands, Some(valid)) => l.inner_dirs(l.coords(sx, sy, z)) & valid,
                     _ => valid,
                 };
-                counts.proposals.add(cluster::propose(
+                counts.proposals.add(proposal::propose(
                     l.t, first, i as u32, valid, inner, own, crossed, rules, cands,
                 ));
             }
@@ -410,7 +410,7 @@ pub(crate) fn number_plane(
 
 /// The vertex pass, after [`super::allocate`]: step 0, the inside bit of every sample point;
 /// step 1 (parallel over storage planes), each plane's crossed points, their owned crossings
-/// and (with `propose`) the cluster proposals ([`crate::cluster`]), copied into
+/// and (with `propose`) the cluster proposals ([`crate::mt::clustering::proposal`]), copied into
 /// `buf.candidates`; step 2 (parallel over planes), every crossing's id and position
 /// (`mesh.positions`, one vertex per crossing). Returns how many crossings lie on a sample
 /// point (within the weld distance).

@@ -13,7 +13,7 @@
 //!   border table, the case table);
 //! - `crossings`: the vertex pass;
 //! - `integrated`: the clustering steps (proposals, group tables, quotient tests and repair in
-//!   [`crate::quotient`], [`crate::repair`] and [`crate::additions`]);
+//!   [`crate::mt::clustering::quotient`], [`crate::mt::clustering::repair`] and [`crate::mt::clustering::additions`]);
 //! - `emission`: the geometry pass, and the listing of plain MT's triangles that the quotient
 //!   test reads.
 //!
@@ -27,22 +27,24 @@
 use rayon::prelude::*;
 use rmt_mesh::Mesh;
 
-use crate::cluster::{self, Candidate, ProposalCounts, Rules};
 use crate::lattice::Offset;
 use crate::lattice::FULL;
 use crate::util::{bits_at, for_each_bit, overwritten};
 use crate::{CellRange, Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
+use clustering::proposal::{self, Candidate, ProposalCounts, Rules};
 
+pub(crate) mod clustering;
 mod crossings;
 mod emission;
-mod integrated;
+mod geometry;
 pub(crate) mod layout;
 
 pub(crate) use crossings::WELD;
 
+use clustering::*;
 use crossings::*;
 use emission::*;
-use integrated::*;
+use geometry::*;
 pub(crate) use layout::*;
 
 /// Per-point working arrays kept between extractions.
@@ -59,7 +61,7 @@ pub struct MtBuffers {
     cpos: Vec<[f32; 3]>,
     /// The groups' state: kept or not, each crossing's group, lone crossings, labels and
     /// vertex positions.
-    groups: crate::quotient::Groups,
+    groups: clustering::quotient::Groups,
     /// Every crossing's owner slot and edge (the direction from the owner), with clustering.
     edge_of: Vec<(u32, u8)>,
     /// Plain MT's triangles (three crossing ids each) and their source tetrahedra, and every
@@ -299,7 +301,7 @@ fn release_tables(buf: &mut MtBuffers, pool: &rayon::ThreadPool) -> usize {
         buf.inc_cursor = Vec::new();
         buf.inc_parts = Vec::new();
         buf.edge_of = Vec::new();
-        buf.groups = crate::quotient::Groups::default();
+        buf.groups = clustering::quotient::Groups::default();
         pool.broadcast(|_| LAYER_WINDOW.with_borrow_mut(|w| *w = Vec::new()));
     }
     lean_bytes
@@ -636,7 +638,7 @@ mod tests {
                     let planes_map = buf.vertex_of.clone();
                     build_groups(&mut buf, &l, &pool);
                     let (mut tables_map, mut by_tables) = (Vec::new(), Vec::new());
-                    let fixed = crate::quotient::Fixed {
+                    let fixed = clustering::quotient::Fixed {
                         l: &l,
                         cpos: &buf.cpos,
                         groups: &buf.candidates,
@@ -647,7 +649,7 @@ mod tests {
                     };
                     // Every crossing's quotient vertex, which the numbering reads.
                     buf.groups.relabel(&fixed, &pool);
-                    let q = crate::quotient::Quotient::new(&fixed, &buf.groups);
+                    let q = clustering::quotient::Quotient::new(&fixed, &buf.groups);
                     vertex_map(&q, &mut tables_map, &mut by_tables, &pool);
                     assert_eq!(planes_map, tables_map, "{what}");
                     let bits = |p: &[[f32; 3]]| -> Vec<[u32; 3]> {

@@ -4,7 +4,7 @@
 //!
 //! - [`collapse_short_edges_tiled`]: post-processed merging, every edge shorter than a threshold,
 //!   shortest first, the merged vertex at the edge's midpoint (integrated clustering handles
-//!   its slivers in the quotient instead, see [`crate::quotient`]).
+//!   its slivers in the quotient instead, see [`crate::mt::clustering::quotient`]).
 
 use rmt_mesh::Mesh;
 

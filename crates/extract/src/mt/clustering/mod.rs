@@ -1,13 +1,13 @@
 //! Clustering between the vertex pass and the emission: the proposals become groups, and each
 //! crossing gets its output vertex.
 //!
-//! The proposals are a partition of the crossings into groups ([`crate::cluster`]: a point's
+//! The proposals are a partition of the crossings into groups ([`proposal`]: a point's
 //! islands, each sheet's own crossings cut into parts joined by mesh edges; with integrated
 //! clustering also the lone crossings, given to a neighbouring island). Integrated clustering
-//! then lists plain MT's triangles once ([`super::emission::plain_triangles`]), keeps the groups
+//! then lists plain MT's triangles once ([`plain::plain_triangles`]), keeps the groups
 //! that pass the exact quotient test, repairing failures by splitting groups in parallel rounds,
-//! and settles its additions the same way ([`crate::quotient`], [`crate::repair`],
-//! [`crate::additions`]); integrated-unchecked keeps every proposal and numbers its vertices
+//! and settles its additions the same way ([`quotient`], [`repair`],
+//! [`additions`]); integrated-unchecked keeps every proposal and numbers its vertices
 //! plane by plane, with no group tables ([`keep_all`]). Every crossing then maps to an output
 //! vertex: its group's (the mean of its crossings) or its own.
 //!
@@ -17,6 +17,13 @@
 //! ```
 
 use super::*;
+use plain::plain_triangles;
+
+pub(crate) mod additions;
+pub(crate) mod plain;
+pub(crate) mod proposal;
+pub(crate) mod quotient;
+pub(crate) mod repair;
 
 /// Passes of lone crossings after the islands settle (each: give, then test and repair).
 pub(crate) const LONE_PASSES: usize = 3;
@@ -28,10 +35,10 @@ pub(crate) const SLIVER_PASSES: usize = 2;
 /// group, each group's leader (lowest crossing id) and vertex position (the mean of its
 /// crossings), and empty lone tables; also what the additions read: every crossing's owner
 /// slot and edge (`buf.edge_of`) and the groups that gave it back
-/// ([`crate::quotient::Groups::refused`]). Integrated clustering only: integrated-unchecked
+/// ([`quotient::Groups::refused`]). Integrated clustering only: integrated-unchecked
 /// numbers its vertices without group tables ([`keep_all`]).
 pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::ThreadPool) {
-    use crate::quotient::NONE;
+    use quotient::NONE;
     let crossings = buf.cpos.len();
     let MtBuffers {
         candidates,
@@ -107,8 +114,8 @@ pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::T
 
 /// The clustering steps between the vertex pass and the emission (`propose`): with
 /// integrated-unchecked, the numbering of the proposals ([`keep_all`]); with integrated (checked) clustering the group tables, plain
-/// MT's triangle list, the islands' quotient tests and repair ([`crate::repair`]), then the
-/// additions ([`crate::additions`]). At the end every crossing's output vertex
+/// MT's triangle list, the islands' quotient tests and repair ([`repair`]), then the
+/// additions ([`additions`]). At the end every crossing's output vertex
 /// (`buf.vertex_of`) and the vertex positions (`mesh.positions`; the crossings' own move to
 /// `buf.cpos`). Integrated clustering, checked or not, takes no tiles: its chunks are exact
 /// without them ([`crate::ExtractSettings::check`] refuses the combination). Counts the tetrahedra that the
@@ -179,7 +186,7 @@ pub(crate) fn cluster(
         .sum();
     let mut vertex_of = std::mem::take(&mut buf.vertex_of);
     let fixed = fixed(buf, layout);
-    let q = crate::quotient::Quotient::new(&fixed, groups);
+    let q = quotient::Quotient::new(&fixed, groups);
     vertex_map(&q, &mut vertex_of, &mut mesh.positions, pool);
     // An island is kept whole, or as one of its variants (at most one of them is kept).
     stats.clusters_committed = groups.active.iter().filter(|&&a| a != 0).count();
@@ -343,8 +350,8 @@ fn plane_id_starts(crossed: &CrossedIndex, planes: usize, crossings: usize) -> V
 }
 
 /// The fixed tables of the quotient tests, over the candidates as they are now.
-fn fixed<'a>(buf: &'a MtBuffers, layout: &'a Layout<'a>) -> crate::quotient::Fixed<'a> {
-    crate::quotient::Fixed {
+fn fixed<'a>(buf: &'a MtBuffers, layout: &'a Layout<'a>) -> quotient::Fixed<'a> {
+    quotient::Fixed {
         l: layout,
         cpos: &buf.cpos,
         groups: &buf.candidates,
@@ -356,7 +363,7 @@ fn fixed<'a>(buf: &'a MtBuffers, layout: &'a Layout<'a>) -> crate::quotient::Fix
 }
 
 /// Adds the timings and rounds of one settling step to `stats`.
-fn count(stats: &mut Stats, settled: crate::repair::Settled) {
+fn count(stats: &mut Stats, settled: repair::Settled) {
     stats.repair_rounds += settled.rounds;
     stats.t_tests_s += settled.t_tests_s;
     stats.t_repair_s += settled.t_repair_s;
@@ -368,7 +375,7 @@ fn count(stats: &mut Stats, settled: crate::repair::Settled) {
 #[allow(clippy::too_many_arguments)]
 fn settle_islands(
     buf: &MtBuffers,
-    groups: &mut crate::quotient::Groups,
+    groups: &mut quotient::Groups,
     layout: &Layout,
     islands: usize,
     step: std::time::Instant,
@@ -377,7 +384,7 @@ fn settle_islands(
 ) {
     let fixed = fixed(buf, layout);
     groups.relabel(&fixed, pool);
-    crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
+    additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
     if buf.record {
         // The proposals are complete: from here on, what the steps do is activity.
         groups.touched.resize(buf.cpos.len(), 0);
@@ -385,7 +392,7 @@ fn settle_islands(
     groups.base_len.fill(0);
     stats.t_groups_s += step.elapsed().as_secs_f64();
     let all = (0..islands as u32).collect();
-    let settled = crate::repair::settle(&fixed, groups, all, crate::repair::Phase::Islands, pool);
+    let settled = repair::settle(&fixed, groups, all, repair::Phase::Islands, pool);
     stats.repair_rounds = 0;
     count(stats, settled);
 }
@@ -395,7 +402,7 @@ fn settle_islands(
 /// where they end).
 fn add_variants(
     buf: &mut MtBuffers,
-    groups: &mut crate::quotient::Groups,
+    groups: &mut quotient::Groups,
     layout: &Layout,
     islands: usize,
     stats: &mut Stats,
@@ -405,7 +412,7 @@ fn add_variants(
     for gi in 0..islands {
         if groups.active[gi] == 0 {
             let c = buf.candidates[gi];
-            crate::additions::variants(&c, layout.t, &mut buf.candidates);
+            additions::variants(&c, layout.t, &mut buf.candidates);
             variant_of.push(buf.candidates.len() as u32);
         }
     }
@@ -420,31 +427,28 @@ fn add_variants(
 #[allow(clippy::too_many_arguments)]
 fn revive_and_give_lones(
     buf: &MtBuffers,
-    groups: &mut crate::quotient::Groups,
+    groups: &mut quotient::Groups,
     layout: &Layout,
     variant_of: &[u32],
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
     let fixed = fixed(buf, layout);
-    let dirty = crate::additions::revive(&fixed, groups, variant_of, pool);
-    let settled = crate::repair::settle(&fixed, groups, dirty, crate::repair::Phase::Islands, pool);
+    let dirty = additions::revive(&fixed, groups, variant_of, pool);
+    let settled = repair::settle(&fixed, groups, dirty, repair::Phase::Islands, pool);
     count(stats, settled);
-    let no_new = crate::repair::Phase::Additions {
+    let no_new = repair::Phase::Additions {
         born: fixed.groups.len() as u32,
     };
     for _ in 0..LONE_PASSES {
         let step = std::time::Instant::now();
         mark_deciders(&fixed, groups, &buf.edge_of, pool);
-        let dirty = crate::additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
+        let dirty = additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
         stats.t_groups_s += step.elapsed().as_secs_f64();
         if dirty.is_empty() {
             break;
         }
-        count(
-            stats,
-            crate::repair::settle(&fixed, groups, dirty, no_new, pool),
-        );
+        count(stats, repair::settle(&fixed, groups, dirty, no_new, pool));
     }
 }
 
@@ -453,7 +457,7 @@ fn revive_and_give_lones(
 /// appended to the candidates). Returns the number of pairs proposed.
 fn sliver_passes(
     buf: &mut MtBuffers,
-    groups: &mut crate::quotient::Groups,
+    groups: &mut quotient::Groups,
     layout: &Layout,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
@@ -461,12 +465,11 @@ fn sliver_passes(
     let mut pairs = 0;
     // A group that gave a crossing back in a lone pass is asked again (see
     // `additions::sliver_proposals`).
-    groups.refused.fill(crate::quotient::NONE);
+    groups.refused.fill(quotient::NONE);
     for _ in 0..SLIVER_PASSES {
         let step = std::time::Instant::now();
         mark_deciders(&fixed(buf, layout), groups, &buf.edge_of, pool);
-        let props =
-            crate::additions::sliver_proposals(&fixed(buf, layout), groups, &buf.edge_of, pool);
+        let props = additions::sliver_proposals(&fixed(buf, layout), groups, &buf.edge_of, pool);
         if props.lones.is_empty() && props.pairs.is_empty() {
             break;
         }
@@ -484,17 +487,14 @@ fn sliver_passes(
         stats.clusters_proposed += props.pairs.len();
         let fixed = fixed(buf, layout);
         groups.add_pairs(&fixed, born, &props.pairs);
-        let mut dirty = crate::additions::attach(&fixed, groups, props.lones, true, pool);
+        let mut dirty = additions::attach(&fixed, groups, props.lones, true, pool);
         let new: Vec<u32> = (born as u32..fixed.groups.len() as u32).collect();
-        dirty.extend(crate::additions::around(&fixed, groups, &new, pool));
+        dirty.extend(additions::around(&fixed, groups, &new, pool));
         dirty.sort_unstable();
         dirty.dedup();
         stats.t_groups_s += step.elapsed().as_secs_f64();
-        let phase = crate::repair::Phase::Additions { born: born as u32 };
-        count(
-            stats,
-            crate::repair::settle(&fixed, groups, dirty, phase, pool),
-        );
+        let phase = repair::Phase::Additions { born: born as u32 };
+        count(stats, repair::settle(&fixed, groups, dirty, phase, pool));
     }
     pairs
 }
@@ -502,8 +502,8 @@ fn sliver_passes(
 /// Recording the activity: marks every crossing that the next lone or sliver pass considers
 /// (an inner crossing in no kept group), whatever it finds.
 fn mark_deciders(
-    f: &crate::quotient::Fixed,
-    g: &mut crate::quotient::Groups,
+    f: &quotient::Fixed,
+    g: &mut quotient::Groups,
     edge_of: &[(u32, u8)],
     pool: &rayon::ThreadPool,
 ) {
@@ -511,7 +511,7 @@ fn mark_deciders(
         return;
     }
     let mut touched = std::mem::take(&mut g.touched);
-    let q = crate::quotient::Quotient::new(f, g);
+    let q = quotient::Quotient::new(f, g);
     pool.install(|| {
         touched.par_iter_mut().enumerate().for_each(|(x, t)| {
             let (slot, dir) = edge_of[x];
@@ -547,14 +547,14 @@ fn activity_points(
 
 /// The output vertices: one per crossing outside the kept groups and one per kept group, in
 /// order of their lowest crossing id; `vertex_of` maps every crossing to its vertex. Read from
-/// the quotient's labels ([`crate::quotient::Groups::vlabel`] and `vpos`, kept up to date by
+/// the quotient's labels ([`quotient::Groups::vlabel`] and `vpos`, kept up to date by
 /// every step): a crossing labelled with itself is a vertex, at its quotient position; the
 /// others take their label's, numbered before them (a label is its group's lowest id). (One
 /// serial pass over two tables, 0.74 -> 0.53 ms at 128^3 against the group tables it read
 /// before; a parallel numbering by runs and prefix sums over those measured slower, 1.6
 /// against 1.1 ms at 128^3 on 2 threads.)
 pub(crate) fn vertex_map(
-    q: &crate::quotient::Quotient,
+    q: &quotient::Quotient,
     vertex_of: &mut Vec<u32>,
     positions: &mut Vec<[f32; 3]>,
     pool: &rayon::ThreadPool,

@@ -1,6 +1,6 @@
 //! The quotient test and the repair rounds of integrated clustering.
 //!
-//! The proposals ([`crate::cluster`]) are a partition of the crossings into groups. Picture every
+//! The proposals ([`crate::mt::clustering::proposal`]) are a partition of the crossings into groups. Picture every
 //! kept group contracted at once into one vertex (at the mean of its crossings): the
 //! *quotient* of plain MT. A group's star in the quotient is the plain MT triangles touching its
 //! crossings (read from the triangle list and every crossing's triangles, [`Fixed`]), and the
@@ -28,14 +28,14 @@
 //!        v-----u
 //! ```
 //!
-//! The repair rounds that keep only groups passing these tests are in [`crate::repair`]; what is
+//! The repair rounds that keep only groups passing these tests are in [`crate::mt::clustering::repair`]; what is
 //! proposed after the islands settle (variants of split islands, lone crossings, sliver pairs) is
-//! in [`crate::additions`].
+//! in [`crate::mt::clustering::additions`].
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::cluster::Candidate;
+use super::proposal::Candidate;
 use crate::mt::layout::Layout;
 
 /// "No group" in the crossing-to-group table.

@@ -9,7 +9,7 @@
 //! proposed group, and a proposal depends only on the samples of C and its neighbours (the
 //! 1-ring): the proposals are a partition of the crossings that no processing order can change.
 //! Integrated clustering then keeps the groups that pass the exact quotient test
-//! ([`crate::quotient`]); integrated-unchecked keeps those that pass the dissertation's mask
+//! ([`crate::mt::clustering::quotient`]); integrated-unchecked keeps those that pass the dissertation's mask
 //! rules ([`Rules`]).
 //!
 //! ```text
@@ -62,6 +62,7 @@ impl Candidate {
     /// The candidate restricted to the crossings whose edges are in `dirs` (a subset of its
     /// own): bit `d` of `dirs` and bit `rank(d)` of `members` name the same crossing, so the
     /// k-th set bits of the two masks correspond.
+    #[cfg(test)]
     pub fn restrict(self, dirs: u16) -> Candidate {
         let (mut all_dirs, mut all_members) = (self.dirs, self.members);
         let mut members = 0;
@@ -134,7 +135,7 @@ impl ProposalCounts {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rules {
     /// Every island of two or more nearby crossings is proposed: the exact quotient test
-    /// ([`crate::quotient`]) decides (integrated clustering).
+    /// ([`crate::mt::clustering::quotient`]) decides (integrated clustering).
     Islands,
     /// The dissertation's rules: no merge with more than 10 nearby crossings or with a loop
     /// through the point (integrated-unchecked, which has no other safeguard).
