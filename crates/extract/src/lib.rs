@@ -313,7 +313,7 @@ impl Extractor {
     /// output triangle ([`CellRange`]'s anchors), as a linear index `x + nx * (y + ny * z)` over
     /// the grid's cells; empty when nothing was recorded.
     pub fn triangle_cells(&self) -> &[u32] {
-        &self.mt.tri_cells
+        &self.mt.emission.tri_cells
     }
 
     /// Recorded by the last extraction ([`Extractor::set_recording`]): the lattice points, in
@@ -322,7 +322,7 @@ impl Extractor {
     /// clustering after the proposals changed, found in a failing group, or considered as a
     /// crossing left alone; sorted, each once.
     pub fn activity(&self) -> &[[i32; 3]] {
-        &self.mt.activity
+        &self.mt.clustering.activity
     }
 
     /// The sample array (to fill it yourself before [`Extractor::extract_presampled`]).

@@ -15,28 +15,65 @@
 //!             write (tetrahedra of each anchor, case table) ->  [ layer 0 | layer 1 | ... ]
 //! ```
 
-use super::*;
+use rayon::prelude::*;
+use rmt_mesh::Mesh;
 
-/// The geometry pass over the lattice, writing the final triangles into `mesh` (with `propose`,
-/// through the groups' vertex map, collapsed triangles dropped), only those of the cells `keep`;
-/// with `cells`, each written triangle's anchor cell too (linear index over the grid's cells).
-#[allow(clippy::too_many_arguments)]
+use super::clustering::plain::PlainList;
+use super::geometry::{geometry_layer, layer_counts, LayerOut, Surface, Vertices};
+use crate::util::overwritten;
+use crate::{Clustering, Lattice, Stats};
+
+/// The emission's buffers, kept between extractions.
+#[derive(Default)]
+pub(crate) struct EmitBuffers {
+    /// The output, one part per run of listed triangles ([`emit`]).
+    parts: Vec<Vec<u32>>,
+    /// Working memory of the vertex compaction (integrated-unchecked).
+    scratch: Vec<u32>,
+    /// Recorded: the anchor cell of every output triangle (linear index, x fastest).
+    pub(crate) tri_cells: Vec<u32>,
+}
+
+/// What the emission reads from the clustering.
+#[derive(Clone, Copy)]
+pub(crate) struct Clustered<'a> {
+    /// The crossings' positions (plain MT's vertices).
+    pub(crate) cpos: &'a [[f32; 3]],
+    /// Every crossing's output vertex.
+    pub(crate) vertex_of: &'a [u32],
+    /// Plain MT's triangles, when integrated clustering listed them (empty otherwise).
+    pub(crate) plain: &'a PlainList,
+    /// The tetrahedra with a triangle that the listing read (of the kept cells, in a chunk).
+    pub(crate) processed: usize,
+}
+
+/// What the emission reads.
+pub(crate) struct EmitIn<'a> {
+    pub(crate) surface: Surface<'a>,
+    pub(crate) clustering: Clustering,
+    /// Record the anchor cell of every output triangle.
+    pub(crate) record: bool,
+    /// With integrated clustering (checked or not), its output.
+    pub(crate) clustered: Option<Clustered<'a>>,
+}
+
+/// The geometry pass over the lattice, writing the final triangles into `mesh` (with
+/// `clustered`, the crossings' positions and output vertices, through the groups' vertex map,
+/// collapsed triangles dropped), only those of the cells `surface.keep`; with `cells`, each
+/// written triangle's anchor cell too (linear index over the grid's cells).
 pub(crate) fn emit_layers(
-    layout: &Layout,
-    iso: f32,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-    propose: bool,
-    buf: &MtBuffers,
+    surface: &Surface,
+    clustered: Option<Vertices>,
     mesh: &mut Mesh,
     mut cells: Option<&mut Vec<u32>>,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
+    let propose = clustered.is_some();
     // Triangles of plain MT per layer, counted from the anchors' crossed edges, so that every
     // layer writes its triangles straight into its own slice of the output (with clustering,
     // collapsed triangles leave the slice's end unused; the layers are then moved together).
-    let counts = layer_counts(layout, keep, crossed, pool);
+    let counts = layer_counts(surface.l, surface.keep, surface.crossed, pool);
     let layers = counts.len();
     let triangles: usize = counts.iter().sum();
     let Mesh {
@@ -57,19 +94,21 @@ pub(crate) fn emit_layers(
         rest = tail;
         rest_cells = tail_cells;
     }
-    let (positions, map) = if propose {
-        (&buf.cpos[..], Some(&buf.vertex_of[..]))
-    } else {
-        (&positions[..], None)
-    };
+    let vertices = clustered.unwrap_or(Vertices {
+        positions: &positions[..],
+        map: None,
+    });
     let written: Vec<(usize, usize)> = pool.install(|| {
         parts
             .into_par_iter()
             .enumerate()
             .map(|(k, (out, cells))| {
-                geometry_layer(
-                    layout, k, iso, keep, crossed, positions, map, out, None, cells,
-                )
+                let out = LayerOut {
+                    out,
+                    list: None,
+                    cells,
+                };
+                geometry_layer(surface, k, vertices, out)
             })
             .collect()
     });
@@ -94,31 +133,31 @@ pub(crate) fn emit_layers(
 }
 
 /// Emission: the final triangles, written straight into `mesh.indices`. With integrated
-/// clustering, the listed plain MT triangles ([`plain_triangles`]) mapped through the output
-/// vertices (`buf.vertex_of`), in order, the collapsed ones dropped (in a chunk, only those of
-/// the kept cells); otherwise the geometry pass ([`emit_layers`]).
-#[allow(clippy::too_many_arguments)]
+/// clustering, the listed plain MT triangles ([`PlainList`]) mapped through the output
+/// vertices (`vertex_of`), in order, the collapsed ones dropped (in a chunk, only those of the
+/// kept cells); otherwise the geometry pass ([`emit_layers`]).
 pub(crate) fn emit(
-    layout: &Layout,
-    samples: &Samples,
-    settings: &ExtractSettings,
-    propose: bool,
-    plain_processed: usize,
-    buf: &mut MtBuffers,
+    input: EmitIn<'_>,
+    buf: &mut EmitBuffers,
     mesh: &mut Mesh,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
-    let (iso, lattice, clustering) = (settings.iso, settings.lattice, settings.clustering);
-    let crossed = &buf.crossed;
-    let keep = settings.keep_cells;
-    if propose && !buf.plain.is_empty() {
+    let EmitIn {
+        surface,
+        clustering,
+        record,
+        clustered,
+    } = input;
+    let keep = surface.keep;
+    let listed = clustered.filter(|c| !c.plain.tris.is_empty());
+    if let Some(clustered) = listed {
         // The plain triangles are at hand (the quotient test read them): map them through the
         // groups, in order, dropping the collapsed ones (and, in a chunk, those of cells not
         // kept: the listing walked every anchor in the order the geometry pass would walk the
         // kept ones).
-        let (plain, map) = (&buf.plain[..], &buf.vertex_of[..]);
-        let kept = (keep.is_some()).then_some(&buf.plain_kept[..]);
+        let (plain, map) = (&clustered.plain.tris[..], clustered.vertex_of);
+        let kept = (keep.is_some()).then_some(&clustered.plain.kept[..]);
         const CHUNK: usize = 3 << 14;
         let mapped = |t: &[u32], i: usize| {
             if kept.is_some_and(|k| k[i] == 0) {
@@ -130,7 +169,7 @@ pub(crate) fn emit(
         // One pass: each run of listed triangles maps its own into its part (reused between
         // extractions), then the parts are joined in order.
         let runs = plain.len().div_ceil(CHUNK);
-        let parts = &mut buf.emit_parts;
+        let parts = &mut buf.parts;
         if parts.len() < runs {
             parts.resize_with(runs, Vec::new);
         }
@@ -161,11 +200,11 @@ pub(crate) fn emit(
             indices.extend_from_slice(part);
         }
         let emitted = indices.len() / 3;
-        stats.tetrahedra_processed += plain_processed;
+        stats.tetrahedra_processed += clustered.processed;
         stats.discarded += listed - emitted;
-        if buf.record {
+        if record {
             // The anchor cells of the emitted triangles, in their order.
-            let cells = &buf.plain_cell;
+            let cells = &clustered.plain.cells;
             buf.tri_cells.clear();
             buf.tri_cells.extend(
                 plain
@@ -177,25 +216,86 @@ pub(crate) fn emit(
         }
     } else {
         // Recording: the anchor cells, unless a post-process changes the triangles after.
-        let record = buf.record
+        let record = record
             && matches!(
                 clustering,
                 Clustering::None | Clustering::Integrated | Clustering::IntegratedUnchecked
             );
         let mut cells = std::mem::take(&mut buf.tri_cells);
         let out = record.then_some(&mut cells);
-        emit_layers(
-            layout, iso, keep, crossed, propose, buf, mesh, out, pool, stats,
-        );
+        let vertices = clustered.map(|c| Vertices {
+            positions: c.cpos,
+            map: Some(c.vertex_of),
+        });
+        emit_layers(&surface, vertices, mesh, out, pool, stats);
         buf.tri_cells = cells;
     }
     if clustering == Clustering::IntegratedUnchecked {
         // Without the test a vertex may lose all its triangles.
         mesh.drop_unused_vertices(&mut buf.scratch);
     }
-    let [nx, ny, nz] = samples.cells;
-    stats.tetrahedra_total = match lattice {
+    let [nx, ny, nz] = surface.l.s.cells;
+    stats.tetrahedra_total = match surface.l.lattice {
         Lattice::BodyCentred => 4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1)),
         Lattice::Simple => 6 * nx * ny * nz,
     };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mt::layout::Layout;
+    use crate::mt::testing::{extracted, settings_on, test_pool, wavy};
+    use crate::{CellRange, Lattice};
+
+    #[test]
+    fn a_chunk_maps_its_triangles_from_the_list_as_the_geometry_pass_walks_its_cells() {
+        // Integrated clustering in a chunk emits the kept cells' triangles from plain MT's
+        // list; the geometry pass over the kept cells, through the same vertex map, is the
+        // reference (triangles, their order, and the counters).
+        let field = wavy();
+        let pool = test_pool(2);
+        let mut compared = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for (cells, lo, hi) in [
+                ([12, 10, 14], [1, 1, 1], [11, 9, 13]),
+                ([16, 16, 16], [0, 3, 5], [9, 16, 12]),
+                ([9, 13, 11], [2, 0, 0], [9, 7, 6]),
+            ] {
+                let mut settings = settings_on(cells, lattice, crate::Clustering::Integrated);
+                settings.keep_cells = Some(CellRange { lo, hi });
+                let (samples, buf, mesh, listed) = extracted(&field, &settings, &pool);
+                let l = Layout::new(&samples, lattice);
+                let mut walked = Mesh::default();
+                let mut reference = Stats::default();
+                let surface = Surface {
+                    l: &l,
+                    iso: settings.iso,
+                    keep: settings.keep_cells,
+                    crossed: &buf.vertices.crossed,
+                };
+                let vertices = Vertices {
+                    positions: &buf.clustering.cpos,
+                    map: Some(&buf.clustering.vertex_of),
+                };
+                emit_layers(
+                    &surface,
+                    Some(vertices),
+                    &mut walked,
+                    None,
+                    &pool,
+                    &mut reference,
+                );
+                let what = format!("{lattice:?} {cells:?} {lo:?}..{hi:?}");
+                assert_eq!(mesh.indices, walked.indices, "{what}");
+                assert_eq!(
+                    listed.tetrahedra_processed, reference.tetrahedra_processed,
+                    "{what}"
+                );
+                assert_eq!(listed.discarded, reference.discarded, "{what}");
+                compared += mesh.indices.len() / 3;
+            }
+        }
+        assert!(compared > 500, "only {compared} triangles compared");
+    }
 }

@@ -9,7 +9,41 @@
 //!             write (tetrahedra of each anchor, case table) ->  [ layer 0 | layer 1 | ... ]
 //! ```
 
-use super::*;
+use rayon::prelude::*;
+
+use super::crossings::{CrossedIndex, CrossedPoint};
+use super::layout::{tet_triangles, Layout, TetTemplate};
+use crate::lattice::Offset;
+use crate::util::for_each_bit;
+use crate::{CellRange, Lattice};
+
+/// What a walk over the geometry layers reads: the lattice, the isovalue, the cells kept (a
+/// chunk: only their anchors are walked) and the crossed points of the vertex pass.
+#[derive(Clone, Copy)]
+pub(crate) struct Surface<'a> {
+    pub(crate) l: &'a Layout<'a>,
+    pub(crate) iso: f32,
+    pub(crate) keep: Option<CellRange>,
+    pub(crate) crossed: &'a CrossedIndex,
+}
+
+/// The vertices a layer's triangles are written with: the crossings' positions (plain MT's
+/// vertices, which choose the diagonal of a quad) and, with clustering, the output vertex of
+/// every crossing.
+#[derive(Clone, Copy)]
+pub(crate) struct Vertices<'a> {
+    pub(crate) positions: &'a [[f32; 3]],
+    pub(crate) map: Option<&'a [u32]>,
+}
+
+/// Where one layer's triangles go: `out` (three ids each, sized by [`count_layer`]), with
+/// `list` what the listing of plain MT's triangles writes beside them, with `cells` each
+/// triangle's anchor cell.
+pub(crate) struct LayerOut<'s> {
+    pub(crate) out: &'s mut [u32],
+    pub(crate) list: Option<ListOut<'s>>,
+    pub(crate) cells: Option<&'s mut [u32]>,
+}
 
 /// Calls `visit(anchor, rank, group, p)` for each body-centred face (group: its axis) or cube
 /// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot, at
@@ -121,23 +155,18 @@ pub(crate) fn count_layer(
     n
 }
 
-/// Emission over one z-layer: writes its triangles into `out`, sized by [`count_layer`] (the
-/// triangles of plain MT); with `map` (crossing id to output vertex, clustering) the triangles
-/// are written with the clustered vertices and those that collapsed are left out. Returns the
-/// tetrahedra processed and the triangles written.
-#[allow(clippy::too_many_arguments)]
+/// Emission over z-layer `k` (its anchors walked as `surface` says): writes its triangles into
+/// `out.out`, sized by [`count_layer`] (the triangles of plain MT); with `vertices.map`
+/// (crossing id to output vertex, clustering) the triangles are written with the clustered
+/// vertices and those that collapsed are left out. Returns the tetrahedra processed and the
+/// triangles written.
 pub(crate) fn geometry_layer(
-    l: &Layout,
+    surface: &Surface,
     k: usize,
-    iso: f32,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-    positions: &[[f32; 3]],
-    map: Option<&[u32]>,
-    out: &mut [u32],
-    list: Option<ListOut<'_>>,
-    cells: Option<&mut [u32]>,
+    vertices: Vertices,
+    out: LayerOut<'_>,
 ) -> (usize, usize) {
+    let (l, crossed) = (surface.l, surface.crossed);
     let plane = l.s.dims[0] * l.s.dims[1];
     // The crossed points of the storage planes this layer reads, copied into a dense window (one
     // entry per slot) of this thread: a crossing's id is then one load away, where the rank
@@ -155,20 +184,7 @@ pub(crate) fn geometry_layer(
                 r += 1;
             });
         }
-        geometry_in_window(
-            l,
-            k,
-            iso,
-            keep,
-            crossed,
-            positions,
-            map,
-            &window[..],
-            z0,
-            out,
-            list,
-            cells,
-        )
+        geometry_in_window(surface, k, vertices, &window[..], z0, out)
     })
 }
 
@@ -190,24 +206,29 @@ pub(crate) struct ListOut<'s> {
 }
 
 /// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`; with
-/// `cells`, each triangle written gets its anchor cell there (linear index, x fastest).
+/// `out.cells`, each triangle written gets its anchor cell there (linear index, x fastest).
 /// Returns the tetrahedra with a triangle (when listing in a chunk, those of kept cells) and
 /// the triangles written.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn geometry_in_window(
-    l: &Layout,
+    surface: &Surface,
     k: usize,
-    iso: f32,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-    positions: &[[f32; 3]],
-    map: Option<&[u32]>,
+    vertices: Vertices,
     window: &[CrossedPoint],
     z0: usize,
-    out: &mut [u32],
-    mut list: Option<ListOut<'_>>,
-    mut cells: Option<&mut [u32]>,
+    out: LayerOut<'_>,
 ) -> (usize, usize) {
+    let Surface {
+        l,
+        iso,
+        keep,
+        crossed,
+    } = *surface;
+    let Vertices { positions, map } = vertices;
+    let LayerOut {
+        out,
+        mut list,
+        mut cells,
+    } = out;
     let v = &l.s.values;
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
@@ -298,4 +319,103 @@ pub(crate) fn geometry_in_window(
         "layer {k}: triangles counted and written differ"
     );
     (processed, w / 3)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mt::layout::case_triangles;
+    use crate::mt::testing::{plain_mt, test_pool, wavy};
+
+    #[test]
+    fn layer_triangle_counts_match_the_tetrahedra_of_every_group() {
+        // The count reads only the anchor's crossed edges through the group tables; here each
+        // group's tetrahedra are evaluated from the sample values instead, with and without
+        // kept cells.
+        let field = wavy();
+        let pool = test_pool(1);
+        let mut triangles = 0;
+        // Anchors visited as not inner / inner.
+        let mut flags = [0usize; 2];
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[3, 2, 4], [9, 8, 6], [13, 11, 12]] {
+                let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
+                let l = Layout::new(&samples, lattice);
+                let (expected_len, dirs_from) = match lattice {
+                    Lattice::BodyCentred => (6, 1),
+                    Lattice::Simple => (8, 0),
+                };
+                for g in &l.groups {
+                    assert_eq!(g.len, expected_len, "{lattice:?}");
+                    assert_eq!(g.points[0], 0, "the anchor comes first");
+                    for i in 1..g.len {
+                        let d = l.delta[dirs_from][g.dirs[i] as usize];
+                        assert_eq!(d, g.points[i], "{lattice:?} point {i}");
+                    }
+                    for code in 0..1usize << g.len {
+                        let swapped = !code & ((1 << g.len) - 1);
+                        assert_eq!(g.triangles[code], g.triangles[swapped], "side swap");
+                    }
+                }
+                let layers = match lattice {
+                    Lattice::BodyCentred => cells[2] + 1,
+                    Lattice::Simple => cells[2],
+                };
+                let keeps = [
+                    None,
+                    Some(CellRange {
+                        lo: [1, 0, 1],
+                        hi: [cells[0] - 1, cells[1], cells[2] - 1],
+                    }),
+                ];
+                for keep in keeps {
+                    let mut total = 0;
+                    for k in 0..layers {
+                        let mut direct = 0;
+                        for_each_group(&l, k, keep, &buf.vertices.crossed, |anchor, _, g, q| {
+                            let tets = match lattice {
+                                Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
+                                Lattice::Simple => &l.tets[..],
+                            };
+                            // The walk's coordinates are the anchor's, and `inner_anchor`
+                            // promises every corner in the box (no ghost).
+                            let p = l.coords_of(anchor);
+                            assert_eq!(q, p, "{lattice:?} {cells:?}");
+                            let inner = l.inner_anchor(p);
+                            let in_box = tets.iter().all(|tpl| {
+                                tpl.off.iter().all(|o| {
+                                    (0..3)
+                                        .all(|a| p[a] + o[a] >= 0 && p[a] + o[a] <= l.max_coord(a))
+                                })
+                            });
+                            assert!(!inner || in_box, "{lattice:?} {cells:?} anchor {p:?}");
+                            flags[usize::from(inner)] += 1;
+                            for tpl in tets {
+                                let case = (0..4).fold(0, |case, i| {
+                                    let slot = (anchor as isize + tpl.delta[i]) as usize;
+                                    case | usize::from(samples.values[slot] < settings.iso) << i
+                                });
+                                direct += usize::from(case_triangles(case));
+                            }
+                        });
+                        let counted = count_layer(&l, k, keep, &buf.vertices.crossed);
+                        assert_eq!(counted, direct, "{lattice:?} {cells:?} layer {k} {keep:?}");
+                        total += counted;
+                    }
+                    if keep.is_none() {
+                        assert_eq!(total * 3, mesh.indices.len(), "{lattice:?} {cells:?}");
+                    }
+                    triangles += total;
+                }
+            }
+        }
+        assert!(
+            triangles > 1000,
+            "only {triangles} triangles: the fields miss the grids"
+        );
+        assert!(
+            flags[0] > 50 && flags[1] > 50,
+            "anchors by inner: {flags:?}"
+        );
+    }
 }

@@ -4,35 +4,82 @@
 //! stars of the quotient test. The emission later maps the same list through the output
 //! vertices ([`crate::mt::emission::emit`]).
 
-use super::*;
+use rayon::prelude::*;
+
+use crate::incidence::{incidence_parallel, Incidence};
+use crate::mt::geometry::{geometry_layer, layer_counts, LayerOut, ListOut, Surface, Vertices};
+use crate::util::overwritten;
+
+/// Plain MT's triangles and every crossing's triangles: the stars of the quotient tests, kept
+/// between extractions.
+#[derive(Default)]
+pub(crate) struct PlainList {
+    /// Three crossing ids per triangle, in the order of the geometry pass.
+    pub(crate) tris: Vec<u32>,
+    /// Per triangle, the gradient of its source tetrahedron (up to a positive factor).
+    pub(crate) grad: Vec<[f32; 3]>,
+    /// In a chunk: per triangle, 1 when its anchor's cell is kept (emitted by the chunk).
+    pub(crate) kept: Vec<u8>,
+    /// When recording ([`crate::Extractor::set_recording`]): per triangle, its anchor cell
+    /// (linear index, x fastest).
+    pub(crate) cells: Vec<u32>,
+    /// Every crossing's triangles (CSR, in triangle order).
+    pub(crate) inc: Incidence,
+}
+
+impl PlainList {
+    /// Empties the list (its memory is kept); the anchor cells are left as they are (read
+    /// only when recorded).
+    pub(crate) fn clear(&mut self) {
+        self.tris.clear();
+        self.grad.clear();
+        self.kept.clear();
+        self.inc.start.clear();
+        self.inc.inc.clear();
+    }
+
+    /// Bytes held.
+    pub(crate) fn bytes(&self) -> usize {
+        self.tris.len() * 4
+            + self.grad.len() * 12
+            + self.kept.len()
+            + self.cells.len() * 4
+            + self.inc.bytes()
+    }
+}
 
 /// Plain MT's triangles over the whole box, in the order of the geometry pass (layer by
-/// layer), into `tris` (three crossing ids each), with each triangle's source tetrahedron
+/// layer), into `list.tris` (three crossing ids each), with each triangle's source tetrahedron
 /// gradient (of the linear interpolant on its source tetrahedron, up to a positive factor) in
-/// `grad`; then every crossing's triangles as a CSR
-/// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order, built in parallel by
-/// [`crate::incidence::incidence_parallel`]; `inc_cursor` and `inc_parts` are its working memory). The quotient test reads a group's star from these instead of from the lattice.
-/// With `keep` (a chunk) also, per triangle, whether its anchor's cell is kept (`kept`), so
-/// that the emission maps the chunk's own triangles from the list too; returns the tetrahedra
-/// with a triangle (of the kept cells, with `keep`).
-#[allow(clippy::too_many_arguments)]
+/// `list.grad`; then every crossing's triangles as a CSR table (`list.inc`, in triangle order,
+/// built in parallel by [`incidence_parallel`]). The quotient test reads a group's star from
+/// these instead of from the lattice. In a chunk (`surface.keep`; every anchor is walked all
+/// the same) also, per triangle, whether its anchor's cell is kept (`list.kept`), so that the
+/// emission maps the chunk's own triangles from the list too; with `record`, each triangle's
+/// anchor cell (`list.cells`). `cpos`: the crossings' positions. Returns the tetrahedra with a
+/// triangle (of the kept cells, in a chunk).
 pub(crate) fn plain_triangles(
-    layout: &Layout,
-    iso: f32,
-    crossed: &CrossedIndex,
+    surface: &Surface,
     cpos: &[[f32; 3]],
+    record: bool,
+    list: &mut PlainList,
     pool: &rayon::ThreadPool,
-    keep: Option<CellRange>,
-    tris: &mut Vec<u32>,
-    grad: &mut Vec<[f32; 3]>,
-    kept: &mut Vec<u8>,
-    cells: Option<&mut Vec<u32>>,
-    inc_start: &mut Vec<u32>,
-    inc: &mut Vec<u32>,
-    inc_cursor: &mut Vec<u32>,
-    inc_parts: &mut Vec<Vec<u32>>,
 ) -> usize {
-    let counts = layer_counts(layout, None, crossed, pool);
+    let keep = surface.keep;
+    // Every anchor is walked; the kept cells are marked.
+    let walk = Surface {
+        keep: None,
+        ..*surface
+    };
+    let PlainList {
+        tris,
+        grad,
+        kept,
+        cells,
+        inc,
+    } = list;
+    let cells = record.then_some(cells);
+    let counts = layer_counts(walk.l, None, walk.crossed, pool);
     let layers = counts.len();
     let total: usize = counts.iter().sum();
     overwritten(tris, 3 * total, 0, pool);
@@ -66,31 +113,20 @@ pub(crate) fn plain_triangles(
                     kept: keep.map(|range| (range, kept)),
                 };
                 let cells = record.then_some(cells);
-                geometry_layer(
-                    layout,
-                    k,
-                    iso,
-                    None,
-                    crossed,
-                    cpos,
-                    None,
+                let vertices = Vertices {
+                    positions: cpos,
+                    map: None,
+                };
+                let out = LayerOut {
                     out,
-                    Some(list),
+                    list: Some(list),
                     cells,
-                )
-                .0
+                };
+                geometry_layer(&walk, k, vertices, out).0
             })
             .sum()
     });
     // Incidence in triangle order, so the table is deterministic.
-    crate::incidence::incidence_parallel(
-        cpos.len(),
-        tris,
-        inc_start,
-        inc,
-        inc_cursor,
-        inc_parts,
-        pool,
-    );
+    incidence_parallel(cpos.len(), tris, inc, pool);
     processed
 }

@@ -142,26 +142,36 @@ pub enum Rules {
     Dissertation,
 }
 
+/// One point's edges, by neighbour bit: `valid`, the neighbours whose edges exist (all 14
+/// except on the box faces); `inner`, those whose edges have every tetrahedron around them (a
+/// crossing there is an inner vertex of plain MT; the others are on the mesh's boundary at the
+/// box faces and are never grouped by [`Rules::Islands`]); `owned`, the point's nearby
+/// crossings; `crossed`, all its crossed edges (the neighbours on the other side of the
+/// threshold).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PointEdges {
+    pub(crate) valid: u16,
+    pub(crate) inner: u16,
+    pub(crate) owned: u16,
+    pub(crate) crossed: u16,
+}
+
 /// Proposes the clusters of one point (storage slot `slot`), whose first owned crossing has id
-/// `first`.
-///
-/// `valid`: the neighbours whose edges exist (all 14 except on the box faces); `inner`: those
-/// whose edges have every tetrahedron around them (a crossing there is an inner vertex of plain
-/// MT; the others are on the mesh's boundary at the box faces and are never grouped by
-/// [`Rules::Islands`]); `owned`: the point's nearby crossings; `crossed`: all its crossed edges
-/// (the neighbours on the other side of the threshold).
-#[allow(clippy::too_many_arguments)]
+/// `first`, from its `edges`.
 pub fn propose(
     t: &LatticeTables,
     first: u32,
     slot: u32,
-    valid: u16,
-    inner: u16,
-    owned: u16,
-    crossed: u16,
+    edges: PointEdges,
     rules: Rules,
     out: &mut Vec<Candidate>,
 ) -> ProposalCounts {
+    let PointEdges {
+        valid,
+        inner,
+        owned,
+        crossed,
+    } = edges;
     let mut counts = ProposalCounts::default();
     if owned.count_ones() < 2 {
         return counts;
@@ -227,7 +237,17 @@ mod tests {
         rules: Rules,
         out: &mut Vec<Candidate>,
     ) -> ProposalCounts {
-        propose(t, 0, 0, FULL, FULL, owned, crossed, rules, out)
+        propose(t, 0, 0, edges(FULL, FULL, owned, crossed), rules, out)
+    }
+
+    /// The edges of a point, in the order of [`PointEdges`]'s fields.
+    fn edges(valid: u16, inner: u16, owned: u16, crossed: u16) -> PointEdges {
+        PointEdges {
+            valid,
+            inner,
+            owned,
+            crossed,
+        }
     }
 
     #[test]
@@ -236,7 +256,14 @@ mod tests {
         // +x (0) with its adjacent diagonals 6 and 7; and -x (1) alone.
         let owned = (1 << 0) | (1 << 6) | (1 << 7) | (1 << 1);
         let mut out = Vec::new();
-        let c = propose(t, 5, 3, FULL, FULL, owned, owned, Rules::Islands, &mut out);
+        let c = propose(
+            t,
+            5,
+            3,
+            edges(FULL, FULL, owned, owned),
+            Rules::Islands,
+            &mut out,
+        );
         assert_eq!(c.proposed, 1);
         assert_eq!(out.len() + c.rejected, 1);
     }
@@ -249,17 +276,8 @@ mod tests {
         let t = LatticeTables::get(Lattice::BodyCentred);
         for owned in [0x0003u16, 0x00C1, 0x3FC0 ^ 0x0100, 0x1234, 0x0F0F] {
             let mut out = Vec::new();
-            propose(
-                t,
-                100,
-                0,
-                FULL,
-                FULL,
-                owned,
-                owned,
-                Rules::Islands,
-                &mut out,
-            );
+            let e = edges(FULL, FULL, owned, owned);
+            propose(t, 100, 0, e, Rules::Islands, &mut out);
             for c in &out {
                 let expected: Vec<u32> = t
                     .islands(owned)
@@ -299,17 +317,8 @@ mod tests {
         // the rest when two or more are left.
         let owned = (1 << 0) | (1 << 6) | (1 << 7);
         out.clear();
-        propose(
-            t,
-            0,
-            0,
-            FULL,
-            FULL & !(1 << 7),
-            owned,
-            owned,
-            Rules::Islands,
-            &mut out,
-        );
+        let e = edges(FULL, FULL & !(1 << 7), owned, owned);
+        propose(t, 0, 0, e, Rules::Islands, &mut out);
         assert_eq!(out.len(), 1);
         assert_eq!(out[0].dirs, (1 << 0) | (1 << 6));
         assert_eq!(out[0].members, compress((1 << 0) | (1 << 6), owned));
