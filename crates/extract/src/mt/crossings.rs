@@ -414,10 +414,10 @@ pub(crate) fn vertex_plane(
     (counts, cands)
 }
 
-/// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points'
-/// entries (`out.entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the
-/// crossings' positions (`out.positions`). Returns how many crossings lie within `WELD` of their owner (surfaces
-/// through sample points).
+/// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points' entries
+/// (`out.entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the crossings'
+/// positions (`out.positions`). Returns how many crossings lie within `WELD` of their owner
+/// (surfaces through sample points).
 pub(crate) fn number_plane(
     l: &Layout,
     z: usize,

@@ -15,7 +15,8 @@
 //! Triangles with two or more vertices in K collapse and are dropped. This is the link condition of
 //! edge contraction applied to the whole cluster at once (`rmt-spec.md`, "When merging keeps the
 //! surface a manifold"). Edge collapse (post-processed clustering) and the welding before meshopt
-//! use it; integrated clustering tests its groups in the quotient instead ([`crate::mt::clustering::quotient`]).
+//! use it; integrated clustering tests its groups in the quotient instead
+//! ([`crate::mt::clustering::quotient`]).
 //!
 //! ```text
 //!      u-----w            u-----w

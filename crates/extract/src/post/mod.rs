@@ -54,9 +54,9 @@ pub(crate) fn process(
     }
 }
 
-/// Welds crossings closer than [`crate::mt::WELD`] grid spacings (crossings on top of each other where the
-/// surface passes through sample points) under the exact check, following the tile rule when
-/// `tile_keys` is given; counted as collapses.
+/// Welds crossings closer than [`crate::mt::WELD`] grid spacings (crossings on top of each other
+/// where the surface passes through sample points) under the exact check, following the tile rule
+/// when `tile_keys` is given; counted as collapses.
 fn weld_coincident(
     merge: &mut MergeBuffers,
     mesh: &mut Mesh,

@@ -130,3 +130,60 @@ pub(crate) fn plain_triangles(
     incidence_parallel(cpos.len(), tris, inc, pool);
     processed
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mt::layout::Layout;
+    use crate::mt::testing::{extracted, settings_on, test_pool, wavy};
+    use crate::{Clustering, Lattice};
+
+    #[test]
+    fn the_list_is_plain_mts_mesh_in_its_order_with_every_crossings_triangles() {
+        // Plain MT (no clustering) writes exactly the triangles the listing lists, in the same
+        // order; the incidence table names each triangle under each of its corners, once.
+        let field = wavy();
+        let mut listed = 0;
+        for threads in [1, 2] {
+            let pool = test_pool(threads);
+            for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+                for cells in [[5, 4, 6], [14, 12, 13]] {
+                    let settings = settings_on(cells, lattice, Clustering::None);
+                    let (samples, buf, mesh, stats) = extracted(&field, &settings, &pool);
+                    let l = Layout::new(&samples, lattice);
+                    let surface = Surface {
+                        l: &l,
+                        iso: settings.iso,
+                        keep: None,
+                        crossed: &buf.vertices.crossed,
+                    };
+                    let what = format!("{lattice:?} {cells:?} threads={threads}");
+                    for record in [false, true] {
+                        let mut list = PlainList::default();
+                        let processed =
+                            plain_triangles(&surface, &mesh.positions, record, &mut list, &pool);
+                        assert_eq!(list.tris, mesh.indices, "{what}");
+                        assert_eq!(processed, stats.tetrahedra_processed, "{what}");
+                        let n = list.tris.len() / 3;
+                        assert_eq!(list.grad.len(), n, "{what}");
+                        assert!(list.kept.is_empty(), "{what}: no chunk, no flags");
+                        assert_eq!(list.cells.len(), if record { n } else { 0 }, "{what}");
+                        let (start, inc) = (&list.inc.start, &list.inc.inc);
+                        assert_eq!(start.len(), mesh.positions.len() + 1, "{what}");
+                        assert_eq!(inc.len(), list.tris.len(), "{what}");
+                        for (t, tri) in list.tris.chunks_exact(3).enumerate() {
+                            for &v in tri {
+                                let v = v as usize;
+                                let star = &inc[start[v] as usize..start[v + 1] as usize];
+                                let times = star.iter().filter(|&&s| s == t as u32).count();
+                                assert_eq!(times, 1, "{what}: triangle {t} at {v}");
+                            }
+                        }
+                        listed += n;
+                    }
+                }
+            }
+        }
+        assert!(listed > 2000, "only {listed} triangles listed");
+    }
+}

@@ -9,7 +9,7 @@
 //! proposed group, and a proposal depends only on the samples of C and its neighbours (the
 //! 1-ring): the proposals are a partition of the crossings that no processing order can change.
 //! Integrated clustering then keeps the groups that pass the exact quotient test
-//! ([`crate::mt::clustering::quotient`]); integrated-unchecked keeps those that pass the dissertation's mask
+//! ([`super::quotient`]); integrated-unchecked keeps those that pass the dissertation's mask
 //! rules ([`Rules`]).
 //!
 //! ```text
@@ -135,7 +135,7 @@ impl ProposalCounts {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rules {
     /// Every island of two or more nearby crossings is proposed: the exact quotient test
-    /// ([`crate::mt::clustering::quotient`]) decides (integrated clustering).
+    /// ([`super::quotient`]) decides (integrated clustering).
     Islands,
     /// The dissertation's rules: no merge with more than 10 nearby crossings or with a loop
     /// through the point (integrated-unchecked, which has no other safeguard).
