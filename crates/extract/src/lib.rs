@@ -65,6 +65,7 @@
 //! Orientation convention: triangles are counter-clockwise seen from the side of increasing
 //! field value, so their right-hand normals point outward for a signed distance field.
 
+mod error;
 pub(crate) mod incidence;
 pub mod lattice;
 pub(crate) mod mc;
@@ -78,6 +79,7 @@ pub mod threads;
 pub(crate) mod tiles;
 pub(crate) mod util;
 
+pub use error::ExtractError;
 pub use measure::{measure, Measurement};
 pub use samples::{Samples, Sampling};
 pub use settings::{
@@ -88,50 +90,6 @@ pub use threads::{thread_pool, ThreadPlacement};
 
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
-
-/// Why an extraction could not run.
-#[derive(Debug, thiserror::Error)]
-pub enum ExtractError {
-    /// Bad grid dimensions or bounds.
-    #[error("invalid grid: {0}")]
-    InvalidGrid(String),
-    /// Bad settings other than the grid.
-    #[error("invalid settings: {0}")]
-    InvalidSettings(String),
-    /// The lattice would not fit in memory.
-    #[error(
-        "grid of {cells:?} cells is too large: its lattice would exceed {limit} sample points"
-    )]
-    TooLarge {
-        /// The requested cells per axis.
-        cells: [usize; 3],
-        /// The sample point limit.
-        limit: usize,
-    },
-    /// The field returned NaN or infinity.
-    #[error("the field is not finite at ({x}, {y}, {z}): got {value}")]
-    NonFiniteSample {
-        /// Position of the first bad sample (x).
-        x: f32,
-        /// Position of the first bad sample (y).
-        y: f32,
-        /// Position of the first bad sample (z).
-        z: f32,
-        /// The value returned.
-        value: f32,
-    },
-    /// The requested combination is not available (e.g. a clustering mode for marching cubes).
-    #[error("unsupported: {0}")]
-    Unsupported(String),
-    /// The worker thread pool could not be created.
-    #[error("could not start {threads} worker threads: {message}")]
-    ThreadPool {
-        /// Requested threads.
-        threads: usize,
-        /// The error from rayon.
-        message: String,
-    },
-}
 
 /// What an [`Extractor`] does with its working memory.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
