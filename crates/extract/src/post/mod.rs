@@ -11,11 +11,11 @@ use rmt_mesh::Mesh;
 
 use crate::{Clustering, ExtractSettings, Stats};
 
-pub mod collapse;
-pub mod merge;
-pub mod simplify;
+pub(crate) mod collapse;
+pub(crate) mod merge;
+pub(crate) mod simplify;
 
-pub use merge::MergeBuffers;
+pub(crate) use merge::MergeBuffers;
 
 /// Post-processing (counted in the geometry pass, as in the dissertation): edge collapse, or
 /// meshopt after welding coincident crossings.
