@@ -2,13 +2,33 @@
 //! ([`incidence`]) or in parallel with the same result ([`incidence_parallel`]).
 //!
 //! Integrated clustering reads the stars of its quotient tests from the table over plain MT's
-//! triangles ([`crate::mt`]); the mesh-based merge of edge collapse ([`crate::merge`]) builds
+//! triangles ([`crate::mt`]); the mesh-based merge of edge collapse ([`crate::post::merge`]) builds
 //! one over the mesh it simplifies.
 //!
 //! ```text
 //!   triangles  t0=(a,b,c) t1=(b,c,d) ...      counts -> prefix sums -> inc_start
 //!   inc        [ a: t0 | b: t0 t1 | c: t0 t1 | d: t1 ... ]   (each vertex's in triangle order)
 //! ```
+
+/// Every vertex's triangles as a CSR table (`inc[start[v]..start[v + 1]]`) and the working
+/// memory of its parallel fill, kept between extractions.
+#[derive(Default)]
+pub(crate) struct Incidence {
+    pub(crate) start: Vec<u32>,
+    pub(crate) inc: Vec<u32>,
+    /// Fill cursors.
+    cursor: Vec<u32>,
+    /// Per part of the triangle list, its counts and then its cursors.
+    parts: Vec<Vec<u32>>,
+}
+
+impl Incidence {
+    /// Bytes held.
+    pub(crate) fn bytes(&self) -> usize {
+        (self.start.len() + self.inc.len() + self.cursor.len()) * 4
+            + self.parts.iter().map(|p| p.len() * 4).sum::<usize>()
+    }
+}
 
 /// Every vertex's triangles as a CSR table: `inc[inc_start[v]..inc_start[v + 1]]` lists the
 /// triangles of `indices` (three per triangle) holding vertex `v`, in triangle order.
@@ -40,7 +60,8 @@ pub(crate) fn incidence(
     }
 }
 
-/// [`incidence`] on `pool`'s threads: the same table, bit for bit, for any thread count.
+/// [`incidence`] on `pool`'s threads into `table`: the same table, bit for bit, for any thread
+/// count.
 ///
 /// The list is cut into parts of consecutive triangles. Each part counts its corners over the
 /// range of ids it touches (`parts[p]`); the counts add up to `inc_start`; then, in part order,
@@ -51,16 +72,18 @@ pub(crate) fn incidence(
 /// meant for lists whose nearby triangles have nearby ids (plain MT's, listed layer by layer,
 /// with ids in storage order); when the ranges add up to more than four times the vertex
 /// count, it falls back to [`incidence`].
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn incidence_parallel(
     vertex_count: usize,
     indices: &[u32],
-    inc_start: &mut Vec<u32>,
-    inc: &mut Vec<u32>,
-    cursor: &mut Vec<u32>,
-    parts: &mut Vec<Vec<u32>>,
+    table: &mut Incidence,
     pool: &rayon::ThreadPool,
 ) {
+    let Incidence {
+        start: inc_start,
+        inc,
+        cursor,
+        parts,
+    } = table;
     use rayon::prelude::*;
     let tris = indices.len() / 3;
     let count = 4 * pool.current_num_threads();
@@ -120,7 +143,7 @@ pub(crate) fn incidence_parallel(
         }
     }
     // Every slot is written below: a reused table is not cleared first.
-    crate::mt::overwritten(inc, indices.len() - indices.len() % 3, 0, pool);
+    crate::util::overwritten(inc, indices.len() - indices.len() % 3, 0, pool);
     let out = SharedSlots {
         ptr: inc.as_mut_ptr(),
         len: inc.len(),
@@ -203,9 +226,13 @@ mod tests {
                     .num_threads(threads)
                     .build()
                     .expect("a thread pool");
-                let (mut s2, mut i2, mut c2, mut parts) =
-                    (vec![7], vec![7], Vec::new(), Vec::new());
-                incidence_parallel(n, &indices, &mut s2, &mut i2, &mut c2, &mut parts, &pool);
+                let mut table = Incidence {
+                    start: vec![7],
+                    inc: vec![7],
+                    ..Incidence::default()
+                };
+                incidence_parallel(n, &indices, &mut table, &pool);
+                let (s2, i2) = (table.start, table.inc);
                 assert_eq!(
                     s2, start,
                     "starts: {tris} triangles, spread {spread}, {threads} threads"

@@ -19,6 +19,9 @@ use std::sync::OnceLock;
 
 use crate::Lattice;
 
+/// All 14 neighbour bits.
+pub(crate) const FULL: u16 = 0x3FFF;
+
 /// An integer offset or position on a lattice (half-cube units for the body-centred lattice).
 pub type Offset = [i32; 3];
 

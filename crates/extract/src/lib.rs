@@ -1,32 +1,51 @@
 //! Isosurface extraction: regularised marching tetrahedra (RMT) and its baselines.
 //!
-//! Pipeline of one extraction (see ARCHITECTURE.md for the picture):
+//! # Public API
+//!
+//! - [`Extractor`]: samples a [`ScalarField`] and meshes it, keeping every buffer between calls,
+//!   as a game would ([`Extractor::extract`], [`Extractor::extract_presampled`]; the
+//!   [`BufferPolicy`], [`Sampling`] and [`ThreadPlacement`] it runs with; with
+//!   [`Extractor::set_recording`], the anchor cell of every triangle and the clustering's
+//!   activity);
+//! - [`ExtractSettings`]: the [`Grid`], the [`Lattice`], the [`Method`] (marching tetrahedra or
+//!   cubes), the [`Clustering`] mode, the [`NormalMode`], and for chunks the [`Tiling`] and the
+//!   kept [`CellRange`];
+//! - [`Stats`]: counters, stage timings and bytes of one extraction ([`Stats::merge_steps_text`]
+//!   splits integrated clustering's time); [`ExtractError`] when it cannot run;
+//! - [`measure()`]: the quality of a mesh ([`Measurement`]; [`measure::on_box_boundary`]);
+//! - [`lattice`]: the lattices' derived tables ([`lattice::LatticeTables`]); [`samples`]: the
+//!   sample array ([`Samples`], [`samples::sampled_lattice`]); [`threads`]: the worker pools
+//!   ([`thread_pool`]).
+//!
+//! # The passes
+//!
+//! One extraction runs these, in this order (see ARCHITECTURE.md for the picture); each pass
+//! is one internal module, which takes the buffer it writes and borrows what it reads:
 //! 1. **sampling**: evaluate the field at the points of the lattice ([`samples`]), in parallel,
 //!    block by block; blocks whose [`ScalarField::range`] excludes the isovalue are skipped
 //!    (their points only need a sign; [`Sampling`]), so the cost follows the surface;
 //! 2. **vertex pass**: classify the points into inside bits, find crossed lattice edges, give
-//!    each crossing to its nearer end point and number it ([`mt`]);
-//! 3. **proposal** (clustering): a partition of the crossings into groups from each point's
-//!    islands of nearby crossings, plus lone crossings given to a neighbouring island
-//!    ([`cluster`], [`mt`]); order-free by construction;
-//! 4. **quotient test and repair** (integrated clustering): every group is tested in the mesh
-//!    where all groups are contracted at once (its star read from plain MT's triangles, listed
-//!    once), and failures are repaired by splitting groups in parallel rounds until every group
-//!    passes; then variants of split islands, lone crossings and sliver pairs are added the same
-//!    way ([`quotient`] the test, [`repair`] the rounds, [`additions`] what comes after the
-//!    islands);
-//! 5. **emission**: one or two triangles per crossed tetrahedron from the case table, written
-//!    with the clustered vertex ids; collapsed ones are left out ([`mt`]).
-//!    Post-processing (edge collapse, meshopt) runs after it, on the mesh ([`merge`],
-//!    [`collapse`]);
+//!    each crossing to its nearer end point and number it, and propose clusters (`mt::crossings`,
+//!    the proposal rules in `mt::clustering::proposal`): a partition of the crossings into
+//!    groups from each point's islands of nearby crossings; order-free by construction;
+//! 3. **integrated clustering** (`mt::clustering`): plain MT's triangles are listed once
+//!    (`plain`), every group is tested in the mesh where all groups are contracted at once
+//!    (`quotient`), failures are repaired by splitting groups in parallel rounds until every
+//!    group passes (`repair`), then variants of split islands, lone crossings and sliver pairs
+//!    are added the same way (`additions`); integrated-unchecked keeps every proposal;
+//! 4. **emission** (`mt::emission`): one or two triangles per crossed tetrahedron from the case
+//!    table, written with the clustered vertex ids; collapsed ones are left out;
+//! 5. **post-processing** (`post`), for the modes that simplify after the fact: edge collapse
+//!    under the exact check, or meshoptimizer's simplifier;
 //! 6. **normals**.
 //!
-//! The [`Extractor`] keeps every buffer between calls, as a game would.
+//! Marching cubes (`mc`) replaces steps 2 to 5 for [`Method::Mc`].
 //!
-//! Cost, on a 2-vCPU AMD EPYC VM at 64^3 cells on one thread (pre-sampled values): about 20-24 ns
-//! per sample point for marching tetrahedra on the body-centred lattice without clustering,
-//! 3.0-3.3 times that with integrated clustering (mostly its quotient tests;
-//! [`Stats::merge_steps`] splits that time).
+//! Cost, on a 2-vCPU Intel Xeon VM on one thread (pre-sampled values; README, Performance):
+//! about 12.6 ns per sample point for marching tetrahedra on the body-centred lattice without
+//! clustering (asteroid, 64^3); integrated clustering costs 2.3-2.7 times that (vertex and
+//! geometry passes, five pinned bench runs; mostly its quotient tests, which
+//! [`Stats::merge_steps`] splits out), integrated-unchecked 1.11-1.17 times.
 //! Reproduce with `cargo run --release -p experiments -- bench` (side by side with
 //! fast-surface-nets and isomesh) or `cargo run --release -p rmt-extract --example passes`.
 //!
@@ -46,24 +65,21 @@
 //! Orientation convention: triangles are counter-clockwise seen from the side of increasing
 //! field value, so their right-hand normals point outward for a signed distance field.
 
-pub mod additions;
-pub mod cluster;
-pub mod collapse;
+mod error;
 pub(crate) mod incidence;
 pub mod lattice;
-pub mod mc;
+pub(crate) mod mc;
 pub mod measure;
-pub mod merge;
-pub mod mt;
-pub mod quotient;
-pub mod repair;
+pub(crate) mod mt;
+pub(crate) mod post;
 pub mod samples;
-pub mod settings;
-pub mod simplify;
-pub mod stats;
+pub(crate) mod settings;
+pub(crate) mod stats;
 pub mod threads;
-pub mod tiles;
+pub(crate) mod tiles;
+pub(crate) mod util;
 
+pub use error::ExtractError;
 pub use measure::{measure, Measurement};
 pub use samples::{Samples, Sampling};
 pub use settings::{
@@ -74,50 +90,6 @@ pub use threads::{thread_pool, ThreadPlacement};
 
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
-
-/// Why an extraction could not run.
-#[derive(Debug, thiserror::Error)]
-pub enum ExtractError {
-    /// Bad grid dimensions or bounds.
-    #[error("invalid grid: {0}")]
-    InvalidGrid(String),
-    /// Bad settings other than the grid.
-    #[error("invalid settings: {0}")]
-    InvalidSettings(String),
-    /// The lattice would not fit in memory.
-    #[error(
-        "grid of {cells:?} cells is too large: its lattice would exceed {limit} sample points"
-    )]
-    TooLarge {
-        /// The requested cells per axis.
-        cells: [usize; 3],
-        /// The sample point limit.
-        limit: usize,
-    },
-    /// The field returned NaN or infinity.
-    #[error("the field is not finite at ({x}, {y}, {z}): got {value}")]
-    NonFiniteSample {
-        /// Position of the first bad sample (x).
-        x: f32,
-        /// Position of the first bad sample (y).
-        y: f32,
-        /// Position of the first bad sample (z).
-        z: f32,
-        /// The value returned.
-        value: f32,
-    },
-    /// The requested combination is not available (e.g. a clustering mode for marching cubes).
-    #[error("unsupported: {0}")]
-    Unsupported(String),
-    /// The worker thread pool could not be created.
-    #[error("could not start {threads} worker threads: {message}")]
-    ThreadPool {
-        /// Requested threads.
-        threads: usize,
-        /// The error from rayon.
-        message: String,
-    },
-}
 
 /// What an [`Extractor`] does with its working memory.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -141,7 +113,7 @@ pub enum BufferPolicy {
 pub struct Extractor {
     pub(crate) samples: Samples,
     pub(crate) mt: mt::MtBuffers,
-    pub(crate) merge: merge::MergeBuffers,
+    pub(crate) merge: post::MergeBuffers,
     /// Thread pools by worker count; `true` marks a pool given by [`Extractor::set_pool`] (the
     /// caller's: kept when the placement changes).
     pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>, bool)>,
@@ -318,7 +290,7 @@ impl Extractor {
     /// output triangle ([`CellRange`]'s anchors), as a linear index `x + nx * (y + ny * z)` over
     /// the grid's cells; empty when nothing was recorded.
     pub fn triangle_cells(&self) -> &[u32] {
-        &self.mt.tri_cells
+        &self.mt.emission.tri_cells
     }
 
     /// Recorded by the last extraction ([`Extractor::set_recording`]): the lattice points, in
@@ -327,7 +299,7 @@ impl Extractor {
     /// clustering after the proposals changed, found in a failing group, or considered as a
     /// crossing left alone; sorted, each once.
     pub fn activity(&self) -> &[[i32; 3]] {
-        &self.mt.activity
+        &self.mt.clustering.activity
     }
 
     /// The sample array (to fill it yourself before [`Extractor::extract_presampled`]).
@@ -361,15 +333,36 @@ impl Extractor {
                 mc::extract(&self.samples, settings, &pool, mesh, stats);
             }
             settings::Method::Mt => {
-                mt::extract(
-                    &self.samples,
+                // Marching tetrahedra (with its clustering), then the post-processing modes on
+                // its mesh.
+                let emitted =
+                    mt::extract(&self.samples, settings, &pool, &mut self.mt, mesh, stats)?;
+                let keys = settings.tiles.is_some().then_some(&emitted.tile_keys[..]);
+                post::process(
                     settings,
-                    &pool,
-                    &mut self.mt,
+                    keys,
+                    emitted.near_points,
                     &mut self.merge,
                     mesh,
                     stats,
-                )?;
+                );
+                let lean = self.mt.lean;
+                stats.bytes_edges = emitted.table_bytes
+                    + if !lean
+                        && matches!(
+                            settings.clustering,
+                            Clustering::Postprocessed | Clustering::Meshopt
+                        )
+                    {
+                        self.merge.bytes()
+                    } else {
+                        0
+                    };
+                if lean {
+                    self.merge = post::MergeBuffers::default();
+                    mesh.positions.shrink_to_fit();
+                    mesh.indices.shrink_to_fit();
+                }
             }
         }
         let t = std::time::Instant::now();

@@ -441,7 +441,8 @@ impl Samples {
             for x0 in (0..dx).step_by(BLOCK) {
                 let x1 = (x0 + BLOCK).min(dx);
                 slab.result.blocks += self.leaves([x0, x1], [y0, y1], [0, planes]);
-                self.sample_block(field, iso, [x0, x1], [y0, y1], [0, planes], true, &mut slab);
+                let block = [[x0, x1], [y0, y1], [0, planes]];
+                self.sample_block(field, iso, block, true, &mut slab);
             }
             // The band of rows y0..y1 is done: evaluate what its blocks left.
             self.evaluate_runs(field, &mut slab);
@@ -543,20 +544,18 @@ impl Samples {
         (x[1] - x[0]).div_ceil(s) * (y[1] - y[0]).div_ceil(s) * (z[1] - z[0]).div_ceil(p)
     }
 
-    /// Samples the block of slots `x`, `y` and planes `z` (local to the slab): skipped when its
-    /// range excludes the isovalue, else split once into sub-blocks of half the size (when
-    /// `split`), else evaluated.
-    #[allow(clippy::too_many_arguments)]
+    /// Samples the block `[x, y, z]` of slots `x`, `y` and planes `z` (local to the slab):
+    /// skipped when its range excludes the isovalue, else split once into sub-blocks of half
+    /// the size (when `split`), else evaluated.
     fn sample_block(
         &self,
         field: &dyn ScalarField,
         iso: f32,
-        x: [usize; 2],
-        y: [usize; 2],
-        z: [usize; 2],
+        block: [[usize; 2]; 3],
         split: bool,
         slab: &mut Slab<'_>,
     ) {
+        let [x, y, z] = block;
         let [dx, dy, _] = self.dims;
         let plane = dx * dy;
         let z0 = slab.z0;
@@ -589,15 +588,12 @@ impl Samples {
             for zz in (z[0]..z[1]).step_by(p) {
                 for yy in (y[0]..y[1]).step_by(s) {
                     for xx in (x0..x1).step_by(s) {
-                        self.sample_block(
-                            field,
-                            iso,
+                        let block = [
                             [xx, (xx + s).min(x1)],
                             [yy, (yy + s).min(y[1])],
                             [zz, (zz + p).min(z[1])],
-                            false,
-                            slab,
-                        );
+                        ];
+                        self.sample_block(field, iso, block, false, slab);
                     }
                 }
             }

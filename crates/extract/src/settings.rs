@@ -203,8 +203,8 @@ pub struct ExtractSettings {
 /// into tiles of `size` cells (global cell coordinates: tile `t` covers cells
 /// `t * size .. (t + 1) * size` per axis), and a collapse is allowed only when every crossing it
 /// involves has its *footprint* (the tetrahedra around its lattice edge, where all triangles
-/// touching it come from) inside one and the same tile ([`crate::tiles`]). The tiles then never interact, and a tile's merges see only the
-/// samples of its closed box. The price: crossings whose footprint crosses a tile face are never
+/// touching it come from) inside one and the same tile (the crate's internal `tiles` module).
+/// The tiles then never interact, and a tile's merges see only the samples of its closed box. The price: crossings whose footprint crosses a tile face are never
 /// merged (about half a cell to a cell on each side of every tile face).
 ///
 /// Integrated clustering, checked or unchecked, takes no tiles ([`ExtractSettings::check`]

@@ -9,7 +9,7 @@
 //! per slot, a rank per 64 slots, and per crossed point its 14 owned-crossing bits and the id of
 //! its first owned crossing), so `id(C, d) = first(C) + popcount(owned(C) & ((1 << d) - 1))`
 //! with no table per slot beyond those bits. With clustering, the pass also proposes clusters
-//! ([`crate::cluster`]).
+//! ([`crate::mt::clustering::proposal`]).
 //!
 //! ```text
 //!   S1 (out)        C owns the crossings on C-S1 and C-S2 (it is nearer T than S1 and S2);
@@ -19,7 +19,70 @@
 //!      S3 (out, nearer T than C)
 //! ```
 
-use super::*;
+use rayon::prelude::*;
+
+use super::clustering::proposal::{self, Candidate, PointEdges, ProposalCounts, Rules};
+use super::layout::{add, owns, Layout};
+use crate::lattice::FULL;
+use crate::util::{bits_at, for_each_bit};
+use crate::{ExtractError, Lattice, Stats};
+
+/// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
+/// sample points): the meshoptimizer mode welds them first ([`crate::post`]).
+pub(crate) const WELD: f32 = 1e-4;
+
+/// The vertex pass's tables, kept between extractions: what the later passes read of the
+/// lattice's crossings.
+#[derive(Default)]
+pub(crate) struct VertexTables {
+    /// One bit per storage slot, set where the value is inside (`f < iso`), plus one zero word
+    /// of padding: 64 points are tested for crossings at once with a few word operations.
+    pub(crate) inside: Vec<u64>,
+    /// Which points have a crossed edge, and their owned crossings and ids ([`CrossedIndex`]).
+    pub(crate) crossed: CrossedIndex,
+    /// Per storage plane, its crossed points in slot order as `owned | crossed << 16` (the vertex
+    /// pass's output, numbered into [`CrossedIndex::points`]).
+    pub(crate) plane_points: Vec<Vec<u32>>,
+}
+
+impl VertexTables {
+    /// Sized for `samples` (the inside bits and the crossed-point bits; the rest is sized by the
+    /// pass).
+    pub(crate) fn allocate(&mut self, samples: &crate::Samples) {
+        let slots = samples.values.len();
+        let words = slots.div_ceil(64);
+        self.inside.resize(words + 1, 0);
+        let plane = samples.dims[0] * samples.dims[1];
+        let planes = samples.dims[2];
+        self.crossed.reset(plane, planes);
+        if self.plane_points.len() < planes {
+            self.plane_points.resize_with(planes, Vec::new);
+        }
+    }
+
+    /// Bytes of the tables.
+    pub(crate) fn bytes(&self) -> usize {
+        self.crossed.bytes()
+            + self.plane_points.iter().map(|o| o.len() * 4).sum::<usize>()
+            + self.inside.len() * 8
+    }
+}
+
+/// What the vertex pass writes besides its tables.
+pub(crate) struct VertexOut<'a> {
+    /// The cluster proposals, appended in storage order of their owners.
+    pub(crate) proposals: &'a mut Vec<Candidate>,
+    /// One position per crossing (plain MT's vertices).
+    pub(crate) positions: &'a mut Vec<[f32; 3]>,
+}
+
+/// Where [`number_plane`] writes one plane's crossed points and crossings.
+pub(crate) struct PlaneOut<'a> {
+    /// The plane's crossed-point entries.
+    pub(crate) entries: &'a mut [CrossedPoint],
+    /// The positions of the plane's crossings.
+    pub(crate) positions: &'a mut [[f32; 3]],
+}
 
 /// A point with a crossed edge: the id of its first owned crossing and its owned crossings (bit d:
 /// the crossing on the edge to neighbour d). `id(C, d) = first + popcount(owned & ((1 << d) - 1))`.
@@ -152,24 +215,6 @@ pub(crate) fn plane_words(plane: usize) -> usize {
     plane.div_ceil(64) + 1
 }
 
-/// Calls `visit(n)` for each set bit `n < len` of the bit set `words` counted from bit `start`.
-#[inline(always)]
-pub(crate) fn for_each_bit(words: &[u64], start: usize, len: usize, mut visit: impl FnMut(usize)) {
-    let mut n = 0;
-    while n < len {
-        let take = (len - n).min(64);
-        let mut bits = bits_at(words, start + n);
-        if take < 64 {
-            bits &= (1u64 << take) - 1;
-        }
-        while bits != 0 {
-            visit(n + bits.trailing_zeros() as usize);
-            bits &= bits - 1;
-        }
-        n += take;
-    }
-}
-
 /// Bit k set where `values[k] < iso` (at most 64 values). A full word is built a byte at a time,
 /// which the compiler turns into wide comparisons (about 40% faster than bit by bit).
 #[inline(always)]
@@ -189,19 +234,6 @@ pub(crate) fn inside_word(values: &[f32], iso: f32) -> u64 {
             .iter()
             .enumerate()
             .fold(0u64, |x, (k, &f)| x | (u64::from(f < iso) << k)),
-    }
-}
-
-/// The 64 bits of `words` starting at bit `pos` (bit k = slot `pos + k`); `words` has one word
-/// of padding past the last slot.
-#[inline(always)]
-pub(crate) fn bits_at(words: &[u64], pos: usize) -> u64 {
-    let (w, s) = (pos >> 6, pos & 63);
-    let lo = words[w] >> s;
-    if s == 0 {
-        lo
-    } else {
-        lo | (words[w + 1] << (64 - s))
     }
 }
 
@@ -231,7 +263,6 @@ pub(crate) struct PlaneCounts {
 /// Vertex pass over one storage plane: counts, cluster proposals, the plane's crossed-point bits
 /// (`crossed`, [`plane_words`] words, all zero on entry) and, per crossed point in slot order,
 /// its owned and crossed edges as `owned | crossed << 16` (`owned`).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn vertex_plane(
     l: &Layout,
     inside_bits: &[u64],
@@ -307,9 +338,15 @@ pub(crate) fn vertex_plane(
                     (Rules::Islands, Some(valid)) => l.inner_dirs(l.coords(sx, sy, z)) & valid,
                     _ => valid,
                 };
-                counts.proposals.add(cluster::propose(
-                    l.t, first, i as u32, valid, inner, own, crossed, rules, cands,
-                ));
+                let edges = PointEdges {
+                    valid,
+                    inner,
+                    owned: own,
+                    crossed,
+                };
+                counts
+                    .proposals
+                    .add(proposal::propose(l.t, first, i as u32, edges, rules, cands));
             }
         };
         // Border points one by one (existence and valid neighbours from the border table).
@@ -377,11 +414,10 @@ pub(crate) fn vertex_plane(
     (counts, cands)
 }
 
-/// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points'
-/// entries (`entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the crossings'
-/// positions (`out`). Returns how many crossings lie within `WELD` of their owner (surfaces
-/// through sample points).
-#[allow(clippy::too_many_arguments)]
+/// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points' entries
+/// (`out.entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the crossings'
+/// positions (`out.positions`). Returns how many crossings lie within `WELD` of their owner
+/// (surfaces through sample points).
 pub(crate) fn number_plane(
     l: &Layout,
     z: usize,
@@ -389,9 +425,12 @@ pub(crate) fn number_plane(
     owned: &[u32],
     crossed: &[u64],
     start: u32,
-    entries: &mut [CrossedPoint],
-    out: &mut [[f32; 3]],
+    out: PlaneOut<'_>,
 ) -> usize {
+    let PlaneOut {
+        entries,
+        positions: out,
+    } = out;
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
     let plane = dx * dy;
@@ -435,28 +474,27 @@ pub(crate) fn number_plane(
     near_points
 }
 
-/// The vertex pass, after [`super::allocate`]: step 0, the inside bit of every sample point;
+/// The vertex pass, after [`VertexTables::allocate`]: step 0, the inside bit of every sample point;
 /// step 1 (parallel over storage planes), each plane's crossed points, their owned crossings
-/// and (with `propose`) the cluster proposals ([`crate::cluster`]), copied into
-/// `buf.candidates`; step 2 (parallel over planes), every crossing's id and position
-/// (`mesh.positions`, one vertex per crossing). Returns how many crossings lie on a sample
+/// and (with `propose`) the cluster proposals ([`crate::mt::clustering::proposal`]), copied into
+/// `out.proposals`; step 2 (parallel over planes), every crossing's id and position
+/// (`out.positions`, one vertex per crossing). Returns how many crossings lie on a sample
 /// point (within the weld distance).
 ///
 /// ```text
 ///   inside bits  ->  crossed points (bits + rank)  ->  ids: first(C) + popcount(owned & below d)
 ///   1 0 0 1 ...      C: owned = {d : |f(C)-T| < |f(S_d)-T|, C-S_d crossed}
 /// ```
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn vertex_pass(
     layout: &Layout,
-    samples: &Samples,
     iso: f32,
     propose: Option<Rules>,
     pool: &rayon::ThreadPool,
-    buf: &mut MtBuffers,
-    mesh: &mut Mesh,
+    buf: &mut VertexTables,
+    out: VertexOut<'_>,
     stats: &mut Stats,
 ) -> Result<usize, ExtractError> {
+    let samples = layout.s;
     let slots = samples.values.len();
     let words = slots.div_ceil(64);
     let planes = samples.dims[2];
@@ -504,7 +542,7 @@ pub(crate) fn vertex_pass(
         stats.edges += c.edges;
         proposals.add(c.proposals);
         let start = starts[z] as u32;
-        buf.candidates.extend(cands.iter().map(|c| Candidate {
+        out.proposals.extend(cands.iter().map(|c| Candidate {
             first: start + c.first,
             ..*c
         }));
@@ -520,9 +558,9 @@ pub(crate) fn vertex_pass(
     buf.crossed.rank_planes(&point_starts, total_points, pool);
     // Step 2: number the crossings and place them.
     let near_points;
-    mesh.positions.resize(total, [0.0; 3]);
+    out.positions.resize(total, [0.0; 3]);
     {
-        let mut rest: &mut [[f32; 3]] = &mut mesh.positions;
+        let mut rest: &mut [[f32; 3]] = out.positions;
         let mut chunks = Vec::with_capacity(per_plane.len());
         for (c, _) in &per_plane {
             let (head, tail) = rest.split_at_mut(c.crossings);
@@ -544,7 +582,7 @@ pub(crate) fn vertex_pass(
                 .into_par_iter()
                 .zip(chunks.into_par_iter())
                 .enumerate()
-                .map(|(z, (entries, out))| {
+                .map(|(z, (entries, positions))| {
                     number_plane(
                         layout,
                         z,
@@ -552,17 +590,162 @@ pub(crate) fn vertex_pass(
                         &plane_points[z],
                         &bits[z * wpp..(z + 1) * wpp],
                         starts[z] as u32,
-                        entries,
-                        out,
+                        PlaneOut { entries, positions },
                     )
                 })
                 .sum::<usize>()
         });
     }
-    // The per-plane proposals were copied into `buf.candidates`: free them before the geometry
+    // The per-plane proposals were copied into `out.proposals`: free them before the geometry
     // pass and the clustering allocate.
     drop(per_plane);
     stats.clusters_proposed = proposals.proposed;
     stats.clusters_rejected_prefilter = proposals.rejected;
     Ok(near_points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mt::layout::Layout;
+    use crate::mt::testing::{lcg, plain_mt, test_pool};
+
+    #[test]
+    fn crossed_index_finds_every_point_and_its_owned_crossings() {
+        // Grids whose storage planes hold fewer slots than a word of bits, about as many, and
+        // many more; the reference is each point's 14 edges tested one by one.
+        let field = rmt_fields::FnField(|p: glam::Vec3| {
+            (p.x * 7.1).sin() + (p.y * 5.3).cos() * (p.z * 3.7 + 0.4).sin() - 0.2
+        });
+        let pool = test_pool(2);
+        let mut checked = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [
+                [1, 1, 6],
+                [2, 1, 5],
+                [1, 3, 4],
+                [3, 3, 3],
+                [5, 2, 7],
+                [9, 8, 6],
+                [40, 3, 5],
+            ] {
+                let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
+                let l = Layout::new(&samples, lattice);
+                let [dx, dy, dz] = samples.dims;
+                let iso = settings.iso;
+                let (mut before, mut rank) = (0u32, 0usize);
+                for z in 0..dz {
+                    for sy in 0..dy {
+                        for sx in 0..dx {
+                            let slot = (z * dy + sy) * dx + sx;
+                            let (p, exists) = l.point(sx, sy, z);
+                            let (mut crossed, mut own) = (0u16, 0u16);
+                            if exists {
+                                let f = samples.values[slot];
+                                let valid = l.valid_neighbours(p);
+                                for d in (0..14).filter(|d| valid & (1 << d) != 0) {
+                                    let q =
+                                        (slot as isize + l.delta[(p[0] & 1) as usize][d]) as usize;
+                                    let g = samples.values[q];
+                                    if (g < iso) != (f < iso) {
+                                        crossed |= 1 << d;
+                                        if owns(f, g, iso) {
+                                            own |= 1 << d;
+                                        }
+                                    }
+                                }
+                            }
+                            let what = format!("{lattice:?} {cells:?} slot {slot}");
+                            assert_eq!(buf.vertices.crossed.plane_of(slot), z, "{what}");
+                            assert_eq!(
+                                buf.vertices.crossed.is_crossed(slot),
+                                crossed != 0,
+                                "{what}"
+                            );
+                            if crossed != 0 {
+                                let expected = CrossedPoint {
+                                    first: before,
+                                    owned: own,
+                                    crossed,
+                                };
+                                assert_eq!(buf.vertices.crossed.get(slot), expected, "{what}");
+                                assert_eq!(buf.vertices.crossed.points[rank], expected, "{what}");
+                                rank += 1;
+                                checked += usize::from(own != 0);
+                            }
+                            before += own.count_ones();
+                        }
+                    }
+                }
+                assert_eq!(
+                    rank,
+                    buf.vertices.crossed.points.len(),
+                    "{lattice:?} {cells:?}"
+                );
+                assert_eq!(
+                    before as usize,
+                    mesh.positions.len(),
+                    "{lattice:?} {cells:?}"
+                );
+            }
+        }
+        assert!(checked > 100, "only {checked} points own crossings");
+    }
+
+    #[test]
+    fn inside_words_set_exactly_the_bits_of_values_below_the_isovalue() {
+        let mut state = 7u64;
+        for len in [0, 1, 5, 63, 64] {
+            for iso in [0.0f32, 0.25, -0.5] {
+                let values: Vec<f32> = (0..len)
+                    .map(|k| match k % 7 {
+                        0 => iso,
+                        1 => f32::NAN,
+                        2 => -0.0,
+                        _ => lcg(&mut state) * 2.0 - 1.0,
+                    })
+                    .collect();
+                let word = inside_word(&values, iso);
+                for (k, &f) in values.iter().enumerate() {
+                    assert_eq!(
+                        word >> k & 1 == 1,
+                        f < iso,
+                        "len {len} iso {iso} k {k} f {f}"
+                    );
+                }
+                assert_eq!(
+                    word >> len.min(63) >> u32::from(len == 64),
+                    0,
+                    "no bit past the end"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn plane_of_divides_exactly_for_every_slot_below_2_pow_32() {
+        let mut index = CrossedIndex::default();
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for plane in (1..600).chain([4096, 65_537, 66_049, 1 << 20, 3_000_017]) {
+            index.reset(plane, 0);
+            let mut slots: Vec<usize> = (0..2000).collect();
+            for k in [1usize, 2, 7, 1000, 65_000, (u32::MAX as usize) / plane] {
+                slots.extend([k * plane - 1, k * plane, k * plane + 1]);
+            }
+            slots.push(u32::MAX as usize);
+            for _ in 0..2000 {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                slots.push((x >> 32) as usize);
+            }
+            for slot in slots.into_iter().filter(|&s| s <= u32::MAX as usize) {
+                assert_eq!(
+                    index.plane_of(slot),
+                    slot / plane,
+                    "slot {slot}, plane {plane}"
+                );
+            }
+        }
+    }
 }

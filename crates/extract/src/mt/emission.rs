@@ -15,28 +15,65 @@
 //!             write (tetrahedra of each anchor, case table) ->  [ layer 0 | layer 1 | ... ]
 //! ```
 
-use super::*;
+use rayon::prelude::*;
+use rmt_mesh::Mesh;
 
-/// The geometry pass over the lattice, writing the final triangles into `mesh` (with `propose`,
-/// through the groups' vertex map, collapsed triangles dropped), only those of the cells `keep`;
-/// with `cells`, each written triangle's anchor cell too (linear index over the grid's cells).
-#[allow(clippy::too_many_arguments)]
+use super::clustering::plain::PlainList;
+use super::geometry::{geometry_layer, layer_counts, LayerOut, Surface, Vertices};
+use crate::util::overwritten;
+use crate::{Clustering, Lattice, Stats};
+
+/// The emission's buffers, kept between extractions.
+#[derive(Default)]
+pub(crate) struct EmitBuffers {
+    /// The output, one part per run of listed triangles ([`emit`]).
+    parts: Vec<Vec<u32>>,
+    /// Working memory of the vertex compaction (integrated-unchecked).
+    scratch: Vec<u32>,
+    /// Recorded: the anchor cell of every output triangle (linear index, x fastest).
+    pub(crate) tri_cells: Vec<u32>,
+}
+
+/// What the emission reads from the clustering.
+#[derive(Clone, Copy)]
+pub(crate) struct Clustered<'a> {
+    /// The crossings' positions (plain MT's vertices).
+    pub(crate) cpos: &'a [[f32; 3]],
+    /// Every crossing's output vertex.
+    pub(crate) vertex_of: &'a [u32],
+    /// Plain MT's triangles, when integrated clustering listed them (empty otherwise).
+    pub(crate) plain: &'a PlainList,
+    /// The tetrahedra with a triangle that the listing read (of the kept cells, in a chunk).
+    pub(crate) processed: usize,
+}
+
+/// What the emission reads.
+pub(crate) struct EmitIn<'a> {
+    pub(crate) surface: Surface<'a>,
+    pub(crate) clustering: Clustering,
+    /// Record the anchor cell of every output triangle.
+    pub(crate) record: bool,
+    /// With integrated clustering (checked or not), its output.
+    pub(crate) clustered: Option<Clustered<'a>>,
+}
+
+/// The geometry pass over the lattice, writing the final triangles into `mesh` (with
+/// `clustered`, the crossings' positions and output vertices, through the groups' vertex map,
+/// collapsed triangles dropped), only those of the cells `surface.keep`; with `cells`, each
+/// written triangle's anchor cell too (linear index over the grid's cells).
 pub(crate) fn emit_layers(
-    layout: &Layout,
-    iso: f32,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-    propose: bool,
-    buf: &MtBuffers,
+    surface: &Surface,
+    clustered: Option<Vertices>,
     mesh: &mut Mesh,
     mut cells: Option<&mut Vec<u32>>,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
+    let propose = clustered.is_some();
     // Triangles of plain MT per layer, counted from the anchors' crossed edges, so that every
     // layer writes its triangles straight into its own slice of the output (with clustering,
     // collapsed triangles leave the slice's end unused; the layers are then moved together).
-    let counts = layer_counts(layout, keep, crossed, pool);
+    let counts = layer_counts(surface.l, surface.keep, surface.crossed, pool);
     let layers = counts.len();
     let triangles: usize = counts.iter().sum();
     let Mesh {
@@ -57,19 +94,21 @@ pub(crate) fn emit_layers(
         rest = tail;
         rest_cells = tail_cells;
     }
-    let (positions, map) = if propose {
-        (&buf.cpos[..], Some(&buf.vertex_of[..]))
-    } else {
-        (&positions[..], None)
-    };
+    let vertices = clustered.unwrap_or(Vertices {
+        positions: &positions[..],
+        map: None,
+    });
     let written: Vec<(usize, usize)> = pool.install(|| {
         parts
             .into_par_iter()
             .enumerate()
             .map(|(k, (out, cells))| {
-                geometry_layer(
-                    layout, k, iso, keep, crossed, positions, map, out, None, cells,
-                )
+                let out = LayerOut {
+                    out,
+                    list: None,
+                    cells,
+                };
+                geometry_layer(surface, k, vertices, out)
             })
             .collect()
     });
@@ -93,410 +132,32 @@ pub(crate) fn emit_layers(
     }
 }
 
-/// Plain MT's triangles over the whole box, in the order of the geometry pass (layer by
-/// layer), into `tris` (three crossing ids each), with each triangle's source tetrahedron
-/// gradient (of the linear interpolant on its source tetrahedron, up to a positive factor) in
-/// `grad`; then every crossing's triangles as a CSR
-/// table (`inc[inc_start[x]..inc_start[x + 1]]`, in triangle order, built in parallel by
-/// [`crate::incidence::incidence_parallel`]; `inc_cursor` and `inc_parts` are its working memory). The quotient test reads a group's star from these instead of from the lattice.
-/// With `keep` (a chunk) also, per triangle, whether its anchor's cell is kept (`kept`), so
-/// that the emission maps the chunk's own triangles from the list too; returns the tetrahedra
-/// with a triangle (of the kept cells, with `keep`).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn plain_triangles(
-    layout: &Layout,
-    iso: f32,
-    crossed: &CrossedIndex,
-    cpos: &[[f32; 3]],
-    pool: &rayon::ThreadPool,
-    keep: Option<CellRange>,
-    tris: &mut Vec<u32>,
-    grad: &mut Vec<[f32; 3]>,
-    kept: &mut Vec<u8>,
-    cells: Option<&mut Vec<u32>>,
-    inc_start: &mut Vec<u32>,
-    inc: &mut Vec<u32>,
-    inc_cursor: &mut Vec<u32>,
-    inc_parts: &mut Vec<Vec<u32>>,
-) -> usize {
-    let counts = layer_counts(layout, None, crossed, pool);
-    let layers = counts.len();
-    let total: usize = counts.iter().sum();
-    overwritten(tris, 3 * total, 0, pool);
-    overwritten(grad, total, [0.0; 3], pool);
-    overwritten(kept, if keep.is_some() { total } else { 0 }, 0, pool);
-    let record = cells.is_some();
-    let mut no_cells = Vec::new();
-    let cells = cells.unwrap_or(&mut no_cells);
-    overwritten(cells, if record { total } else { 0 }, 0, pool);
-    let mut parts = Vec::with_capacity(layers);
-    let (mut rest, mut rest_src, mut rest_kept) = (&mut tris[..], &mut grad[..], &mut kept[..]);
-    let mut rest_cells = &mut cells[..];
-    for &n in &counts {
-        let (head, tail) = rest.split_at_mut(3 * n);
-        let (head_src, tail_src) = rest_src.split_at_mut(n);
-        let (head_kept, tail_kept) = rest_kept.split_at_mut(if keep.is_some() { n } else { 0 });
-        let (head_cells, tail_cells) = rest_cells.split_at_mut(if record { n } else { 0 });
-        parts.push((head, head_src, head_kept, head_cells));
-        rest = tail;
-        rest_src = tail_src;
-        rest_kept = tail_kept;
-        rest_cells = tail_cells;
-    }
-    let processed: usize = pool.install(|| {
-        parts
-            .into_par_iter()
-            .enumerate()
-            .map(|(k, (out, grad, kept, cells))| {
-                let list = ListOut {
-                    grad,
-                    kept: keep.map(|range| (range, kept)),
-                };
-                let cells = record.then_some(cells);
-                geometry_layer(
-                    layout,
-                    k,
-                    iso,
-                    None,
-                    crossed,
-                    cpos,
-                    None,
-                    out,
-                    Some(list),
-                    cells,
-                )
-                .0
-            })
-            .sum()
-    });
-    // Incidence in triangle order, so the table is deterministic.
-    crate::incidence::incidence_parallel(
-        cpos.len(),
-        tris,
-        inc_start,
-        inc,
-        inc_cursor,
-        inc_parts,
-        pool,
-    );
-    processed
-}
-
-/// Calls `visit(anchor, rank, group, p)` for each body-centred face (group: its axis) or cube
-/// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot, at
-/// lattice coordinates `p`) has a crossed edge and, in a chunk, its cell
-/// ([`Layout::anchor_cell`]) is kept. The anchor's entry is `crossed.points[rank]`. The count and
-/// the geometry pass both walk the layer with it, so they see the same groups.
-pub(crate) fn for_each_group(
-    l: &Layout,
-    k: usize,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-    mut visit: impl FnMut(usize, usize, usize, Offset),
-) {
-    let [nx, ny, nz] = l.s.cells;
-    let plane = l.s.dims[0] * l.s.dims[1];
-    // The anchors of one row are consecutive storage slots, at lattice points `first + (step n,
-    // 0, 0)`: scan their bits, visit only the crossed ones.
-    let mut row = |start: usize, z: usize, len: usize, g: usize, first: Offset, step: i32| {
-        let local = start - z * plane;
-        let mut rank = crossed.rank_in(z, local);
-        for_each_bit(crossed.plane_bits(z), local, len, |n| {
-            let r = rank;
-            rank += 1;
-            let p = [first[0] + step * n as i32, first[1], first[2]];
-            if keep.is_some_and(|range| !range.contains(l.anchor_cell(p, g))) {
-                return;
-            }
-            visit(start + n, r, g, p);
-        });
-    };
-    match l.lattice {
-        Lattice::Simple => {
-            // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface
-            // in the cube.
-            for j in 0..ny {
-                row(
-                    l.s.simple_index(0, j, k),
-                    k,
-                    nx,
-                    0,
-                    [0, j as i32, k as i32],
-                    1,
-                );
-            }
-        }
-        Lattice::BodyCentred => {
-            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by their
-            // anchor A, the centre below (B and the 4 face corners are neighbours of A: without
-            // a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a face anchor
-            // moves by one storage slot (two lattice units).
-            let ki = k as i32;
-            let mut faces = |first: Offset, len: usize, axis: usize| {
-                // Storage plane (see `Samples::bcdl_index`).
-                let z = (first[2] + 1) as usize;
-                row(l.s.bcdl_index(first), z, len, axis, first, 2);
-            };
-            for j in 0..ny as i32 {
-                faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
-            }
-            if k < nz {
-                for j in 0..ny as i32 {
-                    faces([-1, 2 * j + 1, 2 * ki + 1], nx + 1, 0);
-                }
-                for f in 0..=ny as i32 {
-                    faces([1, 2 * f - 1, 2 * ki + 1], nx, 1);
-                }
-            }
-        }
-    }
-}
-
-/// Triangles of every geometry layer (those of the cells `keep`), in layer order.
-pub(crate) fn layer_counts(
-    l: &Layout,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-    pool: &rayon::ThreadPool,
-) -> Vec<usize> {
-    let layers = match l.lattice {
-        Lattice::BodyCentred => l.s.cells[2] + 1,
-        Lattice::Simple => l.s.cells[2],
-    };
-    pool.install(|| {
-        (0..layers)
-            .into_par_iter()
-            .map(|k| count_layer(l, k, keep, crossed))
-            .collect()
-    })
-}
-
-/// Triangles geometry layer `k` will give: per group, a table lookup by the anchor's crossed
-/// edges.
-pub(crate) fn count_layer(
-    l: &Layout,
-    k: usize,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-) -> usize {
-    let mut n = 0;
-    for_each_group(l, k, keep, crossed, |_, rank, g, _| {
-        let group = &l.groups[g];
-        let mask = usize::from(crossed.points[rank].crossed);
-        let mut code = 0;
-        for (i, &d) in group.dirs[1..group.len].iter().enumerate() {
-            code |= ((mask >> d) & 1) << (i + 1);
-        }
-        n += usize::from(group.triangles[code]);
-    });
-    n
-}
-
-/// Emission over one z-layer: writes its triangles into `out`, sized by [`count_layer`] (the
-/// triangles of plain MT); with `map` (crossing id to output vertex, clustering) the triangles
-/// are written with the clustered vertices and those that collapsed are left out. Returns the
-/// tetrahedra processed and the triangles written.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn geometry_layer(
-    l: &Layout,
-    k: usize,
-    iso: f32,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-    positions: &[[f32; 3]],
-    map: Option<&[u32]>,
-    out: &mut [u32],
-    list: Option<ListOut<'_>>,
-    cells: Option<&mut [u32]>,
-) -> (usize, usize) {
-    let plane = l.s.dims[0] * l.s.dims[1];
-    // The crossed points of the storage planes this layer reads, copied into a dense window (one
-    // entry per slot) of this thread: a crossing's id is then one load away, where the rank
-    // directory needs two dependent ones. A few planes per thread, not a table per slot.
-    let (z0, z1) = l.layer_planes(k);
-    LAYER_WINDOW.with_borrow_mut(|window| {
-        if window.len() < (z1 + 1 - z0) * plane {
-            window.resize((z1 + 1 - z0) * plane, CrossedPoint::default());
-        }
-        for z in z0..=z1 {
-            let base = (z - z0) * plane;
-            let mut r = crossed.rank_in(z, 0);
-            for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
-                window[base + local] = crossed.points[r];
-                r += 1;
-            });
-        }
-        geometry_in_window(
-            l,
-            k,
-            iso,
-            keep,
-            crossed,
-            positions,
-            map,
-            &window[..],
-            z0,
-            out,
-            list,
-            cells,
-        )
-    })
-}
-
-thread_local! {
-    /// The dense window of [`geometry_layer`], kept per thread between layers and extractions
-    /// (entries of slots without a crossed edge are stale and never read).
-    pub(crate) static LAYER_WINDOW: std::cell::RefCell<Vec<CrossedPoint>> =
-        const { std::cell::RefCell::new(Vec::new()) };
-}
-
-/// What the listing of plain MT's triangles ([`plain_triangles`]) writes beside them, per
-/// triangle of a layer.
-pub(crate) struct ListOut<'s> {
-    /// The gradient of its tetrahedron.
-    pub(crate) grad: &'s mut [[f32; 3]],
-    /// In a chunk: the kept cells, and per triangle 1 when its anchor's cell is one of them
-    /// (the triangles the chunk emits), else 0.
-    pub(crate) kept: Option<(CellRange, &'s mut [u8])>,
-}
-
-/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`; with
-/// `cells`, each triangle written gets its anchor cell there (linear index, x fastest).
-/// Returns the tetrahedra with a triangle (when listing in a chunk, those of kept cells) and
-/// the triangles written.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn geometry_in_window(
-    l: &Layout,
-    k: usize,
-    iso: f32,
-    keep: Option<CellRange>,
-    crossed: &CrossedIndex,
-    positions: &[[f32; 3]],
-    map: Option<&[u32]>,
-    window: &[CrossedPoint],
-    z0: usize,
-    out: &mut [u32],
-    mut list: Option<ListOut<'_>>,
-    mut cells: Option<&mut [u32]>,
-) -> (usize, usize) {
-    let v = &l.s.values;
-    let plane = l.s.dims[0] * l.s.dims[1];
-    let mut processed = 0;
-    let mut w = 0;
-    // Listing in a chunk: every anchor is walked, and the kept cells' ones are marked.
-    let listing = list.is_some();
-    let mark = list
-        .as_ref()
-        .and_then(|list| list.kept.as_ref().map(|k| k.0));
-    let cells_wanted = cells.is_some();
-    let [nx, ny, _] = l.s.cells;
-    let mut tet =
-        |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool, kept: bool, cell: u32| {
-            let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
-            let val = idx.map(|i| v[i]);
-            let mut tris = [[0u32; 3]; 2];
-            // The window starts at slot 0 of plane z0.
-            let id = |o: usize, d: u8| {
-                let entry = window[idx[o] - z0 * plane];
-                debug_assert_eq!(entry, crossed.get(idx[o]));
-                entry.id(d)
-            };
-            let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
-            processed += usize::from(n > 0 && kept);
-            match map {
-                None => {
-                    // The gradient of the tetrahedron, for the quotient test's (c).
-                    let g = if n > 0 && list.is_some() {
-                        l.gradient(anchor, ti, inner)
-                    } else {
-                        [0.0; 3]
-                    };
-                    for t in &tris[..n] {
-                        if let Some(list) = list.as_mut() {
-                            list.grad[w / 3] = g;
-                            if let Some((_, flags)) = list.kept.as_mut() {
-                                flags[w / 3] = u8::from(kept);
-                            }
-                        }
-                        if let Some(cells) = cells.as_deref_mut() {
-                            cells[w / 3] = cell;
-                        }
-                        out[w..w + 3].copy_from_slice(t);
-                        w += 3;
-                    }
-                }
-                Some(map) => {
-                    // Clustered: the vertices of the groups' quotient; a triangle with two corners
-                    // in one group collapsed and is dropped.
-                    for t in &tris[..n] {
-                        let q = t.map(|i| map[i as usize]);
-                        if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
-                            if let Some(cells) = cells.as_deref_mut() {
-                                cells[w / 3] = cell;
-                            }
-                            out[w..w + 3].copy_from_slice(&q);
-                            w += 3;
-                        }
-                    }
-                }
-            }
-        };
-    for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
-        // Only the listing reads these: whether no corner is a ghost (for the gradient), and in
-        // a chunk whether the anchor's cell is kept.
-        let inner = listing && l.inner_anchor(p);
-        let kept = mark.is_none_or(|range| range.contains(l.anchor_cell(p, g)));
-        let cell = if cells_wanted {
-            let c = l.anchor_cell(p, g);
-            (c[0] + nx * (c[1] + ny * c[2])) as u32
-        } else {
-            0
-        };
-        let first = match l.lattice {
-            Lattice::BodyCentred => 4 * g,
-            Lattice::Simple => 0,
-        };
-        let count = match l.lattice {
-            Lattice::BodyCentred => 4,
-            Lattice::Simple => l.tets.len(),
-        };
-        for ti in first..first + count {
-            tet(anchor, ti, &l.tets[ti], inner, kept, cell);
-        }
-    });
-    debug_assert!(
-        w == out.len() || (map.is_some() && w <= out.len()),
-        "layer {k}: triangles counted and written differ"
-    );
-    (processed, w / 3)
-}
-
 /// Emission: the final triangles, written straight into `mesh.indices`. With integrated
-/// clustering, the listed plain MT triangles ([`plain_triangles`]) mapped through the output
-/// vertices (`buf.vertex_of`), in order, the collapsed ones dropped (in a chunk, only those of
-/// the kept cells); otherwise the geometry pass ([`emit_layers`]).
-#[allow(clippy::too_many_arguments)]
+/// clustering, the listed plain MT triangles ([`PlainList`]) mapped through the output
+/// vertices (`vertex_of`), in order, the collapsed ones dropped (in a chunk, only those of the
+/// kept cells); otherwise the geometry pass ([`emit_layers`]).
 pub(crate) fn emit(
-    layout: &Layout,
-    samples: &Samples,
-    settings: &ExtractSettings,
-    propose: bool,
-    plain_processed: usize,
-    buf: &mut MtBuffers,
+    input: EmitIn<'_>,
+    buf: &mut EmitBuffers,
     mesh: &mut Mesh,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
-    let (iso, lattice, clustering) = (settings.iso, settings.lattice, settings.clustering);
-    let crossed = &buf.crossed;
-    let keep = settings.keep_cells;
-    if propose && !buf.plain.is_empty() {
+    let EmitIn {
+        surface,
+        clustering,
+        record,
+        clustered,
+    } = input;
+    let keep = surface.keep;
+    let listed = clustered.filter(|c| !c.plain.tris.is_empty());
+    if let Some(clustered) = listed {
         // The plain triangles are at hand (the quotient test read them): map them through the
         // groups, in order, dropping the collapsed ones (and, in a chunk, those of cells not
         // kept: the listing walked every anchor in the order the geometry pass would walk the
         // kept ones).
-        let (plain, map) = (&buf.plain[..], &buf.vertex_of[..]);
-        let kept = (keep.is_some()).then_some(&buf.plain_kept[..]);
+        let (plain, map) = (&clustered.plain.tris[..], clustered.vertex_of);
+        let kept = (keep.is_some()).then_some(&clustered.plain.kept[..]);
         const CHUNK: usize = 3 << 14;
         let mapped = |t: &[u32], i: usize| {
             if kept.is_some_and(|k| k[i] == 0) {
@@ -508,7 +169,7 @@ pub(crate) fn emit(
         // One pass: each run of listed triangles maps its own into its part (reused between
         // extractions), then the parts are joined in order.
         let runs = plain.len().div_ceil(CHUNK);
-        let parts = &mut buf.emit_parts;
+        let parts = &mut buf.parts;
         if parts.len() < runs {
             parts.resize_with(runs, Vec::new);
         }
@@ -539,11 +200,11 @@ pub(crate) fn emit(
             indices.extend_from_slice(part);
         }
         let emitted = indices.len() / 3;
-        stats.tetrahedra_processed += plain_processed;
+        stats.tetrahedra_processed += clustered.processed;
         stats.discarded += listed - emitted;
-        if buf.record {
+        if record {
             // The anchor cells of the emitted triangles, in their order.
-            let cells = &buf.plain_cell;
+            let cells = &clustered.plain.cells;
             buf.tri_cells.clear();
             buf.tri_cells.extend(
                 plain
@@ -555,25 +216,86 @@ pub(crate) fn emit(
         }
     } else {
         // Recording: the anchor cells, unless a post-process changes the triangles after.
-        let record = buf.record
+        let record = record
             && matches!(
                 clustering,
                 Clustering::None | Clustering::Integrated | Clustering::IntegratedUnchecked
             );
         let mut cells = std::mem::take(&mut buf.tri_cells);
         let out = record.then_some(&mut cells);
-        emit_layers(
-            layout, iso, keep, crossed, propose, buf, mesh, out, pool, stats,
-        );
+        let vertices = clustered.map(|c| Vertices {
+            positions: c.cpos,
+            map: Some(c.vertex_of),
+        });
+        emit_layers(&surface, vertices, mesh, out, pool, stats);
         buf.tri_cells = cells;
     }
     if clustering == Clustering::IntegratedUnchecked {
         // Without the test a vertex may lose all its triangles.
         mesh.drop_unused_vertices(&mut buf.scratch);
     }
-    let [nx, ny, nz] = samples.cells;
-    stats.tetrahedra_total = match lattice {
+    let [nx, ny, nz] = surface.l.s.cells;
+    stats.tetrahedra_total = match surface.l.lattice {
         Lattice::BodyCentred => 4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1)),
         Lattice::Simple => 6 * nx * ny * nz,
     };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mt::layout::Layout;
+    use crate::mt::testing::{extracted, settings_on, test_pool, wavy};
+    use crate::{CellRange, Lattice};
+
+    #[test]
+    fn a_chunk_maps_its_triangles_from_the_list_as_the_geometry_pass_walks_its_cells() {
+        // Integrated clustering in a chunk emits the kept cells' triangles from plain MT's
+        // list; the geometry pass over the kept cells, through the same vertex map, is the
+        // reference (triangles, their order, and the counters).
+        let field = wavy();
+        let pool = test_pool(2);
+        let mut compared = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for (cells, lo, hi) in [
+                ([12, 10, 14], [1, 1, 1], [11, 9, 13]),
+                ([16, 16, 16], [0, 3, 5], [9, 16, 12]),
+                ([9, 13, 11], [2, 0, 0], [9, 7, 6]),
+            ] {
+                let mut settings = settings_on(cells, lattice, crate::Clustering::Integrated);
+                settings.keep_cells = Some(CellRange { lo, hi });
+                let (samples, buf, mesh, listed) = extracted(&field, &settings, &pool);
+                let l = Layout::new(&samples, lattice);
+                let mut walked = Mesh::default();
+                let mut reference = Stats::default();
+                let surface = Surface {
+                    l: &l,
+                    iso: settings.iso,
+                    keep: settings.keep_cells,
+                    crossed: &buf.vertices.crossed,
+                };
+                let vertices = Vertices {
+                    positions: &buf.clustering.cpos,
+                    map: Some(&buf.clustering.vertex_of),
+                };
+                emit_layers(
+                    &surface,
+                    Some(vertices),
+                    &mut walked,
+                    None,
+                    &pool,
+                    &mut reference,
+                );
+                let what = format!("{lattice:?} {cells:?} {lo:?}..{hi:?}");
+                assert_eq!(mesh.indices, walked.indices, "{what}");
+                assert_eq!(
+                    listed.tetrahedra_processed, reference.tetrahedra_processed,
+                    "{what}"
+                );
+                assert_eq!(listed.discarded, reference.discarded, "{what}");
+                compared += mesh.indices.len() / 3;
+            }
+        }
+        assert!(compared > 500, "only {compared} triangles compared");
+    }
 }

@@ -12,7 +12,8 @@
 //!        v1
 //! ```
 
-use super::*;
+use crate::lattice::{LatticeTables, Offset, FULL};
+use crate::{Lattice, Samples};
 
 /// Edges of a tetrahedron (v0..v3), as in `rmt-spec.md`.
 pub(crate) const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
@@ -708,4 +709,210 @@ pub(crate) fn star_tets(
 
 pub(crate) fn add(a: Offset, b: Offset) -> Offset {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mt::testing::{lcg, plain_mt, test_pool};
+    use crate::{Clustering, ExtractSettings};
+
+    #[test]
+    fn the_tetrahedra_around_the_points_give_exactly_the_emitted_triangles() {
+        // Every point sees 24 tetrahedra; over all points each tetrahedron of the extraction is
+        // seen from its 4 corners, and their triangles (the quotient test's view) are exactly
+        // the triangles the geometry pass writes, with the same orientation.
+        let field = rmt_fields::FnField(|p: glam::Vec3| {
+            (p.x * 5.3).sin() * (p.y * 3.9 + 0.2).cos() + (p.z * 4.7).sin() * 0.7 - 0.15
+        });
+        let pool = test_pool(1);
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[3, 4, 5], [9, 8, 7]] {
+                let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
+                let l = Layout::new(&samples, lattice);
+                assert_eq!(l.around[0].len(), 24, "{lattice:?}");
+                assert_eq!(l.around[1].len(), 24, "{lattice:?}");
+                for tet in l.around.iter().flatten() {
+                    assert_eq!(crate::lattice::det(&tet.off).signum(), 1, "{lattice:?}");
+                    assert_eq!(tet.from_point.count_ones(), 3);
+                }
+                let canonical = |t: [u32; 3]| {
+                    let k = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
+                    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+                };
+                let mut seen = std::collections::HashMap::new();
+                let mut tets = 0;
+                let [dx, dy, dz] = samples.dims;
+                for z in 0..dz {
+                    for sy in 0..dy {
+                        for sx in 0..dx {
+                            let (p, exists) = l.point(sx, sy, z);
+                            if !exists {
+                                continue;
+                            }
+                            let slot = (z * dy + sy) * dx + sx;
+                            for tet in &l.around[(p[0] & 1) as usize] {
+                                if !l.has_tet(p, tet) {
+                                    continue;
+                                }
+                                tets += 1;
+                                let idx = tet.delta.map(|d| (slot as isize + d) as usize);
+                                let val = idx.map(|i| samples.values[i]);
+                                let id = |o: usize, d: u8| buf.vertices.crossed.get(idx[o]).id(d);
+                                let mut tris = [[0; 3]; 2];
+                                let n = tet_triangles(
+                                    val,
+                                    settings.iso,
+                                    &tet.dir,
+                                    id,
+                                    &mesh.positions,
+                                    &mut tris,
+                                );
+                                for t in &tris[..n] {
+                                    *seen.entry(canonical(*t)).or_insert(0) += 1;
+                                }
+                            }
+                        }
+                    }
+                }
+                let stats_tets = match lattice {
+                    Lattice::BodyCentred => {
+                        let [nx, ny, nz] = cells;
+                        4 * ((nx + 1) * ny * nz + nx * (ny + 1) * nz + nx * ny * (nz + 1))
+                    }
+                    Lattice::Simple => 6 * cells.iter().product::<usize>(),
+                };
+                assert_eq!(tets, 4 * stats_tets, "{lattice:?} {cells:?}");
+                let emitted: std::collections::HashSet<[u32; 3]> = mesh
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| canonical([t[0], t[1], t[2]]))
+                    .collect();
+                assert_eq!(emitted.len() * 3, mesh.indices.len());
+                assert!(seen.values().all(|&c| c == 4), "{lattice:?} {cells:?}");
+                let seen: std::collections::HashSet<[u32; 3]> = seen.into_keys().collect();
+                assert_eq!(seen, emitted, "{lattice:?} {cells:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_cached_border_table_is_the_one_built_for_the_same_lattice_and_cells() {
+        let mut cache = BorderCache::default();
+        let mut built = 0;
+        for (lattice, cells) in [
+            (Lattice::BodyCentred, [12, 14, 16]),
+            (Lattice::BodyCentred, [12, 14, 16]),
+            (Lattice::BodyCentred, [16, 14, 12]),
+            (Lattice::Simple, [16, 14, 12]),
+            (Lattice::BodyCentred, [16, 14, 12]),
+            (Lattice::BodyCentred, [3, 4, 5]),
+            (Lattice::Simple, [20, 12, 11]),
+        ] {
+            let settings = ExtractSettings::new(
+                crate::Grid::new(cells, glam::Vec3::ZERO, glam::Vec3::ONE),
+                lattice,
+                Clustering::None,
+            );
+            let mut samples = Samples::default();
+            samples.prepare(&settings);
+            let fresh = Layout::new(&samples, lattice).border_table;
+            let cached = Layout::cached(&samples, lattice, &mut cache).border_table;
+            assert_eq!(cached, fresh, "{lattice:?} {cells:?}");
+            built += usize::from(!fresh.is_empty());
+        }
+        // Six of the seven grids are large enough for the classes to have a table.
+        assert_eq!(built, 6);
+    }
+
+    #[test]
+    fn border_table_agrees_with_the_point_by_point_rules() {
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[4, 5, 6], [5, 5, 5], [6, 11, 7], [12, 10, 13], [17, 16, 5]] {
+                let settings = crate::ExtractSettings::new(
+                    crate::Grid::new(cells, glam::Vec3::ZERO, glam::Vec3::ONE),
+                    lattice,
+                    crate::Clustering::None,
+                );
+                let mut samples = Samples::default();
+                samples.prepare(&settings);
+                let l = Layout::new(&samples, lattice);
+                let big = (0..3).all(|a| l.max_coord(a) >= 10);
+                assert_eq!(l.border_table.is_empty(), !big, "{cells:?}");
+                let [dx, dy, dz] = samples.dims;
+                for z in 0..dz {
+                    for sy in 0..dy {
+                        for sx in 0..dx {
+                            let (p, exists) = l.point(sx, sy, z);
+                            let valid = if exists { l.valid_neighbours(p) } else { 0 };
+                            assert_eq!(
+                                l.border_info(p),
+                                (exists, valid),
+                                "{lattice:?} {cells:?} at {p:?}"
+                            );
+                            if exists {
+                                assert_eq!(
+                                    l.inner_dirs(p),
+                                    l.inner_dirs_of(p),
+                                    "inner edges, {lattice:?} {cells:?} at {p:?}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn case_table_orients_triangles_along_the_gradient() {
+        let mut s = 12345u64;
+        let mut checked = 0;
+        for _ in 0..2000 {
+            let mut p: [glam::Vec3; 4] =
+                [0; 4].map(|_| glam::Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)));
+            let vol = (p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]));
+            if vol.abs() < 1e-3 {
+                continue;
+            }
+            if vol < 0.0 {
+                p.swap(2, 3);
+            }
+            let grad = glam::Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s));
+            let off = lcg(&mut s) * 0.5;
+            let f: Vec<f32> = p.iter().map(|q| q.dot(grad) + off).collect();
+            let case = (0..4).filter(|&i| f[i] < 0.0).fold(0, |c, i| c | 1 << i);
+            if case == 0 || case == 15 {
+                continue;
+            }
+            let cycle = &CASES[case];
+            let n = if cycle[3] == u8::MAX { 3 } else { 4 };
+            let pts: Vec<glam::Vec3> = cycle[..n]
+                .iter()
+                .map(|&e| {
+                    let (a, b) = TET_EDGES[e as usize];
+                    // Each edge of the cycle must really be crossed.
+                    assert_ne!(f[a] < 0.0, f[b] < 0.0, "case {case} edge {e} not crossed");
+                    p[a].lerp(p[b], f[a] / (f[a] - f[b]))
+                })
+                .collect();
+            for tri in [[0, 1, 2], [0, 2, 3]].iter().take(n - 2) {
+                let nrm = (pts[tri[1]] - pts[tri[0]]).cross(pts[tri[2]] - pts[tri[0]]);
+                if nrm.length() > 1e-6 {
+                    assert!(
+                        nrm.dot(grad) > 0.0,
+                        "case {case} faces against the gradient"
+                    );
+                    checked += 1;
+                }
+            }
+            // Every crossed edge of the tetrahedron appears in the cycle.
+            let crossed = TET_EDGES
+                .iter()
+                .filter(|(a, b)| (f[*a] < 0.0) != (f[*b] < 0.0))
+                .count();
+            assert_eq!(crossed, n, "case {case}");
+        }
+        assert!(checked > 1000);
+    }
 }

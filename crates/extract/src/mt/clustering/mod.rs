@@ -1,13 +1,13 @@
 //! Clustering between the vertex pass and the emission: the proposals become groups, and each
 //! crossing gets its output vertex.
 //!
-//! The proposals are a partition of the crossings into groups ([`crate::cluster`]: a point's
+//! The proposals are a partition of the crossings into groups ([`proposal`]: a point's
 //! islands, each sheet's own crossings cut into parts joined by mesh edges; with integrated
 //! clustering also the lone crossings, given to a neighbouring island). Integrated clustering
-//! then lists plain MT's triangles once ([`super::emission::plain_triangles`]), keeps the groups
+//! then lists plain MT's triangles once ([`plain::plain_triangles`]), keeps the groups
 //! that pass the exact quotient test, repairing failures by splitting groups in parallel rounds,
-//! and settles its additions the same way ([`crate::quotient`], [`crate::repair`],
-//! [`crate::additions`]); integrated-unchecked keeps every proposal and numbers its vertices
+//! and settles its additions the same way ([`quotient`], [`repair`],
+//! [`additions`]); integrated-unchecked keeps every proposal and numbers its vertices
 //! plane by plane, with no group tables ([`keep_all`]). Every crossing then maps to an output
 //! vertex: its group's (the mean of its crossings) or its own.
 //!
@@ -16,7 +16,67 @@
 //!             -> sliver passes -> output vertices (one per kept group or lone crossing)
 //! ```
 
-use super::*;
+use rayon::prelude::*;
+
+use super::crossings::CrossedIndex;
+use super::geometry::Surface;
+use super::layout::Layout;
+use crate::util::{for_each_bit, overwritten};
+use crate::{Clustering, Stats};
+
+pub(crate) mod additions;
+pub(crate) mod plain;
+pub(crate) mod proposal;
+pub(crate) mod quotient;
+pub(crate) mod repair;
+
+use plain::{plain_triangles, PlainList};
+use proposal::Candidate;
+use quotient::{Fixed, Groups, Quotient};
+use repair::{settle, Phase, Settled};
+
+/// The clustering's tables, kept between extractions.
+#[derive(Default)]
+pub(crate) struct ClusterBuffers {
+    /// Proposed groups, in storage order of their owners (written by the vertex pass), then
+    /// the variants and sliver pairs the additions append.
+    pub(crate) candidates: Vec<Candidate>,
+    /// Positions of the crossings (plain MT's vertices).
+    pub(crate) cpos: Vec<[f32; 3]>,
+    /// The groups' state: kept or not, each crossing's group, lone crossings, labels and
+    /// vertex positions.
+    pub(crate) groups: Groups,
+    /// Every crossing's owner slot and edge (the direction from the owner).
+    pub(crate) edge_of: Vec<(u32, u8)>,
+    /// Plain MT's triangles and every crossing's triangles (checked clustering): the stars of
+    /// the quotient test.
+    pub(crate) plain: PlainList,
+    /// Output vertex of each crossing.
+    pub(crate) vertex_of: Vec<u32>,
+    /// Recorded: the lattice points (grid-local lattice coordinates) whose crossings the
+    /// clustering touched after its proposals, sorted, each once.
+    pub(crate) activity: Vec<[i32; 3]>,
+}
+
+impl ClusterBuffers {
+    /// Bytes of the tables (the recorded activity aside).
+    pub(crate) fn bytes(&self) -> usize {
+        self.candidates.len() * std::mem::size_of::<Candidate>()
+            + self.cpos.len() * 12
+            + self.groups.bytes()
+            + self.edge_of.len() * 8
+            + self.plain.bytes()
+            + self.vertex_of.len() * 4
+    }
+}
+
+/// What every step of integrated clustering reads besides the tables.
+struct Steps<'a> {
+    layout: &'a Layout<'a>,
+    /// Record the clustering's activity.
+    record: bool,
+    pool: &'a rayon::ThreadPool,
+}
 
 /// Passes of lone crossings after the islands settle (each: give, then test and repair).
 pub(crate) const LONE_PASSES: usize = 3;
@@ -24,20 +84,25 @@ pub(crate) const LONE_PASSES: usize = 3;
 /// Passes over the slivers left after the lone passes (each: propose, then test and repair).
 pub(crate) const SLIVER_PASSES: usize = 2;
 
-/// The group tables of the proposals in `buf.candidates`, every group kept: each crossing's
+/// The group tables of the proposals in `buf.candidates` (owned by the points of `crossed`),
+/// every group kept: each crossing's
 /// group, each group's leader (lowest crossing id) and vertex position (the mean of its
 /// crossings), and empty lone tables; also what the additions read: every crossing's owner
 /// slot and edge (`buf.edge_of`) and the groups that gave it back
-/// ([`crate::quotient::Groups::refused`]). Integrated clustering only: integrated-unchecked
+/// ([`quotient::Groups::refused`]). Integrated clustering only: integrated-unchecked
 /// numbers its vertices without group tables ([`keep_all`]).
-pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::ThreadPool) {
-    use crate::quotient::NONE;
+pub(crate) fn build_groups(
+    buf: &mut ClusterBuffers,
+    crossed: &CrossedIndex,
+    layout: &Layout,
+    pool: &rayon::ThreadPool,
+) {
+    use quotient::NONE;
     let crossings = buf.cpos.len();
-    let MtBuffers {
+    let ClusterBuffers {
         candidates,
         cpos,
         groups: g,
-        crossed,
         edge_of,
         ..
     } = buf;
@@ -73,7 +138,6 @@ pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::T
     // Every crossing's edge: plane by plane, points in slot order, edges in bit order, which
     // is the order of the ids.
     let plane = layout.s.dims[0] * layout.s.dims[1];
-    let crossed = &*crossed;
     // Ids are numbered plane by plane: a plane's first id is the `first` of its first crossed
     // point (or of the next plane's, when it has none), so each plane fills its own slice.
     let planes = layout.s.dims[2];
@@ -105,69 +169,54 @@ pub(crate) fn build_groups(buf: &mut MtBuffers, layout: &Layout, pool: &rayon::T
     });
 }
 
-/// The clustering steps between the vertex pass and the emission (`propose`): with
-/// integrated-unchecked, the numbering of the proposals ([`keep_all`]); with integrated (checked) clustering the group tables, plain
-/// MT's triangle list, the islands' quotient tests and repair ([`crate::repair`]), then the
-/// additions ([`crate::additions`]). At the end every crossing's output vertex
-/// (`buf.vertex_of`) and the vertex positions (`mesh.positions`; the crossings' own move to
-/// `buf.cpos`). Integrated clustering, checked or not, takes no tiles: its chunks are exact
-/// without them ([`crate::ExtractSettings::check`] refuses the combination). Counts the tetrahedra that the
-/// triangle list read into `plain_processed`.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn cluster(
-    buf: &mut MtBuffers,
-    layout: &Layout,
-    iso: f32,
+/// The clustering steps between the vertex pass and the emission: with integrated-unchecked,
+/// the numbering of the proposals ([`keep_all`]); with integrated (checked) clustering the
+/// group tables, plain MT's triangle list ([`plain`]), the islands' quotient tests and repair
+/// ([`repair`]), then the additions ([`additions`]). At the end every crossing's output vertex
+/// (`buf.vertex_of`) and the vertex positions (`positions`; the crossings' own, there on entry,
+/// move to `buf.cpos`). Integrated clustering, checked or not, takes no tiles: its chunks are
+/// exact without them ([`crate::ExtractSettings::check`] refuses the combination). With
+/// `record`, the activity too (`buf.activity`). Returns the tetrahedra that the triangle list
+/// read (0 without it).
+pub(crate) fn run(
+    surface: &Surface,
     clustering: Clustering,
-    keep: Option<CellRange>,
-    mesh: &mut Mesh,
-    stats: &mut Stats,
-    plain_processed: &mut usize,
+    record: bool,
+    buf: &mut ClusterBuffers,
+    positions: &mut Vec<[f32; 3]>,
     pool: &rayon::ThreadPool,
-) {
+    stats: &mut Stats,
+) -> usize {
+    let layout = surface.l;
     // The crossings' positions move to `cpos`; the mesh gets the clustered vertices.
-    std::mem::swap(&mut mesh.positions, &mut buf.cpos);
+    std::mem::swap(positions, &mut buf.cpos);
     let step = std::time::Instant::now();
     if clustering == Clustering::IntegratedUnchecked {
         // Every proposal is kept: no group tables, no tests.
-        keep_all(buf, layout, &mut mesh.positions, pool);
+        keep_all(buf, surface.crossed, layout, positions, pool);
         buf.plain.clear();
-        buf.plain_grad.clear();
-        buf.plain_kept.clear();
-        buf.inc_start.clear();
-        buf.inc.clear();
         stats.lone_absorbed = 0;
         stats.clusters_committed = buf.candidates.len();
         stats.clusters_rejected_check = 0;
         stats.t_vertices_s += step.elapsed().as_secs_f64();
-        return;
+        return 0;
     }
-    build_groups(buf, layout, pool);
+    build_groups(buf, surface.crossed, layout, pool);
     let mut islands = buf.candidates.len();
     // Plain MT's triangles and every crossing's triangles: the stars of the tests.
-    *plain_processed = plain_triangles(
-        layout,
-        iso,
-        &buf.crossed,
-        &buf.cpos,
-        pool,
-        keep,
-        &mut buf.plain,
-        &mut buf.plain_grad,
-        &mut buf.plain_kept,
-        buf.record.then_some(&mut buf.plain_cell),
-        &mut buf.inc_start,
-        &mut buf.inc,
-        &mut buf.inc_cursor,
-        &mut buf.inc_parts,
-    );
+    let plain_processed = plain_triangles(surface, &buf.cpos, record, &mut buf.plain, pool);
     // The groups' state changes while the fixed tables (in `buf`) are read.
     let mut groups = std::mem::take(&mut buf.groups);
-    settle_islands(buf, &mut groups, layout, islands, step, pool, stats);
-    let variant_of = add_variants(buf, &mut groups, layout, islands, stats);
-    revive_and_give_lones(buf, &mut groups, layout, &variant_of, pool, stats);
-    islands += sliver_passes(buf, &mut groups, layout, pool, stats);
-    if buf.record {
+    let s = Steps {
+        layout,
+        record,
+        pool,
+    };
+    settle_islands(&s, buf, &mut groups, islands, step, stats);
+    let variant_of = add_variants(&s, buf, &mut groups, islands, stats);
+    revive_and_give_lones(&s, buf, &mut groups, &variant_of, stats);
+    islands += sliver_passes(&s, buf, &mut groups, stats);
+    if record {
         activity_points(layout, &groups.touched, &buf.edge_of, &mut buf.activity);
     }
     buf.groups = groups;
@@ -179,13 +228,14 @@ pub(crate) fn cluster(
         .sum();
     let mut vertex_of = std::mem::take(&mut buf.vertex_of);
     let fixed = fixed(buf, layout);
-    let q = crate::quotient::Quotient::new(&fixed, groups);
-    vertex_map(&q, &mut vertex_of, &mut mesh.positions, pool);
+    let q = Quotient::new(&fixed, groups);
+    vertex_map(&q, &mut vertex_of, positions, pool);
     // An island is kept whole, or as one of its variants (at most one of them is kept).
     stats.clusters_committed = groups.active.iter().filter(|&&a| a != 0).count();
     stats.clusters_rejected_check = islands - stats.clusters_committed;
     stats.t_vertices_s += step.elapsed().as_secs_f64();
     buf.vertex_of = vertex_of;
+    plain_processed
 }
 
 /// Integrated-unchecked, every proposal kept: each crossing's output vertex (`buf.vertex_of`)
@@ -203,14 +253,15 @@ pub(crate) fn cluster(
 ///
 /// The group tables are left empty.
 pub(crate) fn keep_all(
-    buf: &mut MtBuffers,
+    buf: &mut ClusterBuffers,
+    crossed: &CrossedIndex,
     layout: &Layout,
     positions: &mut Vec<[f32; 3]>,
     pool: &rayon::ThreadPool,
 ) {
     let crossings = buf.cpos.len();
     let planes = layout.s.dims[2];
-    let starts = plane_id_starts(&buf.crossed, planes, crossings);
+    let starts = plane_id_starts(crossed, planes, crossings);
     let candidates = &buf.candidates[..];
     // Proposals come in the order of their owners (by `first`): each plane's are one range.
     let cand_starts: Vec<usize> = starts
@@ -343,20 +394,20 @@ fn plane_id_starts(crossed: &CrossedIndex, planes: usize, crossings: usize) -> V
 }
 
 /// The fixed tables of the quotient tests, over the candidates as they are now.
-fn fixed<'a>(buf: &'a MtBuffers, layout: &'a Layout<'a>) -> crate::quotient::Fixed<'a> {
-    crate::quotient::Fixed {
+fn fixed<'a>(buf: &'a ClusterBuffers, layout: &'a Layout<'a>) -> Fixed<'a> {
+    Fixed {
         l: layout,
         cpos: &buf.cpos,
         groups: &buf.candidates,
-        tris: &buf.plain,
-        grad: &buf.plain_grad,
-        inc_start: &buf.inc_start,
-        inc: &buf.inc,
+        tris: &buf.plain.tris,
+        grad: &buf.plain.grad,
+        inc_start: &buf.plain.inc.start,
+        inc: &buf.plain.inc.inc,
     }
 }
 
 /// Adds the timings and rounds of one settling step to `stats`.
-fn count(stats: &mut Stats, settled: crate::repair::Settled) {
+fn count(stats: &mut Stats, settled: Settled) {
     stats.repair_rounds += settled.rounds;
     stats.t_tests_s += settled.t_tests_s;
     stats.t_repair_s += settled.t_repair_s;
@@ -365,27 +416,26 @@ fn count(stats: &mut Stats, settled: crate::repair::Settled) {
 /// The islands: every crossing's quotient vertex, the lone crossings of the proposal (crossings
 /// in no island join a neighbouring one), then the quotient tests and repair rounds of all
 /// `islands`. The group tables' time, from `step` on, counts until the tests start.
-#[allow(clippy::too_many_arguments)]
 fn settle_islands(
-    buf: &MtBuffers,
-    groups: &mut crate::quotient::Groups,
-    layout: &Layout,
+    s: &Steps,
+    buf: &ClusterBuffers,
+    groups: &mut Groups,
     islands: usize,
     step: std::time::Instant,
-    pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
-    let fixed = fixed(buf, layout);
+    let pool = s.pool;
+    let fixed = fixed(buf, s.layout);
     groups.relabel(&fixed, pool);
-    crate::additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
-    if buf.record {
+    additions::give_lones(&fixed, groups, &buf.edge_of, false, pool);
+    if s.record {
         // The proposals are complete: from here on, what the steps do is activity.
         groups.touched.resize(buf.cpos.len(), 0);
     }
     groups.base_len.fill(0);
     stats.t_groups_s += step.elapsed().as_secs_f64();
     let all = (0..islands as u32).collect();
-    let settled = crate::repair::settle(&fixed, groups, all, crate::repair::Phase::Islands, pool);
+    let settled = settle(&fixed, groups, all, Phase::Islands, pool);
     stats.repair_rounds = 0;
     count(stats, settled);
 }
@@ -394,9 +444,9 @@ fn settle_islands(
 /// to the candidates (not kept). Returns where each split island's variants start (and, last,
 /// where they end).
 fn add_variants(
-    buf: &mut MtBuffers,
-    groups: &mut crate::quotient::Groups,
-    layout: &Layout,
+    s: &Steps,
+    buf: &mut ClusterBuffers,
+    groups: &mut Groups,
     islands: usize,
     stats: &mut Stats,
 ) -> Vec<u32> {
@@ -405,7 +455,7 @@ fn add_variants(
     for gi in 0..islands {
         if groups.active[gi] == 0 {
             let c = buf.candidates[gi];
-            crate::additions::variants(&c, layout.t, &mut buf.candidates);
+            additions::variants(&c, s.layout.t, &mut buf.candidates);
             variant_of.push(buf.candidates.len() as u32);
         }
     }
@@ -417,34 +467,30 @@ fn add_variants(
 /// Each split island takes its first variant that passes; then crossings left alone (in no
 /// island, or in one that split) join the nearest kept group, in [`LONE_PASSES`] passes: a group
 /// that fails with them gives them back, and they try another group in the next pass.
-#[allow(clippy::too_many_arguments)]
 fn revive_and_give_lones(
-    buf: &MtBuffers,
-    groups: &mut crate::quotient::Groups,
-    layout: &Layout,
+    s: &Steps,
+    buf: &ClusterBuffers,
+    groups: &mut Groups,
     variant_of: &[u32],
-    pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
-    let fixed = fixed(buf, layout);
-    let dirty = crate::additions::revive(&fixed, groups, variant_of, pool);
-    let settled = crate::repair::settle(&fixed, groups, dirty, crate::repair::Phase::Islands, pool);
+    let pool = s.pool;
+    let fixed = fixed(buf, s.layout);
+    let dirty = additions::revive(&fixed, groups, variant_of, pool);
+    let settled = settle(&fixed, groups, dirty, Phase::Islands, pool);
     count(stats, settled);
-    let no_new = crate::repair::Phase::Additions {
+    let no_new = Phase::Additions {
         born: fixed.groups.len() as u32,
     };
     for _ in 0..LONE_PASSES {
         let step = std::time::Instant::now();
         mark_deciders(&fixed, groups, &buf.edge_of, pool);
-        let dirty = crate::additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
+        let dirty = additions::give_lones(&fixed, groups, &buf.edge_of, true, pool);
         stats.t_groups_s += step.elapsed().as_secs_f64();
         if dirty.is_empty() {
             break;
         }
-        count(
-            stats,
-            crate::repair::settle(&fixed, groups, dirty, no_new, pool),
-        );
+        count(stats, settle(&fixed, groups, dirty, no_new, pool));
     }
 }
 
@@ -452,21 +498,20 @@ fn revive_and_give_lones(
 /// joins the group across its shortest edge, or pairs with the crossing there (a new group,
 /// appended to the candidates). Returns the number of pairs proposed.
 fn sliver_passes(
-    buf: &mut MtBuffers,
-    groups: &mut crate::quotient::Groups,
-    layout: &Layout,
-    pool: &rayon::ThreadPool,
+    s: &Steps,
+    buf: &mut ClusterBuffers,
+    groups: &mut Groups,
     stats: &mut Stats,
 ) -> usize {
+    let (layout, pool) = (s.layout, s.pool);
     let mut pairs = 0;
     // A group that gave a crossing back in a lone pass is asked again (see
     // `additions::sliver_proposals`).
-    groups.refused.fill(crate::quotient::NONE);
+    groups.refused.fill(quotient::NONE);
     for _ in 0..SLIVER_PASSES {
         let step = std::time::Instant::now();
         mark_deciders(&fixed(buf, layout), groups, &buf.edge_of, pool);
-        let props =
-            crate::additions::sliver_proposals(&fixed(buf, layout), groups, &buf.edge_of, pool);
+        let props = additions::sliver_proposals(&fixed(buf, layout), groups, &buf.edge_of, pool);
         if props.lones.is_empty() && props.pairs.is_empty() {
             break;
         }
@@ -484,34 +529,26 @@ fn sliver_passes(
         stats.clusters_proposed += props.pairs.len();
         let fixed = fixed(buf, layout);
         groups.add_pairs(&fixed, born, &props.pairs);
-        let mut dirty = crate::additions::attach(&fixed, groups, props.lones, true, pool);
+        let mut dirty = additions::attach(&fixed, groups, props.lones, true, pool);
         let new: Vec<u32> = (born as u32..fixed.groups.len() as u32).collect();
-        dirty.extend(crate::additions::around(&fixed, groups, &new, pool));
+        dirty.extend(additions::around(&fixed, groups, &new, pool));
         dirty.sort_unstable();
         dirty.dedup();
         stats.t_groups_s += step.elapsed().as_secs_f64();
-        let phase = crate::repair::Phase::Additions { born: born as u32 };
-        count(
-            stats,
-            crate::repair::settle(&fixed, groups, dirty, phase, pool),
-        );
+        let phase = Phase::Additions { born: born as u32 };
+        count(stats, settle(&fixed, groups, dirty, phase, pool));
     }
     pairs
 }
 
 /// Recording the activity: marks every crossing that the next lone or sliver pass considers
 /// (an inner crossing in no kept group), whatever it finds.
-fn mark_deciders(
-    f: &crate::quotient::Fixed,
-    g: &mut crate::quotient::Groups,
-    edge_of: &[(u32, u8)],
-    pool: &rayon::ThreadPool,
-) {
+fn mark_deciders(f: &Fixed, g: &mut Groups, edge_of: &[(u32, u8)], pool: &rayon::ThreadPool) {
     if g.touched.is_empty() {
         return;
     }
     let mut touched = std::mem::take(&mut g.touched);
-    let q = crate::quotient::Quotient::new(f, g);
+    let q = Quotient::new(f, g);
     pool.install(|| {
         touched.par_iter_mut().enumerate().for_each(|(x, t)| {
             let (slot, dir) = edge_of[x];
@@ -547,14 +584,14 @@ fn activity_points(
 
 /// The output vertices: one per crossing outside the kept groups and one per kept group, in
 /// order of their lowest crossing id; `vertex_of` maps every crossing to its vertex. Read from
-/// the quotient's labels ([`crate::quotient::Groups::vlabel`] and `vpos`, kept up to date by
+/// the quotient's labels ([`quotient::Groups::vlabel`] and `vpos`, kept up to date by
 /// every step): a crossing labelled with itself is a vertex, at its quotient position; the
 /// others take their label's, numbered before them (a label is its group's lowest id). (One
 /// serial pass over two tables, 0.74 -> 0.53 ms at 128^3 against the group tables it read
 /// before; a parallel numbering by runs and prefix sums over those measured slower, 1.6
 /// against 1.1 ms at 128^3 on 2 threads.)
 pub(crate) fn vertex_map(
-    q: &crate::quotient::Quotient,
+    q: &Quotient,
     vertex_of: &mut Vec<u32>,
     positions: &mut Vec<[f32; 3]>,
     pool: &rayon::ThreadPool,
@@ -576,5 +613,71 @@ pub(crate) fn vertex_map(
             );
             vertex_of[x] = vertex_of[l];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mt::testing::{extracted, settings_on, test_pool, wavy};
+    use crate::Lattice;
+
+    #[test]
+    fn unchecked_numbering_by_planes_is_the_group_tables_numbering() {
+        // `keep_all` (integrated-unchecked: every proposal kept, numbered plane by plane in
+        // parallel) against the group tables and the serial `vertex_map` of integrated
+        // clustering with every group kept: the same vertex of every crossing and the same
+        // positions, bit for bit.
+        let field = wavy();
+        let mut compared = 0;
+        for threads in [1, 2] {
+            let pool = test_pool(threads);
+            for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+                for cells in [[12, 10, 14], [16, 16, 16], [5, 23, 9]] {
+                    let settings =
+                        settings_on(cells, lattice, crate::Clustering::IntegratedUnchecked);
+                    let (samples, mut buf, _, _) = extracted(&field, &settings, &pool);
+                    let what = format!("{lattice:?} {cells:?} threads={threads}");
+                    assert!(
+                        buf.clustering.candidates.len() > 20,
+                        "{what}: few proposals"
+                    );
+                    let l = Layout::new(&samples, lattice);
+                    let mut by_planes = Vec::new();
+                    keep_all(
+                        &mut buf.clustering,
+                        &buf.vertices.crossed,
+                        &l,
+                        &mut by_planes,
+                        &pool,
+                    );
+                    let planes_map = buf.clustering.vertex_of.clone();
+                    build_groups(&mut buf.clustering, &buf.vertices.crossed, &l, &pool);
+                    let (mut tables_map, mut by_tables) = (Vec::new(), Vec::new());
+                    let fixed = Fixed {
+                        l: &l,
+                        cpos: &buf.clustering.cpos,
+                        groups: &buf.clustering.candidates,
+                        tris: &[],
+                        grad: &[],
+                        inc_start: &[],
+                        inc: &[],
+                    };
+                    // Every crossing's quotient vertex, which the numbering reads.
+                    buf.clustering.groups.relabel(&fixed, &pool);
+                    let q = Quotient::new(&fixed, &buf.clustering.groups);
+                    vertex_map(&q, &mut tables_map, &mut by_tables, &pool);
+                    assert_eq!(planes_map, tables_map, "{what}");
+                    let bits = |p: &[[f32; 3]]| -> Vec<[u32; 3]> {
+                        p.iter().map(|v| v.map(f32::to_bits)).collect()
+                    };
+                    assert_eq!(bits(&by_planes), bits(&by_tables), "{what}");
+                    // Merged groups: fewer vertices than crossings.
+                    assert!(by_planes.len() < buf.clustering.cpos.len(), "{what}");
+                    compared += buf.clustering.cpos.len();
+                }
+            }
+        }
+        assert!(compared > 5000, "only {compared} crossings compared");
     }
 }

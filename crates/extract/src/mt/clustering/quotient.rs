@@ -1,6 +1,7 @@
-//! The quotient test and the repair rounds of integrated clustering.
+//! The quotient test of integrated clustering: whether a group, contracted with all the others,
+//! keeps the mesh a manifold of the same topology.
 //!
-//! The proposals ([`crate::cluster`]) are a partition of the crossings into groups. Picture every
+//! The proposals ([`super::proposal`]) are a partition of the crossings into groups. Picture every
 //! kept group contracted at once into one vertex (at the mean of its crossings): the
 //! *quotient* of plain MT. A group's star in the quotient is the plain MT triangles touching its
 //! crossings (read from the triangle list and every crossing's triangles, [`Fixed`]), and the
@@ -28,15 +29,15 @@
 //!        v-----u
 //! ```
 //!
-//! The repair rounds that keep only groups passing these tests are in [`crate::repair`]; what is
+//! The repair rounds that keep only groups passing these tests are in [`super::repair`]; what is
 //! proposed after the islands settle (variants of split islands, lone crossings, sliver pairs) is
-//! in [`crate::additions`].
+//! in [`super::additions`].
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::cluster::Candidate;
-use crate::mt::Layout;
+use super::proposal::Candidate;
+use crate::mt::layout::Layout;
 
 /// "No group" in the crossing-to-group table.
 pub(crate) const NONE: u32 = u32::MAX;

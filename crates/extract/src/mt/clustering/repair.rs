@@ -1,5 +1,5 @@
 //! The repair rounds of integrated clustering: test the groups in the quotient
-//! ([`crate::quotient`]), repair the failures, test again what the repairs touched, until every
+//! ([`super::quotient`]), repair the failures, test again what the repairs touched, until every
 //! kept group passes.
 //!
 //! Rounds test the groups against the state the previous round left (Jacobi rounds: parallel,
@@ -10,13 +10,13 @@
 //! singletons is plain MT, so the rounds end, and they end with every group passing. (This
 //! follows the Python study in `shared/research/order-free-rmt`.)
 //!
-//! Additions ([`crate::additions`]) are settled the same way ([`Phase::Additions`]), except that
+//! Additions ([`super::additions`]) are settled the same way ([`Phase::Additions`]), except that
 //! a failing addition is undone (a new group splits, a group gives back its new lone crossings)
 //! before anything older splits.
 
 use rayon::prelude::*;
 
-use crate::quotient::{Fixed, Groups, Quotient, Star, Verdict, NONE};
+use super::quotient::{Fixed, Groups, Quotient, Star, Verdict, NONE};
 
 /// The outcome of the repair rounds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -9,7 +9,7 @@
 //! proposed group, and a proposal depends only on the samples of C and its neighbours (the
 //! 1-ring): the proposals are a partition of the crossings that no processing order can change.
 //! Integrated clustering then keeps the groups that pass the exact quotient test
-//! ([`crate::quotient`]); integrated-unchecked keeps those that pass the dissertation's mask
+//! ([`super::quotient`]); integrated-unchecked keeps those that pass the dissertation's mask
 //! rules ([`Rules`]).
 //!
 //! ```text
@@ -20,9 +20,6 @@
 //! ```
 
 use crate::lattice::LatticeTables;
-
-/// All 14 neighbour bits.
-pub const FULL: u16 = 0x3FFF;
 
 /// A proposed group: some of the nearby crossings of one point, to be merged into one vertex,
 /// named by crossing id so that no lookup is needed to find them.
@@ -65,6 +62,7 @@ impl Candidate {
     /// The candidate restricted to the crossings whose edges are in `dirs` (a subset of its
     /// own): bit `d` of `dirs` and bit `rank(d)` of `members` name the same crossing, so the
     /// k-th set bits of the two masks correspond.
+    #[cfg(test)]
     pub fn restrict(self, dirs: u16) -> Candidate {
         let (mut all_dirs, mut all_members) = (self.dirs, self.members);
         let mut members = 0;
@@ -137,33 +135,43 @@ impl ProposalCounts {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rules {
     /// Every island of two or more nearby crossings is proposed: the exact quotient test
-    /// ([`crate::quotient`]) decides (integrated clustering).
+    /// ([`super::quotient`]) decides (integrated clustering).
     Islands,
     /// The dissertation's rules: no merge with more than 10 nearby crossings or with a loop
     /// through the point (integrated-unchecked, which has no other safeguard).
     Dissertation,
 }
 
+/// One point's edges, by neighbour bit: `valid`, the neighbours whose edges exist (all 14
+/// except on the box faces); `inner`, those whose edges have every tetrahedron around them (a
+/// crossing there is an inner vertex of plain MT; the others are on the mesh's boundary at the
+/// box faces and are never grouped by [`Rules::Islands`]); `owned`, the point's nearby
+/// crossings; `crossed`, all its crossed edges (the neighbours on the other side of the
+/// threshold).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PointEdges {
+    pub(crate) valid: u16,
+    pub(crate) inner: u16,
+    pub(crate) owned: u16,
+    pub(crate) crossed: u16,
+}
+
 /// Proposes the clusters of one point (storage slot `slot`), whose first owned crossing has id
-/// `first`.
-///
-/// `valid`: the neighbours whose edges exist (all 14 except on the box faces); `inner`: those
-/// whose edges have every tetrahedron around them (a crossing there is an inner vertex of plain
-/// MT; the others are on the mesh's boundary at the box faces and are never grouped by
-/// [`Rules::Islands`]); `owned`: the point's nearby crossings; `crossed`: all its crossed edges
-/// (the neighbours on the other side of the threshold).
-#[allow(clippy::too_many_arguments)]
+/// `first`, from its `edges`.
 pub fn propose(
     t: &LatticeTables,
     first: u32,
     slot: u32,
-    valid: u16,
-    inner: u16,
-    owned: u16,
-    crossed: u16,
+    edges: PointEdges,
     rules: Rules,
     out: &mut Vec<Candidate>,
 ) -> ProposalCounts {
+    let PointEdges {
+        valid,
+        inner,
+        owned,
+        crossed,
+    } = edges;
     let mut counts = ProposalCounts::default();
     if owned.count_ones() < 2 {
         return counts;
@@ -217,6 +225,7 @@ pub fn propose(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lattice::FULL;
     use crate::Lattice;
 
     /// `propose` at a point with id 0 and slot 0 whose 14 neighbours exist and whose edges are
@@ -228,7 +237,17 @@ mod tests {
         rules: Rules,
         out: &mut Vec<Candidate>,
     ) -> ProposalCounts {
-        propose(t, 0, 0, FULL, FULL, owned, crossed, rules, out)
+        propose(t, 0, 0, edges(FULL, FULL, owned, crossed), rules, out)
+    }
+
+    /// The edges of a point, in the order of [`PointEdges`]'s fields.
+    fn edges(valid: u16, inner: u16, owned: u16, crossed: u16) -> PointEdges {
+        PointEdges {
+            valid,
+            inner,
+            owned,
+            crossed,
+        }
     }
 
     #[test]
@@ -237,7 +256,14 @@ mod tests {
         // +x (0) with its adjacent diagonals 6 and 7; and -x (1) alone.
         let owned = (1 << 0) | (1 << 6) | (1 << 7) | (1 << 1);
         let mut out = Vec::new();
-        let c = propose(t, 5, 3, FULL, FULL, owned, owned, Rules::Islands, &mut out);
+        let c = propose(
+            t,
+            5,
+            3,
+            edges(FULL, FULL, owned, owned),
+            Rules::Islands,
+            &mut out,
+        );
         assert_eq!(c.proposed, 1);
         assert_eq!(out.len() + c.rejected, 1);
     }
@@ -250,17 +276,8 @@ mod tests {
         let t = LatticeTables::get(Lattice::BodyCentred);
         for owned in [0x0003u16, 0x00C1, 0x3FC0 ^ 0x0100, 0x1234, 0x0F0F] {
             let mut out = Vec::new();
-            propose(
-                t,
-                100,
-                0,
-                FULL,
-                FULL,
-                owned,
-                owned,
-                Rules::Islands,
-                &mut out,
-            );
+            let e = edges(FULL, FULL, owned, owned);
+            propose(t, 100, 0, e, Rules::Islands, &mut out);
             for c in &out {
                 let expected: Vec<u32> = t
                     .islands(owned)
@@ -300,17 +317,8 @@ mod tests {
         // the rest when two or more are left.
         let owned = (1 << 0) | (1 << 6) | (1 << 7);
         out.clear();
-        propose(
-            t,
-            0,
-            0,
-            FULL,
-            FULL & !(1 << 7),
-            owned,
-            owned,
-            Rules::Islands,
-            &mut out,
-        );
+        let e = edges(FULL, FULL & !(1 << 7), owned, owned);
+        propose(t, 0, 0, e, Rules::Islands, &mut out);
         assert_eq!(out.len(), 1);
         assert_eq!(out[0].dirs, (1 << 0) | (1 << 6));
         assert_eq!(out[0].members, compress((1 << 0) | (1 << 6), owned));

@@ -1,6 +1,6 @@
 //! What integrated clustering proposes once the islands settle, each step a function of the
 //! state the previous one left around each crossing (so still order-free), each settled by
-//! [`crate::repair::settle`] in [`crate::repair::Phase::Additions`]:
+//! [`super::repair::settle`] in [`super::repair::Phase::Additions`]:
 //!
 //! 1. every split island of three or more takes back its first variant (the island without one
 //!    crossing, then pairs of its crossings) that passes in the current state ([`revive`]);
@@ -16,14 +16,14 @@
 
 use rayon::prelude::*;
 
-use crate::cluster::Candidate;
-use crate::quotient::{Fixed, Groups, Lone, Quotient, Star, MAX_LONES, NONE};
+use super::proposal::Candidate;
+use super::quotient::{Fixed, Groups, Lone, Quotient, Star, MAX_LONES, NONE};
 
 /// The groups that may replace a split island, in the order they are tried: its island without
 /// one crossing, for each crossing in bit order, when that leaves a connected part; then (for
 /// islands of four or more) every pair of its crossings joined by a mesh edge, in bit order
 /// (lattice adjacency joins the crossings of one point through mesh edges, see
-/// [`crate::cluster`]).
+/// [`super::proposal`]).
 pub(crate) fn variants(c: &Candidate, t: &crate::lattice::LatticeTables, out: &mut Vec<Candidate>) {
     if c.size() < 3 {
         return;
@@ -156,7 +156,7 @@ pub(crate) struct SliverProposals {
 /// current state around each crossing, so order-free.
 ///
 /// A crossing skips the sliver edges that lead to the group that last gave it back
-/// ([`crate::quotient::Groups::refused`]) and takes its next-shortest one. The sliver passes
+/// ([`super::quotient::Groups::refused`]) and takes its next-shortest one. The sliver passes
 /// start with the lone passes' refusals cleared, so a group that gave a crossing back in a lone
 /// pass is asked again: its star has changed since, as the other lone passes settled. This
 /// matters where a sample point lies exactly on the surface: its crossings coincide there, the
@@ -530,7 +530,7 @@ mod tests {
 
     #[test]
     fn variants_drop_one_crossing_then_keep_pairs_all_connected() {
-        use crate::cluster::compress;
+        use super::super::proposal::compress;
         use crate::lattice::LatticeTables;
         use crate::Lattice;
         let t = LatticeTables::get(Lattice::BodyCentred);

@@ -15,7 +15,8 @@
 //! Triangles with two or more vertices in K collapse and are dropped. This is the link condition of
 //! edge contraction applied to the whole cluster at once (`rmt-spec.md`, "When merging keeps the
 //! surface a manifold"). Edge collapse (post-processed clustering) and the welding before meshopt
-//! use it; integrated clustering tests its groups in the quotient instead ([`crate::quotient`]).
+//! use it; integrated clustering tests its groups in the quotient instead
+//! ([`crate::mt::clustering::quotient`]).
 //!
 //! ```text
 //!      u-----w            u-----w
@@ -195,6 +196,7 @@ impl MergeBuffers {
 
     /// Number of original vertices merged into current vertex `v` (1 for an unmerged vertex):
     /// the length of its member chain (a few links; no per-vertex count is stored).
+    #[cfg(test)]
     pub fn member_count(&self, v: u32) -> u32 {
         let mut n = 0;
         let mut m = v;
@@ -206,6 +208,7 @@ impl MergeBuffers {
     }
 
     /// Number of triangles loaded (alive or not): `t` in `0..triangle_count()`.
+    #[cfg(test)]
     pub fn triangle_count(&self) -> usize {
         self.tris.len()
     }
@@ -216,11 +219,13 @@ impl MergeBuffers {
     }
 
     /// Whether triangle `t` (original numbering) still exists.
+    #[cfg(test)]
     pub fn is_alive(&self, t: usize) -> bool {
         self.tris[t] != DEAD
     }
 
     /// Current vertices of triangle `t` (meaningful while it is alive).
+    #[cfg(test)]
     pub fn triangle(&self, t: usize) -> [u32; 3] {
         self.tris[t]
     }

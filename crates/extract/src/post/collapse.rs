@@ -1,17 +1,18 @@
-//! Edge collapses under the exact check of [`crate::merge`] (the link condition, no normal
+//! Edge collapses under the exact check of [`crate::post::merge`] (the link condition, no normal
 //! flips), so topology and closedness are kept. Edges on the mesh boundary (the box) are never
 //! collapsed: the check refuses regions whose boundary touches the merged vertices.
 //!
-//! - [`collapse_short_edges`]: post-processed merging, every edge shorter than a threshold,
+//! - [`collapse_short_edges_tiled`]: post-processed merging, every edge shorter than a threshold,
 //!   shortest first, the merged vertex at the edge's midpoint (integrated clustering handles
-//!   its slivers in the quotient instead, see [`crate::quotient`]).
+//!   its slivers in the quotient instead, see [`crate::mt::clustering::quotient`]).
 
 use rmt_mesh::Mesh;
 
-use crate::merge::MergeBuffers;
+use super::merge::MergeBuffers;
 
 /// Collapses edges of `mesh` shorter than `max_len`, in order of increasing initial length (ties by
 /// vertex ids, so the result is deterministic). Returns (collapses done, triangles dropped).
+#[cfg(test)]
 pub fn collapse_short_edges(
     merge: &mut MergeBuffers,
     mesh: &mut Mesh,
@@ -82,7 +83,7 @@ mod tests {
     #[test]
     fn without_short_edges_the_mesh_is_only_compacted_as_finish_would() {
         // An octahedron with two unused vertices (first and in the middle): nothing to collapse.
-        let (positions, indices) = crate::merge::tests::octahedron();
+        let (positions, indices) = super::super::merge::tests::octahedron();
         let mut p = vec![[9.0, 9.0, 9.0]];
         p.extend_from_slice(&positions[..3]);
         p.push([7.0, 7.0, 7.0]);

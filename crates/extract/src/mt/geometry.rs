@@ -1,0 +1,421 @@
+//! The walk over the tetrahedra of one geometry layer, shared by the emission and by the
+//! listing of plain MT's triangles (integrated clustering): the anchors of a layer's faces or
+//! cubes that can hold surface ([`for_each_group`]), the count of a layer's triangles from the
+//! anchors' crossed edges alone ([`count_layer`]), and the writing of its triangles from the
+//! case table ([`geometry_layer`]).
+//!
+//! ```text
+//!   layer k:  count (anchors' crossed edges -> triangles)  ->  slice k of the output
+//!             write (tetrahedra of each anchor, case table) ->  [ layer 0 | layer 1 | ... ]
+//! ```
+
+use rayon::prelude::*;
+
+use super::crossings::{CrossedIndex, CrossedPoint};
+use super::layout::{tet_triangles, Layout, TetTemplate};
+use crate::lattice::Offset;
+use crate::util::for_each_bit;
+use crate::{CellRange, Lattice};
+
+/// What a walk over the geometry layers reads: the lattice, the isovalue, the cells kept (a
+/// chunk: only their anchors are walked) and the crossed points of the vertex pass.
+#[derive(Clone, Copy)]
+pub(crate) struct Surface<'a> {
+    pub(crate) l: &'a Layout<'a>,
+    pub(crate) iso: f32,
+    pub(crate) keep: Option<CellRange>,
+    pub(crate) crossed: &'a CrossedIndex,
+}
+
+/// The vertices a layer's triangles are written with: the crossings' positions (plain MT's
+/// vertices, which choose the diagonal of a quad) and, with clustering, the output vertex of
+/// every crossing.
+#[derive(Clone, Copy)]
+pub(crate) struct Vertices<'a> {
+    pub(crate) positions: &'a [[f32; 3]],
+    pub(crate) map: Option<&'a [u32]>,
+}
+
+/// Where one layer's triangles go: `out` (three ids each, sized by [`count_layer`]), with
+/// `list` what the listing of plain MT's triangles writes beside them, with `cells` each
+/// triangle's anchor cell.
+pub(crate) struct LayerOut<'s> {
+    pub(crate) out: &'s mut [u32],
+    pub(crate) list: Option<ListOut<'s>>,
+    pub(crate) cells: Option<&'s mut [u32]>,
+}
+
+/// Calls `visit(anchor, rank, group, p)` for each body-centred face (group: its axis) or cube
+/// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot, at
+/// lattice coordinates `p`) has a crossed edge and, in a chunk, its cell
+/// ([`Layout::anchor_cell`]) is kept. The anchor's entry is `crossed.points[rank]`. The count and
+/// the geometry pass both walk the layer with it, so they see the same groups.
+pub(crate) fn for_each_group(
+    l: &Layout,
+    k: usize,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    mut visit: impl FnMut(usize, usize, usize, Offset),
+) {
+    let [nx, ny, nz] = l.s.cells;
+    let plane = l.s.dims[0] * l.s.dims[1];
+    // The anchors of one row are consecutive storage slots, at lattice points `first + (step n,
+    // 0, 0)`: scan their bits, visit only the crossed ones.
+    let mut row = |start: usize, z: usize, len: usize, g: usize, first: Offset, step: i32| {
+        let local = start - z * plane;
+        let mut rank = crossed.rank_in(z, local);
+        for_each_bit(crossed.plane_bits(z), local, len, |n| {
+            let r = rank;
+            rank += 1;
+            let p = [first[0] + step * n as i32, first[1], first[2]];
+            if keep.is_some_and(|range| !range.contains(l.anchor_cell(p, g))) {
+                return;
+            }
+            visit(start + n, r, g, p);
+        });
+    };
+    match l.lattice {
+        Lattice::Simple => {
+            // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface
+            // in the cube.
+            for j in 0..ny {
+                row(
+                    l.s.simple_index(0, j, k),
+                    k,
+                    nx,
+                    0,
+                    [0, j as i32, k as i32],
+                    1,
+                );
+            }
+        }
+        Lattice::BodyCentred => {
+            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by their
+            // anchor A, the centre below (B and the 4 face corners are neighbours of A: without
+            // a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a face anchor
+            // moves by one storage slot (two lattice units).
+            let ki = k as i32;
+            let mut faces = |first: Offset, len: usize, axis: usize| {
+                // Storage plane (see `Samples::bcdl_index`).
+                let z = (first[2] + 1) as usize;
+                row(l.s.bcdl_index(first), z, len, axis, first, 2);
+            };
+            for j in 0..ny as i32 {
+                faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
+            }
+            if k < nz {
+                for j in 0..ny as i32 {
+                    faces([-1, 2 * j + 1, 2 * ki + 1], nx + 1, 0);
+                }
+                for f in 0..=ny as i32 {
+                    faces([1, 2 * f - 1, 2 * ki + 1], nx, 1);
+                }
+            }
+        }
+    }
+}
+
+/// Triangles of every geometry layer (those of the cells `keep`), in layer order.
+pub(crate) fn layer_counts(
+    l: &Layout,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+    pool: &rayon::ThreadPool,
+) -> Vec<usize> {
+    let layers = match l.lattice {
+        Lattice::BodyCentred => l.s.cells[2] + 1,
+        Lattice::Simple => l.s.cells[2],
+    };
+    pool.install(|| {
+        (0..layers)
+            .into_par_iter()
+            .map(|k| count_layer(l, k, keep, crossed))
+            .collect()
+    })
+}
+
+/// Triangles geometry layer `k` will give: per group, a table lookup by the anchor's crossed
+/// edges.
+pub(crate) fn count_layer(
+    l: &Layout,
+    k: usize,
+    keep: Option<CellRange>,
+    crossed: &CrossedIndex,
+) -> usize {
+    let mut n = 0;
+    for_each_group(l, k, keep, crossed, |_, rank, g, _| {
+        let group = &l.groups[g];
+        let mask = usize::from(crossed.points[rank].crossed);
+        let mut code = 0;
+        for (i, &d) in group.dirs[1..group.len].iter().enumerate() {
+            code |= ((mask >> d) & 1) << (i + 1);
+        }
+        n += usize::from(group.triangles[code]);
+    });
+    n
+}
+
+/// Emission over z-layer `k` (its anchors walked as `surface` says): writes its triangles into
+/// `out.out`, sized by [`count_layer`] (the triangles of plain MT); with `vertices.map`
+/// (crossing id to output vertex, clustering) the triangles are written with the clustered
+/// vertices and those that collapsed are left out. Returns the tetrahedra processed and the
+/// triangles written.
+pub(crate) fn geometry_layer(
+    surface: &Surface,
+    k: usize,
+    vertices: Vertices,
+    out: LayerOut<'_>,
+) -> (usize, usize) {
+    let (l, crossed) = (surface.l, surface.crossed);
+    let plane = l.s.dims[0] * l.s.dims[1];
+    // The crossed points of the storage planes this layer reads, copied into a dense window (one
+    // entry per slot) of this thread: a crossing's id is then one load away, where the rank
+    // directory needs two dependent ones. A few planes per thread, not a table per slot.
+    let (z0, z1) = l.layer_planes(k);
+    LAYER_WINDOW.with_borrow_mut(|window| {
+        if window.len() < (z1 + 1 - z0) * plane {
+            window.resize((z1 + 1 - z0) * plane, CrossedPoint::default());
+        }
+        for z in z0..=z1 {
+            let base = (z - z0) * plane;
+            let mut r = crossed.rank_in(z, 0);
+            for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
+                window[base + local] = crossed.points[r];
+                r += 1;
+            });
+        }
+        geometry_in_window(surface, k, vertices, &window[..], z0, out)
+    })
+}
+
+thread_local! {
+    /// The dense window of [`geometry_layer`], kept per thread between layers and extractions
+    /// (entries of slots without a crossed edge are stale and never read).
+    pub(crate) static LAYER_WINDOW: std::cell::RefCell<Vec<CrossedPoint>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// What the listing of plain MT's triangles ([`plain_triangles`]) writes beside them, per
+/// triangle of a layer.
+pub(crate) struct ListOut<'s> {
+    /// The gradient of its tetrahedron.
+    pub(crate) grad: &'s mut [[f32; 3]],
+    /// In a chunk: the kept cells, and per triangle 1 when its anchor's cell is one of them
+    /// (the triangles the chunk emits), else 0.
+    pub(crate) kept: Option<(CellRange, &'s mut [u8])>,
+}
+
+/// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`; with
+/// `out.cells`, each triangle written gets its anchor cell there (linear index, x fastest).
+/// Returns the tetrahedra with a triangle (when listing in a chunk, those of kept cells) and
+/// the triangles written.
+pub(crate) fn geometry_in_window(
+    surface: &Surface,
+    k: usize,
+    vertices: Vertices,
+    window: &[CrossedPoint],
+    z0: usize,
+    out: LayerOut<'_>,
+) -> (usize, usize) {
+    let Surface {
+        l,
+        iso,
+        keep,
+        crossed,
+    } = *surface;
+    let Vertices { positions, map } = vertices;
+    let LayerOut {
+        out,
+        mut list,
+        mut cells,
+    } = out;
+    let v = &l.s.values;
+    let plane = l.s.dims[0] * l.s.dims[1];
+    let mut processed = 0;
+    let mut w = 0;
+    // Listing in a chunk: every anchor is walked, and the kept cells' ones are marked.
+    let listing = list.is_some();
+    let mark = list
+        .as_ref()
+        .and_then(|list| list.kept.as_ref().map(|k| k.0));
+    let cells_wanted = cells.is_some();
+    let [nx, ny, _] = l.s.cells;
+    let mut tet =
+        |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool, kept: bool, cell: u32| {
+            let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
+            let val = idx.map(|i| v[i]);
+            let mut tris = [[0u32; 3]; 2];
+            // The window starts at slot 0 of plane z0.
+            let id = |o: usize, d: u8| {
+                let entry = window[idx[o] - z0 * plane];
+                debug_assert_eq!(entry, crossed.get(idx[o]));
+                entry.id(d)
+            };
+            let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
+            processed += usize::from(n > 0 && kept);
+            match map {
+                None => {
+                    // The gradient of the tetrahedron, for the quotient test's (c).
+                    let g = if n > 0 && list.is_some() {
+                        l.gradient(anchor, ti, inner)
+                    } else {
+                        [0.0; 3]
+                    };
+                    for t in &tris[..n] {
+                        if let Some(list) = list.as_mut() {
+                            list.grad[w / 3] = g;
+                            if let Some((_, flags)) = list.kept.as_mut() {
+                                flags[w / 3] = u8::from(kept);
+                            }
+                        }
+                        if let Some(cells) = cells.as_deref_mut() {
+                            cells[w / 3] = cell;
+                        }
+                        out[w..w + 3].copy_from_slice(t);
+                        w += 3;
+                    }
+                }
+                Some(map) => {
+                    // Clustered: the vertices of the groups' quotient; a triangle with two corners
+                    // in one group collapsed and is dropped.
+                    for t in &tris[..n] {
+                        let q = t.map(|i| map[i as usize]);
+                        if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
+                            if let Some(cells) = cells.as_deref_mut() {
+                                cells[w / 3] = cell;
+                            }
+                            out[w..w + 3].copy_from_slice(&q);
+                            w += 3;
+                        }
+                    }
+                }
+            }
+        };
+    for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
+        // Only the listing reads these: whether no corner is a ghost (for the gradient), and in
+        // a chunk whether the anchor's cell is kept.
+        let inner = listing && l.inner_anchor(p);
+        let kept = mark.is_none_or(|range| range.contains(l.anchor_cell(p, g)));
+        let cell = if cells_wanted {
+            let c = l.anchor_cell(p, g);
+            (c[0] + nx * (c[1] + ny * c[2])) as u32
+        } else {
+            0
+        };
+        let first = match l.lattice {
+            Lattice::BodyCentred => 4 * g,
+            Lattice::Simple => 0,
+        };
+        let count = match l.lattice {
+            Lattice::BodyCentred => 4,
+            Lattice::Simple => l.tets.len(),
+        };
+        for ti in first..first + count {
+            tet(anchor, ti, &l.tets[ti], inner, kept, cell);
+        }
+    });
+    debug_assert!(
+        w == out.len() || (map.is_some() && w <= out.len()),
+        "layer {k}: triangles counted and written differ"
+    );
+    (processed, w / 3)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mt::layout::case_triangles;
+    use crate::mt::testing::{plain_mt, test_pool, wavy};
+
+    #[test]
+    fn layer_triangle_counts_match_the_tetrahedra_of_every_group() {
+        // The count reads only the anchor's crossed edges through the group tables; here each
+        // group's tetrahedra are evaluated from the sample values instead, with and without
+        // kept cells.
+        let field = wavy();
+        let pool = test_pool(1);
+        let mut triangles = 0;
+        // Anchors visited as not inner / inner.
+        let mut flags = [0usize; 2];
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[3, 2, 4], [9, 8, 6], [13, 11, 12]] {
+                let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
+                let l = Layout::new(&samples, lattice);
+                let (expected_len, dirs_from) = match lattice {
+                    Lattice::BodyCentred => (6, 1),
+                    Lattice::Simple => (8, 0),
+                };
+                for g in &l.groups {
+                    assert_eq!(g.len, expected_len, "{lattice:?}");
+                    assert_eq!(g.points[0], 0, "the anchor comes first");
+                    for i in 1..g.len {
+                        let d = l.delta[dirs_from][g.dirs[i] as usize];
+                        assert_eq!(d, g.points[i], "{lattice:?} point {i}");
+                    }
+                    for code in 0..1usize << g.len {
+                        let swapped = !code & ((1 << g.len) - 1);
+                        assert_eq!(g.triangles[code], g.triangles[swapped], "side swap");
+                    }
+                }
+                let layers = match lattice {
+                    Lattice::BodyCentred => cells[2] + 1,
+                    Lattice::Simple => cells[2],
+                };
+                let keeps = [
+                    None,
+                    Some(CellRange {
+                        lo: [1, 0, 1],
+                        hi: [cells[0] - 1, cells[1], cells[2] - 1],
+                    }),
+                ];
+                for keep in keeps {
+                    let mut total = 0;
+                    for k in 0..layers {
+                        let mut direct = 0;
+                        for_each_group(&l, k, keep, &buf.vertices.crossed, |anchor, _, g, q| {
+                            let tets = match lattice {
+                                Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
+                                Lattice::Simple => &l.tets[..],
+                            };
+                            // The walk's coordinates are the anchor's, and `inner_anchor`
+                            // promises every corner in the box (no ghost).
+                            let p = l.coords_of(anchor);
+                            assert_eq!(q, p, "{lattice:?} {cells:?}");
+                            let inner = l.inner_anchor(p);
+                            let in_box = tets.iter().all(|tpl| {
+                                tpl.off.iter().all(|o| {
+                                    (0..3)
+                                        .all(|a| p[a] + o[a] >= 0 && p[a] + o[a] <= l.max_coord(a))
+                                })
+                            });
+                            assert!(!inner || in_box, "{lattice:?} {cells:?} anchor {p:?}");
+                            flags[usize::from(inner)] += 1;
+                            for tpl in tets {
+                                let case = (0..4).fold(0, |case, i| {
+                                    let slot = (anchor as isize + tpl.delta[i]) as usize;
+                                    case | usize::from(samples.values[slot] < settings.iso) << i
+                                });
+                                direct += usize::from(case_triangles(case));
+                            }
+                        });
+                        let counted = count_layer(&l, k, keep, &buf.vertices.crossed);
+                        assert_eq!(counted, direct, "{lattice:?} {cells:?} layer {k} {keep:?}");
+                        total += counted;
+                    }
+                    if keep.is_none() {
+                        assert_eq!(total * 3, mesh.indices.len(), "{lattice:?} {cells:?}");
+                    }
+                    triangles += total;
+                }
+            }
+        }
+        assert!(
+            triangles > 1000,
+            "only {triangles} triangles: the fields miss the grids"
+        );
+        assert!(
+            flags[0] > 50 && flags[1] > 50,
+            "anchors by inner: {flags:?}"
+        );
+    }
+}
