@@ -144,7 +144,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for line in &significant {
         println!("  {line}");
     }
-    for line in rmt_analysis::effects::summary_lines(&analysis) {
+    for line in rmt_analysis::analysis::summary_lines(&analysis) {
         println!("{line}");
     }
     for line in &analysis.ungrouped {

@@ -22,11 +22,10 @@
 
 use std::path::Path;
 
-use crate::analysis::{Analysis, Interval};
 use crate::data::{Answer, Dataset};
 use crate::design::Design;
 use crate::error::{AnalysisError, Result};
-use crate::stats::{sign_test, wilson_interval, Z_95};
+use crate::stats::{sign_test, wilson_interval, Interval, Z_95};
 
 /// Target power of the power table.
 pub const TARGET_POWER: f64 = 0.8;
@@ -524,51 +523,6 @@ fn order_effect(
         slower,
         time_p: sign_test(faster, slower),
     })
-}
-
-/// Analysis summary lines for printing.
-pub fn summary_lines(analysis: &Analysis) -> Vec<String> {
-    let Some(effects) = &analysis.survey else {
-        return Vec::new();
-    };
-    let mut lines = Vec::new();
-    for p in &effects.position {
-        lines.push(format!(
-            "Position, {}: left {} / none {} / right {}, share left {:.3}, p = {:.3}",
-            p.source, p.left, p.none, p.right, p.share_left, p.p_value
-        ));
-    }
-    if let Some(o) = &effects.order {
-        let rates: Vec<String> = o
-            .bins
-            .iter()
-            .map(|b| format!("{}-{}: {:.3}", b.first, b.last, b.tie_rate))
-            .collect();
-        lines.push(format!(
-            "Order: no-preference rate by position {} (trend z = {:.2}, p = {:.3}); last/first \
-             third answer time {:.2}x",
-            rates.join(", "),
-            o.tie_trend_z,
-            o.tie_trend_p,
-            o.time_ratio
-        ));
-    }
-    if let Some(power) = &effects.power {
-        for g in &power.groups {
-            let show = |n: Option<u64>| n.map(|n| n.to_string()).unwrap_or_else(|| "-".into());
-            lines.push(format!(
-                "Power 80%, {}: {} participants for its strongest question, {} for all {} \
-                 (Holm worst case: {} / {})",
-                g.group,
-                show(g.strongest),
-                show(g.all),
-                g.questions,
-                show(g.strongest_holm),
-                show(g.all_holm)
-            ));
-        }
-    }
-    lines
 }
 
 #[cfg(test)]

@@ -4,6 +4,9 @@
 //!
 //! Formulas follow `statistics.md`; each function says which.
 
+/// A 95% interval (`None` when undefined, e.g. no bootstrap or no decided answers).
+pub type Interval = Option<(f64, f64)>;
+
 /// z for a two-sided 95% interval.
 pub const Z_95: f64 = 1.959_963_984_540_054;
 
