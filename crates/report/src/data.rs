@@ -1,5 +1,6 @@
 //! The run folder as the report sees it: provenance from `run.json`, one [`Configuration`] per
-//! row of `summary.csv`, the comparison with the dissertation from `paper_comparison.csv`.
+//! row of `summary.csv`, the comparison with the dissertation from `paper_comparison.csv` and a
+//! seed study's distributions from `seeds.csv` (drawn by [`crate::seeds`]).
 //!
 //! Column names are those the runner writes (`experiments::runner`): the configuration columns,
 //! `repetitions`, each time's `t_<stage>_s_{mean,sd,min,median,max}`, the counts, validation and
@@ -25,6 +26,8 @@ pub const CONFIGURATIONS_CSV: &str = "configurations.csv";
 pub const RAW_CSV: &str = "raw.csv";
 /// `manifest.toml`.
 pub const MANIFEST_TOML: &str = "manifest.toml";
+/// `seeds.csv`.
+pub const SEEDS_CSV: &str = "seeds.csv";
 
 /// Where and how a run was made, from `run.json`.
 #[derive(Clone, Debug, PartialEq)]
@@ -487,6 +490,126 @@ pub fn read_paper_comparison(path: &Path) -> Result<Vec<PaperRow>> {
     Ok(rows)
 }
 
+/// The seed the single-seed tables show: 7 (the dissertation's asteroid, the asteroid's default
+/// seed) when the study has it, else the study's first seed.
+pub fn representative_seed(from: u64, to: u64) -> u64 {
+    if (from..=to).contains(&7) {
+        7
+    } else {
+        from
+    }
+}
+
+/// A metric's distribution over the seeds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spread {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation.
+    pub sd: Option<f64>,
+    /// 95% confidence interval of the mean.
+    pub ci: Option<(f64, f64)>,
+    /// Smallest and largest value.
+    pub range: (f64, f64),
+}
+
+/// One row of `seeds.csv`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SeedRow {
+    /// Configuration id without seed.
+    pub id: String,
+    /// Object name.
+    pub object: String,
+    /// `mt` or `mc`.
+    pub method: String,
+    /// Lattice.
+    pub lattice: String,
+    /// Clustering.
+    pub clustering: String,
+    /// Number of seeds, first and last.
+    pub seeds: (u64, u64, u64),
+    /// Output triangles.
+    pub triangles: Option<Spread>,
+    /// Triangle reduction against no clustering.
+    pub reduction: Option<Spread>,
+    /// Mean radius ratio.
+    pub radius_ratio: Option<Spread>,
+    /// Mean distance to the surface, grid spacings.
+    pub fidelity: Option<Spread>,
+    /// The dissertation's triangles, reduction and radius ratio (single asteroid).
+    pub paper: [Option<f64>; 3],
+}
+
+impl SeedRow {
+    /// `BCDL, integrated` or `marching cubes`.
+    pub fn description(&self) -> String {
+        if self.method == "mc" {
+            "marching cubes".into()
+        } else {
+            format!("{}, {}", lattice_name(&self.lattice), self.clustering)
+        }
+    }
+
+    /// `marching cubes` or the clustering: the variant a seed figure colours.
+    pub(crate) fn variant(&self) -> String {
+        if self.method == "mc" {
+            "marching cubes".into()
+        } else {
+            self.clustering.clone()
+        }
+    }
+}
+
+/// Reads `seeds.csv`.
+pub fn read_seeds(path: &Path) -> Result<Vec<SeedRow>> {
+    let file = CsvFile::read(path)?;
+    let mut rows = Vec::with_capacity(file.rows.len());
+    for r in 0..file.rows.len() {
+        let spread = |m: &str| -> Result<Option<Spread>> {
+            let Some(mean) = file.number(r, &format!("{m}_mean"))? else {
+                return Ok(None);
+            };
+            let lo = file.number(r, &format!("{m}_ci_low"))?;
+            let hi = file.number(r, &format!("{m}_ci_high"))?;
+            Ok(Some(Spread {
+                mean,
+                sd: file.number(r, &format!("{m}_sd"))?,
+                ci: lo.zip(hi),
+                range: (
+                    file.number(r, &format!("{m}_min"))?.unwrap_or(mean),
+                    file.number(r, &format!("{m}_max"))?.unwrap_or(mean),
+                ),
+            }))
+        };
+        let int = |name: &str| -> Result<u64> { Ok(file.required(r, name)? as u64) };
+        let paper = |m: &str| -> Result<Option<f64>> {
+            if file.has(&format!("paper_{m}")) {
+                file.number(r, &format!("paper_{m}"))
+            } else {
+                Ok(None)
+            }
+        };
+        rows.push(SeedRow {
+            id: file.text(r, "id")?.to_string(),
+            object: file.text(r, "object")?.to_string(),
+            method: file.text(r, "method")?.to_string(),
+            lattice: file.text(r, "lattice")?.to_string(),
+            clustering: file.text(r, "clustering")?.to_string(),
+            seeds: (int("seeds")?, int("seed_from")?, int("seed_to")?),
+            triangles: spread("triangles")?,
+            reduction: spread("triangle_reduction")?,
+            radius_ratio: spread("ar_mean")?,
+            fidelity: spread("fidelity_mean_h")?,
+            paper: [
+                paper("triangles")?,
+                paper("triangle_reduction")?,
+                paper("ar_mean")?,
+            ],
+        });
+    }
+    Ok(rows)
+}
+
 /// A run folder read for the report.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Run {
@@ -499,8 +622,8 @@ pub struct Run {
     /// The comparison with the dissertation, when the run has one.
     pub paper: Option<Vec<PaperRow>>,
     /// A seed study's distributions (`seeds.csv`); its per-seed configurations are then left out
-    /// of [`Run::configurations`] except one seed each ([`crate::seeds::representative_seed`]).
-    pub seeds: Option<Vec<crate::seeds::SeedRow>>,
+    /// of [`Run::configurations`] except one seed each ([`representative_seed`]).
+    pub seeds: Option<Vec<SeedRow>>,
 }
 
 impl Run {
@@ -532,9 +655,9 @@ impl Run {
         } else {
             None
         };
-        let seeds_path = folder.join(crate::seeds::SEEDS_CSV);
+        let seeds_path = folder.join(SEEDS_CSV);
         let seeds = if seeds_path.is_file() {
-            Some(crate::seeds::read_seeds(&seeds_path)?)
+            Some(read_seeds(&seeds_path)?)
         } else {
             None
         };
@@ -545,9 +668,7 @@ impl Run {
                     c.id.strip_prefix(r.id.as_str())
                         .and_then(|rest| rest.strip_prefix("_s"))
                         .and_then(|s| s.parse::<u64>().ok())
-                        .is_some_and(|seed| {
-                            seed != crate::seeds::representative_seed(r.seeds.1, r.seeds.2)
-                        })
+                        .is_some_and(|seed| seed != representative_seed(r.seeds.1, r.seeds.2))
                 })
             });
         }
@@ -585,5 +706,17 @@ impl Run {
                 (o, members)
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_dissertation_seed_is_shown_when_the_study_has_it() {
+        assert_eq!(representative_seed(1, 200), 7);
+        assert_eq!(representative_seed(8, 20), 8);
+        assert_eq!(representative_seed(7, 7), 7);
     }
 }

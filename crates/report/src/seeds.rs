@@ -4,138 +4,16 @@
 //! single-asteroid values). The report then shows a section "Across N asteroids": a table and
 //! interval plots (mean with its 95% CI, the dissertation's value as a marker), beside the
 //! single-seed tables, which show one seed of each configuration ([`representative_seed`]).
+//!
+//! `seeds.csv` is read with the rest of the run folder ([`crate::data`]); this module draws it.
 
 use std::collections::BTreeSet;
-use std::path::Path;
 
-use crate::csv_file::CsvFile;
-use crate::data::{lattice_name, Run};
-use crate::error::Result;
+use crate::data::Run;
+pub use crate::data::{read_seeds, representative_seed, SeedRow, Spread, SEEDS_CSV};
 use crate::format::{fixed, sig};
 use crate::output::{Block, TextTable};
 use crate::plot::{palette, Axis, Bar, LegendEntry, Marker, RowChart, RowLine, Swatch, INK};
-
-/// `seeds.csv`.
-pub const SEEDS_CSV: &str = "seeds.csv";
-
-/// The seed the single-seed tables show: 7 (the dissertation's asteroid, the asteroid's default
-/// seed) when the study has it, else the study's first seed.
-pub fn representative_seed(from: u64, to: u64) -> u64 {
-    if (from..=to).contains(&7) {
-        7
-    } else {
-        from
-    }
-}
-
-/// A metric's distribution over the seeds.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Spread {
-    /// Mean.
-    pub mean: f64,
-    /// Sample standard deviation.
-    pub sd: Option<f64>,
-    /// 95% confidence interval of the mean.
-    pub ci: Option<(f64, f64)>,
-    /// Smallest and largest value.
-    pub range: (f64, f64),
-}
-
-/// One row of `seeds.csv`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SeedRow {
-    /// Configuration id without seed.
-    pub id: String,
-    /// Object name.
-    pub object: String,
-    /// `mt` or `mc`.
-    pub method: String,
-    /// Lattice.
-    pub lattice: String,
-    /// Clustering.
-    pub clustering: String,
-    /// Number of seeds, first and last.
-    pub seeds: (u64, u64, u64),
-    /// Output triangles.
-    pub triangles: Option<Spread>,
-    /// Triangle reduction against no clustering.
-    pub reduction: Option<Spread>,
-    /// Mean radius ratio.
-    pub radius_ratio: Option<Spread>,
-    /// Mean distance to the surface, grid spacings.
-    pub fidelity: Option<Spread>,
-    /// The dissertation's triangles, reduction and radius ratio (single asteroid).
-    pub paper: [Option<f64>; 3],
-}
-
-impl SeedRow {
-    /// `BCDL, integrated` or `marching cubes`.
-    pub fn description(&self) -> String {
-        if self.method == "mc" {
-            "marching cubes".into()
-        } else {
-            format!("{}, {}", lattice_name(&self.lattice), self.clustering)
-        }
-    }
-
-    fn variant(&self) -> String {
-        if self.method == "mc" {
-            "marching cubes".into()
-        } else {
-            self.clustering.clone()
-        }
-    }
-}
-
-/// Reads `seeds.csv`.
-pub fn read_seeds(path: &Path) -> Result<Vec<SeedRow>> {
-    let file = CsvFile::read(path)?;
-    let mut rows = Vec::with_capacity(file.rows.len());
-    for r in 0..file.rows.len() {
-        let spread = |m: &str| -> Result<Option<Spread>> {
-            let Some(mean) = file.number(r, &format!("{m}_mean"))? else {
-                return Ok(None);
-            };
-            let lo = file.number(r, &format!("{m}_ci_low"))?;
-            let hi = file.number(r, &format!("{m}_ci_high"))?;
-            Ok(Some(Spread {
-                mean,
-                sd: file.number(r, &format!("{m}_sd"))?,
-                ci: lo.zip(hi),
-                range: (
-                    file.number(r, &format!("{m}_min"))?.unwrap_or(mean),
-                    file.number(r, &format!("{m}_max"))?.unwrap_or(mean),
-                ),
-            }))
-        };
-        let int = |name: &str| -> Result<u64> { Ok(file.required(r, name)? as u64) };
-        let paper = |m: &str| -> Result<Option<f64>> {
-            if file.has(&format!("paper_{m}")) {
-                file.number(r, &format!("paper_{m}"))
-            } else {
-                Ok(None)
-            }
-        };
-        rows.push(SeedRow {
-            id: file.text(r, "id")?.to_string(),
-            object: file.text(r, "object")?.to_string(),
-            method: file.text(r, "method")?.to_string(),
-            lattice: file.text(r, "lattice")?.to_string(),
-            clustering: file.text(r, "clustering")?.to_string(),
-            seeds: (int("seeds")?, int("seed_from")?, int("seed_to")?),
-            triangles: spread("triangles")?,
-            reduction: spread("triangle_reduction")?,
-            radius_ratio: spread("ar_mean")?,
-            fidelity: spread("fidelity_mean_h")?,
-            paper: [
-                paper("triangles")?,
-                paper("triangle_reduction")?,
-                paper("ar_mean")?,
-            ],
-        });
-    }
-    Ok(rows)
-}
 
 /// `N asteroids` (or `N seeds` when the study has no asteroid): the section's noun.
 pub fn heading(rows: &[SeedRow]) -> String {
@@ -420,16 +298,4 @@ pub fn readme_section(rows: &[SeedRow], figures: &[String], table_link: Option<S
         }
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_dissertation_seed_is_shown_when_the_study_has_it() {
-        assert_eq!(representative_seed(1, 200), 7);
-        assert_eq!(representative_seed(8, 20), 8);
-        assert_eq!(representative_seed(7, 7), 7);
-    }
 }
