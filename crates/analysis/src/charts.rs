@@ -16,7 +16,7 @@ use plotters::style::FontStyle;
 
 use crate::analysis::{Analysis, Interval, StrengthScope};
 use crate::error::{AnalysisError, Result};
-use crate::output::write_atomically;
+use rmt_runfolder::write_atomic;
 
 /// DejaVu Sans (Bitstream Vera licence, see `assets/DejaVuSans-LICENSE.txt`).
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
@@ -600,7 +600,7 @@ fn write_chart<C: Chart>(chart: &C, dir: &Path, name: &str) -> Result<Vec<PathBu
         root.present()
             .map_err(|e| chart_error(&svg)(e.to_string()))?;
     }
-    write_atomically(&svg, text.as_bytes())?;
+    write_atomic(&svg, text.as_bytes())?;
     Ok(vec![png, svg])
 }
 

@@ -243,6 +243,16 @@ pub enum AnalysisError {
 /// The crate's result type.
 pub type Result<T> = std::result::Result<T, AnalysisError>;
 
+/// A failed atomic write is an I/O error on the file it was to write.
+impl From<rmt_runfolder::WriteError> for AnalysisError {
+    fn from(e: rmt_runfolder::WriteError) -> Self {
+        AnalysisError::Io {
+            path: e.path,
+            source: e.source,
+        }
+    }
+}
+
 /// Wraps an I/O error with its path.
 pub(crate) fn io_error(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> AnalysisError {
     let path = path.to_path_buf();

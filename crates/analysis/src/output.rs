@@ -1,30 +1,16 @@
 //! Writing results: every table as CSV and Markdown, every chart as PNG and SVG, each file written
-//! to a temporary name in the target directory and renamed over the target, so a reader never
-//! sees a half-written file and an interrupted run leaves the previous file intact.
+//! with the workspace's atomic write ([`rmt_runfolder::write_atomic`]: a temporary name in the
+//! target directory renamed over the target), so a reader never sees a half-written file and an
+//! interrupted run leaves the previous file intact.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
+
+use rmt_runfolder::write_atomic;
 
 use crate::analysis::Analysis;
 use crate::charts::write_charts;
 use crate::error::{io_error, Result};
 use crate::tables::all_tables;
-
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path.parent().unwrap_or_else(|| Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "output".into());
-    let temporary = dir.join(format!(".{name}.tmp"));
-    {
-        let mut file = std::fs::File::create(&temporary).map_err(io_error(&temporary))?;
-        file.write_all(bytes).map_err(io_error(&temporary))?;
-        file.sync_all().map_err(io_error(&temporary))?;
-    }
-    std::fs::rename(&temporary, path).map_err(io_error(path))
-}
 
 /// Writes every table (`NAME.csv`, `NAME.md`), a combined `analysis.md` and the charts
 /// (`NAME.png`, `NAME.svg`) into `out_dir` (created if needed). Returns the files written, in
@@ -35,16 +21,16 @@ pub fn write_outputs(analysis: &Analysis, out_dir: &Path) -> Result<Vec<PathBuf>
     let mut combined = String::from("# Questionnaire analysis\n\n");
     for table in all_tables(analysis) {
         let csv = out_dir.join(format!("{}.csv", table.name));
-        write_atomically(&csv, &table.to_csv())?;
+        write_atomic(&csv, &table.to_csv())?;
         written.push(csv);
         let markdown = table.to_markdown();
         let md = out_dir.join(format!("{}.md", table.name));
-        write_atomically(&md, markdown.as_bytes())?;
+        write_atomic(&md, markdown.as_bytes())?;
         written.push(md);
         combined.push_str(&markdown);
     }
     let all = out_dir.join("analysis.md");
-    write_atomically(&all, combined.as_bytes())?;
+    write_atomic(&all, combined.as_bytes())?;
     written.push(all);
     written.extend(write_charts(analysis, out_dir)?);
     Ok(written)

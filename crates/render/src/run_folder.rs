@@ -26,10 +26,10 @@ use rmt_mesh::Mesh;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// The manifest of a run.
-pub const CONFIGURATIONS_FILE: &str = "configurations.csv";
-/// Folder of the meshes, `<id>.ply`.
-pub const MESHES_DIR: &str = "meshes";
+/// The manifest of a run (the runner's file, [`rmt_runfolder::layout::CONFIGURATIONS_CSV`]).
+pub const CONFIGURATIONS_FILE: &str = rmt_runfolder::layout::CONFIGURATIONS_CSV;
+/// Folder of the meshes, `<id>.ply` (the runner's, [`rmt_runfolder::layout::MESHES`]).
+pub const MESHES_DIR: &str = rmt_runfolder::layout::MESHES;
 /// Folder of the turntables.
 pub const RENDER_DIR: &str = "render";
 /// The settings file inside [`RENDER_DIR`].

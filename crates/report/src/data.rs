@@ -15,17 +15,17 @@ use crate::csv_file::CsvFile;
 use crate::error::{io_error, ReportError, Result};
 
 /// `run.json`.
-pub const RUN_JSON: &str = "run.json";
+pub const RUN_JSON: &str = rmt_runfolder::layout::RUN_JSON;
 /// `summary.csv`.
-pub const SUMMARY_CSV: &str = "summary.csv";
+pub const SUMMARY_CSV: &str = rmt_runfolder::layout::SUMMARY_CSV;
 /// `paper_comparison.csv`.
-pub const PAPER_CSV: &str = "paper_comparison.csv";
+pub const PAPER_CSV: &str = rmt_runfolder::layout::PAPER_CSV;
 /// `configurations.csv`.
-pub const CONFIGURATIONS_CSV: &str = "configurations.csv";
+pub const CONFIGURATIONS_CSV: &str = rmt_runfolder::layout::CONFIGURATIONS_CSV;
 /// `raw.csv`.
-pub const RAW_CSV: &str = "raw.csv";
+pub const RAW_CSV: &str = rmt_runfolder::layout::RAW_CSV;
 /// `manifest.toml`.
-pub const MANIFEST_TOML: &str = "manifest.toml";
+pub const MANIFEST_TOML: &str = rmt_runfolder::layout::MANIFEST_COPY;
 /// `seeds.csv`.
 pub const SEEDS_CSV: &str = "seeds.csv";
 

@@ -94,6 +94,16 @@ pub enum ReportError {
 /// The crate's result type.
 pub type Result<T> = std::result::Result<T, ReportError>;
 
+/// A failed atomic write is an I/O error on the file it was to write.
+impl From<rmt_runfolder::WriteError> for ReportError {
+    fn from(e: rmt_runfolder::WriteError) -> Self {
+        ReportError::Io {
+            path: e.path,
+            source: e.source,
+        }
+    }
+}
+
 /// Maps an I/O error to [`ReportError::Io`] for `path`.
 pub(crate) fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
     move |source| ReportError::Io {

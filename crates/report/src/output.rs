@@ -1,29 +1,6 @@
-//! Writing files: tables as CSV and Markdown, every file through a temporary name and a rename, so
-//! a reader never sees half a file.
-
-use std::io::Write;
-use std::path::Path;
-
-use crate::error::{io_error, Result};
-
-/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or_else(|| Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "output".into());
-    let temporary = dir.join(format!(".{name}.tmp"));
-    {
-        let mut file = std::fs::File::create(&temporary).map_err(io_error(&temporary))?;
-        file.write_all(bytes).map_err(io_error(&temporary))?;
-        file.sync_all().map_err(io_error(&temporary))?;
-    }
-    std::fs::rename(&temporary, path).map_err(io_error(path))
-}
+//! Tables as CSV and Markdown. Every file of the report is written with the workspace's atomic
+//! write ([`rmt_runfolder::write_atomic`]: a temporary name and a rename), so a reader never sees
+//! half a file.
 
 /// One Markdown table of a [`TextTable`].
 #[derive(Clone, Debug, PartialEq)]
@@ -140,15 +117,5 @@ mod tests {
             table.to_markdown(),
             "## T\n\nnote\n\n| a | b |\n|---|---:|\n| x\\|y | – |\n\n"
         );
-    }
-
-    #[test]
-    fn atomic_writes_leave_only_the_target() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("a.txt");
-        write_atomically(&path, b"one, longer").unwrap();
-        write_atomically(&path, b"two").unwrap();
-        assert_eq!(std::fs::read(&path).unwrap(), b"two");
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 }

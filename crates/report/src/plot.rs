@@ -15,7 +15,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::error::{io_error, ReportError, Result};
 use crate::format;
-use crate::output::write_atomically;
+use rmt_runfolder::write_atomic;
 
 /// The font family registered by `rmt-analysis`.
 const FAMILY: &str = "sans-serif";
@@ -1195,7 +1195,7 @@ pub fn write_figure<F: Figure>(figure: &F, dir: &Path, name: &str) -> Result<Vec
         root.present()
             .map_err(|m| chart_error(&svg, m.to_string()))?;
     }
-    write_atomically(&svg, text.as_bytes())?;
+    write_atomic(&svg, text.as_bytes())?;
     Ok(vec![png, svg])
 }
 

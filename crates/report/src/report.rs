@@ -24,10 +24,11 @@ use crate::data::{
 };
 use crate::error::{io_error, ReportError, Result};
 use crate::figures::{self, AnyFigure};
-use crate::output::{write_atomically, TextTable};
+use crate::output::TextTable;
 use crate::readme::{readme, QuestionnaireSummary, ReadmeInput};
 use crate::scaling::{fit_scaling, ScalingFit};
 use crate::tables;
+use rmt_runfolder::write_atomic;
 
 /// The run files copied into `data/` (when present), in this order.
 pub const DATA_FILES: [&str; 7] = [
@@ -106,7 +107,7 @@ fn read_data_files(folder: &Path, keep_raw: bool) -> Result<Vec<(&'static str, V
 fn write_data_files(dir: &Path, files: &[(&'static str, Vec<u8>)]) -> Result<Vec<String>> {
     std::fs::create_dir_all(dir).map_err(io_error(dir))?;
     for (name, bytes) in files {
-        write_atomically(&dir.join(name), bytes)?;
+        write_atomic(&dir.join(name), bytes)?;
     }
     for name in DATA_FILES {
         let path = dir.join(name);
@@ -136,9 +137,9 @@ fn remove_stale(dir: &Path, keep: &BTreeSet<PathBuf>, extensions: &[&str]) -> Re
 /// Writes `table` as `dir/NAME.csv` and `dir/NAME.md`.
 fn write_table(dir: &Path, table: &TextTable) -> Result<Vec<PathBuf>> {
     let csv = dir.join(format!("{}.csv", table.name));
-    write_atomically(&csv, &table.to_csv())?;
+    write_atomic(&csv, &table.to_csv())?;
     let md = dir.join(format!("{}.md", table.name));
-    write_atomically(&md, table.to_markdown().as_bytes())?;
+    write_atomic(&md, table.to_markdown().as_bytes())?;
     Ok(vec![csv, md])
 }
 
@@ -295,7 +296,7 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         data_files: &data_files,
     });
     let readme_path = out.join("README.md");
-    write_atomically(&readme_path, text.as_bytes())?;
+    write_atomic(&readme_path, text.as_bytes())?;
     written.push(readme_path);
 
     let mut relative: Vec<PathBuf> = written
