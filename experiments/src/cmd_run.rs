@@ -16,7 +16,12 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 
 use crate::manifest::{self, Overrides};
-use crate::runner::{self, RunOptions, Status, Table};
+use rmt_runfolder::layout::SUMMARY_CSV;
+use rmt_runfolder::Table;
+
+use crate::run_csv::configurations_csv;
+use crate::run_record::Status;
+use crate::runner::{self, RunOptions};
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -96,10 +101,7 @@ pub fn run(args: Args) -> Result<()> {
                     plan.repetitions,
                     plan.threads
                 );
-                print!(
-                    "{}",
-                    String::from_utf8_lossy(&runner::configurations_csv(&plan)?)
-                );
+                print!("{}", String::from_utf8_lossy(&configurations_csv(&plan)?));
                 return Ok(());
             }
             runner::start_shard(path, &overrides, args.out.as_deref(), &opts, args.shard)?
@@ -110,7 +112,7 @@ pub fn run(args: Args) -> Result<()> {
     match report.status {
         Status::Finished => {
             if !args.quiet && report.configurations_run > 0 {
-                print_summary(&report.folder.join("summary.csv"))?;
+                print_summary(&report.folder.join(SUMMARY_CSV))?;
             }
             println!(
                 "finished: {} configurations in {folder} ({} run in this session)",

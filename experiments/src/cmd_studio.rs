@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use anyhow::Context;
 
-use crate::cmd_extract::default_threads;
+use crate::config::default_threads;
 use crate::studio::StudioBackend;
 
 /// Arguments of `studio`.

@@ -1,9 +1,12 @@
 //! One extraction's full description ([`Extraction`]): object, box, resolution and extractor
-//! settings, shared by `extract` and the runner, and the names these take on the command line,
-//! in manifests and in CSV files.
+//! settings, shared by `extract` and the runner; the names these take on the command line, in
+//! manifests and in CSV files (every choice listed once: [`LATTICES`], [`CLUSTERINGS`],
+//! [`METHODS`], [`NORMALS`]); and one extraction's record as JSON ([`config_json`],
+//! [`measurement_json`]), which `extract --json`, the studio and `raw.csv` share.
 
-use rmt_extract::{Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode};
+use rmt_extract::{Clustering, ExtractSettings, Grid, Lattice, Measurement, Method, NormalMode};
 use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
 
 use crate::objects::{Bounds, ObjectSpec, Resolution};
 
@@ -41,54 +44,86 @@ impl Normals {
     }
 }
 
-/// Parses `bcdl` or `simple`.
-pub fn parse_lattice(s: &str) -> Result<Lattice, String> {
-    match s {
-        "bcdl" => Ok(Lattice::BodyCentred),
-        "simple" => Ok(Lattice::Simple),
-        _ => Err(format!("unknown lattice `{s}` (expected bcdl or simple)")),
+/// Every lattice, in the order help texts and errors list them.
+pub const LATTICES: [Lattice; 2] = [Lattice::BodyCentred, Lattice::Simple];
+
+/// Every clustering mode, in the order help texts and errors list them.
+pub const CLUSTERINGS: [Clustering; 5] = [
+    Clustering::None,
+    Clustering::Integrated,
+    Clustering::IntegratedUnchecked,
+    Clustering::Postprocessed,
+    Clustering::Meshopt,
+];
+
+/// Every method, in the order help texts and errors list them.
+pub const METHODS: [Method; 2] = [Method::Mt, Method::Mc];
+
+/// Every normals mode, in the order help texts and errors list them.
+pub const NORMALS: [Normals; 3] = [Normals::Area, Normals::Gradient, Normals::None];
+
+/// The names of `all`, by `name`.
+pub fn names<T: Copy>(all: &[T], name: fn(T) -> &'static str) -> Vec<&'static str> {
+    all.iter().map(|&x| name(x)).collect()
+}
+
+/// Choices as help texts and errors list them: `a, b or c`.
+pub fn one_of<S: AsRef<str>>(names: &[S]) -> String {
+    match names.split_last() {
+        None => String::new(),
+        Some((last, [])) => last.as_ref().to_string(),
+        Some((last, rest)) => {
+            let rest: Vec<&str> = rest.iter().map(AsRef::as_ref).collect();
+            format!("{} or {}", rest.join(", "), last.as_ref())
+        }
     }
 }
 
-/// Parses `none`, `integrated`, `integrated-unchecked`, `postprocessed` or `meshopt`.
-pub fn parse_clustering(s: &str) -> Result<Clustering, String> {
-    use Clustering::*;
-    [
-        None,
-        Integrated,
-        IntegratedUnchecked,
-        Postprocessed,
-        Meshopt,
-    ]
-    .into_iter()
-    .find(|c| c.name() == s)
-    .ok_or_else(|| {
+/// Parses a name of [`LATTICES`] (`bcdl`, `simple`).
+pub fn parse_lattice(s: &str) -> Result<Lattice, String> {
+    LATTICES.into_iter().find(|l| l.name() == s).ok_or_else(|| {
         format!(
-            "unknown clustering `{s}` (expected none, integrated, integrated-unchecked, \
-                 postprocessed or meshopt)"
+            "unknown lattice `{s}` (expected {})",
+            one_of(&names(&LATTICES, Lattice::name))
         )
     })
 }
 
-/// Parses `mt` or `mc`.
-pub fn parse_method(s: &str) -> Result<Method, String> {
-    match s {
-        "mt" => Ok(Method::Mt),
-        "mc" => Ok(Method::Mc),
-        _ => Err(format!("unknown method `{s}` (expected mt or mc)")),
-    }
+/// Parses a name of [`CLUSTERINGS`] (`none`, `integrated`, `integrated-unchecked`,
+/// `postprocessed`, `meshopt`).
+pub fn parse_clustering(s: &str) -> Result<Clustering, String> {
+    CLUSTERINGS
+        .into_iter()
+        .find(|c| c.name() == s)
+        .ok_or_else(|| {
+            format!(
+                "unknown clustering `{s}` (expected {})",
+                one_of(&names(&CLUSTERINGS, Clustering::name))
+            )
+        })
 }
 
-/// Parses `area`, `gradient` or `none`.
+/// Parses a name of [`METHODS`] (`mt`, `mc`).
+pub fn parse_method(s: &str) -> Result<Method, String> {
+    METHODS
+        .into_iter()
+        .find(|&m| method_name(m) == s)
+        .ok_or_else(|| {
+            format!(
+                "unknown method `{s}` (expected {})",
+                one_of(&names(&METHODS, method_name))
+            )
+        })
+}
+
+/// Parses a name of [`NORMALS`] (`area`, `gradient`, `none`).
 pub fn parse_normals(s: &str) -> Result<Normals, String> {
-    match s {
-        "area" => Ok(Normals::Area),
-        "gradient" => Ok(Normals::Gradient),
-        "none" => Ok(Normals::None),
-        _ => Err(format!(
-            "unknown normals `{s}` (expected area, gradient or none)"
-        )),
-    }
+    NORMALS.into_iter().find(|n| n.name() == s).ok_or_else(|| {
+        format!(
+            "unknown normals `{s}` (expected {})",
+            one_of(&names(&NORMALS, Normals::name))
+        )
+    })
 }
 
 /// The method's name (`mt`, `mc`).
@@ -96,6 +131,14 @@ pub fn method_name(m: Method) -> &'static str {
     match m {
         Method::Mt => "mt",
         Method::Mc => "mc",
+    }
+}
+
+/// The method's full name (`marching tetrahedra`, `marching cubes`).
+pub fn method_title(m: Method) -> &'static str {
+    match m {
+        Method::Mt => "marching tetrahedra",
+        Method::Mc => "marching cubes",
     }
 }
 
@@ -129,6 +172,46 @@ pub struct Extraction {
     pub iso: f32,
     /// Normals.
     pub normals: Normals,
+}
+
+/// Threads to use when not told: every core the process may use.
+pub fn default_threads() -> usize {
+    std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+}
+
+/// The configuration keys of an extraction on `threads` threads, as `extract --json` prints
+/// them before the measurement.
+pub fn config_json(e: &Extraction, threads: usize) -> Map<String, Value> {
+    let mut m = Map::new();
+    m.insert("object".into(), e.object.kind.name().into());
+    m.insert("lattice".into(), lattice_name(e.method, e.lattice).into());
+    m.insert("clustering".into(), e.clustering.name().into());
+    m.insert("method".into(), method_name(e.method).into());
+    m.insert("resolution".into(), serde_json::json!(e.resolution.cells()));
+    m.insert(
+        "bounds".into(),
+        serde_json::json!(<[f32; 6]>::from(e.bounds)),
+    );
+    m.insert(
+        "collapse_threshold".into(),
+        serde_json::json!(e.collapse_threshold),
+    );
+    m.insert("iso".into(), serde_json::json!(e.iso));
+    m.insert("normals".into(), e.normals.name().into());
+    m.insert("threads".into(), threads.into());
+    m
+}
+
+/// The measurement as an ordered JSON map (its serde keys, flattened): the keys of
+/// `extract --json` after the configuration and the measurement columns of `raw.csv`.
+pub fn measurement_json(m: &Measurement) -> anyhow::Result<Map<String, Value>> {
+    use anyhow::Context;
+    match serde_json::to_value(m).context("serialising the measurement")? {
+        Value::Object(map) => Ok(map),
+        other => anyhow::bail!("the measurement serialised to {other}, not an object"),
+    }
 }
 
 /// The extractor's default collapse threshold, in grid spacings.
@@ -248,6 +331,53 @@ pub fn human_bytes(b: u64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn measurement_keys_follow_the_stats_fields_in_order() {
+        let keys: Vec<String> = measurement_json(&Measurement::default())
+            .unwrap()
+            .keys()
+            .cloned()
+            .collect();
+        assert_eq!(keys[0], "vertices");
+        assert!(keys.iter().any(|k| k == "t_total_s"));
+        assert!(keys.iter().any(|k| k == "fidelity_mean_h"));
+    }
+
+    #[test]
+    fn parsers_accept_their_lists_and_name_them_when_refusing() {
+        assert_eq!(one_of(&["a"]), "a");
+        assert_eq!(one_of(&["a", "b", "c"]), "a, b or c");
+        for l in LATTICES {
+            assert_eq!(parse_lattice(l.name()), Ok(l));
+        }
+        for c in CLUSTERINGS {
+            assert_eq!(parse_clustering(c.name()), Ok(c));
+        }
+        for m in METHODS {
+            assert_eq!(parse_method(method_name(m)), Ok(m));
+        }
+        for n in NORMALS {
+            assert_eq!(parse_normals(n.name()), Ok(n));
+        }
+        assert_eq!(
+            parse_lattice("hex").unwrap_err(),
+            "unknown lattice `hex` (expected bcdl or simple)"
+        );
+        assert_eq!(
+            parse_clustering("x").unwrap_err(),
+            "unknown clustering `x` (expected none, integrated, integrated-unchecked, \
+             postprocessed or meshopt)"
+        );
+        assert_eq!(
+            parse_method("x").unwrap_err(),
+            "unknown method `x` (expected mt or mc)"
+        );
+        assert_eq!(
+            parse_normals("x").unwrap_err(),
+            "unknown normals `x` (expected area, gradient or none)"
+        );
+    }
 
     #[test]
     fn names_round_trip() {

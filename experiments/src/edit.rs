@@ -137,48 +137,7 @@ pub fn run_edit_session(
     })
 }
 
-/// Column names of `edits.csv` (one row per timed stroke).
-pub const EDITS_HEADER: [&str; 8] = [
-    "id",
-    "edit",
-    "latency_s",
-    "chunks",
-    "triangles",
-    "triangles_per_chunk",
-    "boxes",
-    "box_cells",
-];
-
-/// Column names of an edit run's `summary.csv` (one row per configuration).
-pub const EDIT_SUMMARY_HEADER: [&str; 25] = [
-    "id",
-    "object",
-    "method",
-    "lattice",
-    "clustering",
-    "rx",
-    "ry",
-    "rz",
-    "chunk",
-    "threads",
-    "strokes",
-    "latency_p50_ms",
-    "latency_p95_ms",
-    "latency_p99_ms",
-    "latency_max_ms",
-    "chunks_per_edit_mean",
-    "chunks_per_edit_max",
-    "triangles_per_chunk_mean",
-    "triangles",
-    "whole_triangles",
-    "chunks",
-    "t_chunked_s",
-    "t_whole_s",
-    "chunked_equals_whole",
-    "seams",
-];
-
-/// The `edits.csv` rows of one session.
+/// The `edits.csv` rows of one session (columns of [`EDITS`](rmt_runfolder::schema::EDITS)).
 pub fn edit_rows(id: &str, s: &EditSession) -> Vec<Vec<String>> {
     let r = &s.strokes;
     let per_chunk = r.triangles_per_chunk();
@@ -198,7 +157,8 @@ pub fn edit_rows(id: &str, s: &EditSession) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// The summary row of one session (columns of [`EDIT_SUMMARY_HEADER`]).
+/// The summary row of one session (columns of
+/// [`EDIT_SUMMARY`](rmt_runfolder::schema::EDIT_SUMMARY)).
 pub fn edit_summary_row(
     id: &str,
     e: &Extraction,
@@ -252,6 +212,7 @@ mod tests {
     use crate::config::Normals;
     use crate::objects::{Bounds, ObjectKind, ObjectParams, ObjectSpec, Resolution};
     use rmt_extract::{Clustering, Lattice};
+    use rmt_runfolder::schema::{EDITS, EDIT_SUMMARY};
 
     fn extraction(cells: [usize; 3], bounds: [f32; 6], clustering: Clustering) -> Extraction {
         Extraction {
@@ -327,10 +288,10 @@ mod tests {
         assert!(s.initial.identical && s.identical_after);
         let rows = edit_rows("x", &s);
         assert_eq!(rows.len(), 6);
-        assert!(rows.iter().all(|r| r.len() == EDITS_HEADER.len()));
+        assert!(rows.iter().all(|r| r.len() == EDITS.len()));
         let summary = edit_summary_row("x", &e, &plan, 1, &s);
-        assert_eq!(summary.len(), EDIT_SUMMARY_HEADER.len());
-        let col = |name: &str| EDIT_SUMMARY_HEADER.iter().position(|h| *h == name);
+        assert_eq!(summary.len(), EDIT_SUMMARY.len());
+        let col = |name: &str| EDIT_SUMMARY.iter().position(|h| *h == name);
         let at = |name: &str| col(name).map(|i| summary[i].as_str());
         assert_eq!(at("chunked_equals_whole"), Some("true"));
         // Integrated clustering of marching tetrahedra: the whole volume's own mesh.

@@ -1,27 +1,35 @@
 //! The experiment runner as a library: the `experiments` binary only parses arguments and calls
-//! into these modules.
+//! into these modules. Library modules come first, in the order data flows; the `cmd_*` modules
+//! are the subcommands, each importing only library modules.
 //!
-//! - [`objects`]: the sample objects (sphere, asteroid, gyroid, torus, bunny, terrain, caves) built
-//!   from names and parameters, shared by `extract` and manifests;
-//! - [`config`]: one extraction's full description and the names of its settings;
-//! - [`cmd_extract`]: one extraction, printed as a summary or JSON;
+//! - [`objects`]: the sample objects (sphere, asteroid, gyroid, torus, bunny, terrain, caves,
+//!   random) built from names and parameters, shared by `extract` and manifests;
+//! - [`config`]: one extraction's full description, the names of its settings (each list of
+//!   choices once), and its record as JSON;
+//! - [`extract_args`]: the options of one extraction parsed and checked (the `extract` command
+//!   line and the studio);
 //! - [`manifest`]: experiment manifests (TOML) expanded into configurations;
 //! - [`runner`]: runs a manifest's configurations N times into raw and summary CSV files,
-//!   crash-safe and resumable; [`provenance`] records where and how;
-//! - [`cmd_run`]: the `run` subcommand;
+//!   crash-safe and resumable; the run folder's files and columns are `rmt_runfolder`'s;
+//!   [`run_record`] (`run.json`, `progress.json`), [`run_csv`] (the rows of `raw.csv` and
+//!   `configurations.csv`), [`run_files`] (folders, JSON, appends) and [`provenance`] (where
+//!   and how) serve it;
+//! - [`summary`]: the statistics of `summary.csv`; [`paper`]: the comparison with the
+//!   dissertation (`paper_comparison.csv`);
 //! - [`shard`], [`merge`], [`slurm`]: runs split over many machines (`run --shard I/N`), merged
 //!   back into one run folder (`merge`), and submitted to Slurm as a job array plus a merge job
-//!   (`slurm`); [`cmd_cluster`] holds the `merge` and `slurm` subcommands;
+//!   (`slurm`);
 //! - [`seeds`]: seed studies, every noise configuration over many seeds, summarised in `seeds.csv`;
+//!   [`topology`]: their topology tallies;
 //! - [`edit`]: chunked terrain (`rmt-terrain`): `extract --chunks` and the `edit` workload;
-//! - [`cmd_render`], [`cmd_questionnaire`]: turntable GIFs of a run's meshes and the questionnaire
-//!   built from them (`rmt-render`);
-//! - [`cmd_analyse`]: the questionnaire analysis (`rmt-analysis`);
-//! - [`studio`], [`cmd_studio`]: the studio's backend (page parameters parsed and checked as
-//!   `extract` options) and the `studio` subcommand (`rmt-server`);
-//! - [`cmd_survey`]: the survey server and its export (`rmt-server`);
-//! - [`cmd_report`]: figures, tables and README of `reports/` rebuilt from a run (`rmt-report`);
-//! - [`bench`](mod@bench), [`cmd_bench`]: extraction speed against peer crates on pre-sampled values.
+//! - [`studio`]: the studio's backend (page parameters parsed and checked as `extract` options);
+//! - [`bench`](mod@bench): extraction speed against peer crates on pre-sampled values.
+//!
+//! Subcommands: [`cmd_extract`] (one extraction, printed as a summary or JSON), [`cmd_run`],
+//! [`cmd_cluster`] (`merge`, `slurm`), [`cmd_render`] and [`cmd_questionnaire`] (turntable GIFs
+//! of a run's meshes and the questionnaire built from them, `rmt-render`), [`cmd_analyse`] (the
+//! questionnaire analysis, `rmt-analysis`), [`cmd_studio`] and [`cmd_survey`] (`rmt-server`),
+//! [`cmd_report`] (`reports/` rebuilt from a run, `rmt-report`), [`cmd_bench`].
 
 pub mod bench;
 pub mod cmd_analyse;
@@ -36,13 +44,19 @@ pub mod cmd_studio;
 pub mod cmd_survey;
 pub mod config;
 pub mod edit;
+pub mod extract_args;
 pub mod manifest;
 pub mod merge;
 pub mod objects;
+pub mod paper;
 pub mod provenance;
+pub mod run_csv;
+pub mod run_files;
+pub mod run_record;
 pub mod runner;
 pub mod seeds;
 pub mod shard;
 pub mod slurm;
 pub mod studio;
+pub mod summary;
 pub mod topology;

@@ -17,7 +17,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Extract one surface and print its statistics.
-    Extract(experiments::cmd_extract::Args),
+    Extract(experiments::extract_args::Args),
     /// Run a manifest: every configuration N times, into raw and summary CSV files.
     Run(experiments::cmd_run::Args),
     /// Render a turntable GIF of every configuration of a run folder, under anonymous names.

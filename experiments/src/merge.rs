@@ -25,12 +25,21 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
-use crate::manifest::{self, Overrides, Plan};
-use crate::runner::{
-    self, csv_bytes, write_atomic, write_json, MergedShard, Progress, RunRecord, Status, Table,
+use rmt_runfolder::layout::{
     CONFIGURATIONS_CSV, MANIFEST_COPY, MESHES, PROGRESS_JSON, RAW_CSV, RUN_JSON,
 };
+use rmt_runfolder::schema::RAW_PREFIX;
+use rmt_runfolder::{csv_bytes, write_atomic, Table};
+
+use crate::manifest::Plan;
+use crate::run_csv::{configurations_csv, raw_header};
+use crate::run_files::write_json;
+use crate::run_record::{plan_of, read_record, MergedShard, Progress, RunRecord, Status};
+use crate::runner::write_summaries;
 use crate::shard::{self, ShardSpec, WorkUnit};
+
+/// The column of `raw.csv` that numbers the repetitions.
+const REPETITION: usize = RAW_PREFIX.len() - 1;
 
 /// What a merge produced.
 #[derive(Clone, Debug)]
@@ -52,21 +61,10 @@ struct ShardDir {
     raw: Table,
 }
 
-fn read_record(folder: &Path) -> Result<RunRecord> {
-    let path = folder.join(RUN_JSON);
-    let bytes = fs::read(&path).with_context(|| {
-        format!(
-            "{} is not a run folder (cannot read run.json)",
-            folder.display()
-        )
-    })?;
-    serde_json::from_slice(&bytes).with_context(|| format!("parsing {}", path.display()))
-}
-
 /// Reads one shard folder and checks it is complete: finished, `raw.csv` exactly as long as its
 /// recorded rows, every row whole, exactly the rows of its work units, its meshes present.
 fn read_shard(folder: &Path) -> Result<ShardDir> {
-    let record = read_record(folder)?;
+    let record = read_record(folder, "a run folder")?;
     let Some(shard) = &record.shard else {
         bail!(
             "{} is not a shard (its run.json has no `shard` entry): merge takes folders made by \
@@ -108,7 +106,7 @@ fn read_shard(folder: &Path) -> Result<ShardDir> {
         bail!("{name} is torn: raw.csv does not end with a whole row");
     }
     let raw = Table::read(&raw_path).with_context(|| format!("{name} is torn: raw.csv"))?;
-    if raw.header != runner::raw_header() {
+    if raw.header != raw_header() {
         bail!(
             "{name}: raw.csv has other columns than this version writes; merge with the version \
              that ran it"
@@ -134,11 +132,11 @@ fn read_shard(folder: &Path) -> Result<ShardDir> {
         .collect();
     let mut got = Vec::with_capacity(raw.rows.len());
     for (i, row) in raw.rows.iter().enumerate() {
-        let rep = row[14].parse::<usize>().with_context(|| {
+        let rep = row[REPETITION].parse::<usize>().with_context(|| {
             format!(
                 "{name}: raw.csv row {}: repetition `{}` is not a number",
                 i + 2,
-                row[14]
+                row[REPETITION]
             )
         })?;
         got.push((row[1].clone(), rep));
@@ -172,26 +170,6 @@ fn read_shard(folder: &Path) -> Result<ShardDir> {
         record,
         raw,
     })
-}
-
-/// The plan a run folder was made with: its manifest copy, expanded with its recorded options.
-pub(crate) fn plan_of(folder: &Path, record: &RunRecord) -> Result<Plan> {
-    let copy = folder.join(MANIFEST_COPY);
-    let text = fs::read_to_string(&copy).with_context(|| format!("reading {}", copy.display()))?;
-    let m = manifest::parse(&text, &copy)?;
-    let base = if record.manifest.base_dir.is_dir() {
-        record.manifest.base_dir.clone()
-    } else {
-        folder.to_path_buf()
-    };
-    let s = &record.settings;
-    let overrides = Overrides {
-        repetitions: Some(s.repetitions),
-        warmup: Some(s.warmup),
-        threads: Some(s.threads),
-        save_meshes: Some(s.save_meshes),
-    };
-    Ok(m.plan(&copy, &base, &overrides)?)
 }
 
 /// Checks that the shard folders are complete pieces of one run and together hold every work
@@ -359,7 +337,7 @@ pub fn merge(out: &Path, dirs: &[PathBuf]) -> Result<MergeReport> {
     let mut rows: Vec<(usize, usize, &Vec<String>)> = Vec::new();
     for s in &shards {
         for row in &s.raw.rows {
-            let rep: usize = row[14].parse().unwrap_or(0);
+            let rep: usize = row[REPETITION].parse().unwrap_or(0);
             rows.push((order[row[1].as_str()], rep, row));
         }
     }
@@ -409,11 +387,8 @@ pub fn merge(out: &Path, dirs: &[PathBuf]) -> Result<MergeReport> {
         let first = &shards[0];
         fs::copy(first.folder.join(MANIFEST_COPY), temp.join(MANIFEST_COPY))
             .with_context(|| format!("copying {}", first.folder.join(MANIFEST_COPY).display()))?;
-        write_atomic(
-            &temp.join(CONFIGURATIONS_CSV),
-            &runner::configurations_csv(&plan)?,
-        )?;
-        let mut all = vec![runner::raw_header()];
+        write_atomic(&temp.join(CONFIGURATIONS_CSV), &configurations_csv(&plan)?)?;
+        let mut all = vec![raw_header()];
         all.extend(rows.iter().map(|(_, _, r)| (*r).clone()));
         let raw_bytes = csv_bytes(&all)?;
         write_atomic(&temp.join(RAW_CSV), &raw_bytes)?;
@@ -423,7 +398,7 @@ pub fn merge(out: &Path, dirs: &[PathBuf]) -> Result<MergeReport> {
                 write_atomic(&temp.join(MESHES).join(format!("{id}.ply")), bytes)?;
             }
         }
-        let files = runner::write_summaries(&temp, &plan)?;
+        let files = write_summaries(&temp, &plan)?;
         let progress = Progress {
             completed: plan.configurations.iter().map(|c| c.id.clone()).collect(),
             raw_bytes: raw_bytes.len() as u64,

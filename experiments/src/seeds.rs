@@ -11,11 +11,11 @@ use std::collections::HashMap;
 
 use anyhow::Result;
 
-use crate::manifest::Plan;
-use crate::runner::{self, Table};
+use rmt_runfolder::schema::{SEEDS_COUNTS, SEEDS_PREFIX, SEED_STATISTICS};
+use rmt_runfolder::Table;
 
-/// The file written beside `summary.csv` in seed studies.
-pub const SEEDS_CSV: &str = "seeds.csv";
+use crate::manifest::Plan;
+use crate::paper::paper_comparison;
 
 /// Summary columns whose distribution over seeds `seeds.csv` gives: triangles, vertices,
 /// triangle reduction, radius ratio (mean per mesh), fidelity (mean and largest vertex distance
@@ -28,20 +28,6 @@ pub const SEED_METRICS: [&str; 7] = [
     "fidelity_mean_h",
     "fidelity_max_h",
     "t_total_s_mean",
-];
-
-/// The configuration columns of `seeds.csv` (taken from the first seed's summary row).
-pub const SEED_PREFIX: [&str; 10] = [
-    "id",
-    "object",
-    "kind",
-    "method",
-    "lattice",
-    "clustering",
-    "rx",
-    "ry",
-    "rz",
-    "collapse_threshold",
 ];
 
 /// The 97.5% quantile of Student's t with `df` degrees of freedom (two-sided 95% intervals):
@@ -156,10 +142,10 @@ pub fn seed_summary(summary: &Table, plan: &Plan) -> Result<Option<Table>> {
     if order.is_empty() {
         return Ok(None);
     }
-    let mut header: Vec<String> = SEED_PREFIX.iter().map(|s| s.to_string()).collect();
-    header.extend(["seeds", "seed_from", "seed_to"].map(String::from));
+    let mut header: Vec<String> = SEEDS_PREFIX.iter().map(|s| s.to_string()).collect();
+    header.extend(SEEDS_COUNTS.map(String::from));
     for m in SEED_METRICS {
-        for stat in ["mean", "sd", "ci_low", "ci_high", "min", "max"] {
+        for stat in SEED_STATISTICS {
             header.push(format!("{m}_{stat}"));
         }
     }
@@ -174,7 +160,7 @@ pub fn seed_summary(summary: &Table, plan: &Plan) -> Result<Option<Table>> {
     for base in order {
         let list = &members[base];
         let first = list[0].1;
-        let mut row: Vec<String> = SEED_PREFIX
+        let mut row: Vec<String> = SEEDS_PREFIX
             .iter()
             .map(|k| summary.get(first, k).unwrap_or_default().to_string())
             .collect();
@@ -216,7 +202,7 @@ pub fn seed_summary(summary: &Table, plan: &Plan) -> Result<Option<Table>> {
                     })
                     .collect(),
             };
-            let cmp = runner::paper_comparison(&base, bench)?;
+            let cmp = paper_comparison(&base, bench)?;
             cmp.rows
                 .into_iter()
                 .map(|r| ((r[0].clone(), r[1].clone()), r[3].clone()))

@@ -24,7 +24,8 @@ use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 
 use crate::manifest::{self, Overrides};
-use crate::runner::{self, RunRecord, Status};
+use crate::run_files::{new_folder, write_json};
+use crate::run_record::{RunRecord, Status};
 use crate::shard;
 
 /// What `experiments slurm` was asked for.
@@ -134,7 +135,7 @@ pub fn prepare(opts: &SlurmOptions) -> Result<Prepared> {
     }
     let out = match &opts.out {
         Some(o) => absolute(o)?,
-        None => absolute(&runner::new_folder(&plan.output, &plan.name)?)?,
+        None => absolute(&new_folder(&plan.output, &plan.name)?)?,
     };
     if out.exists()
         && fs::read_dir(&out)
@@ -253,8 +254,8 @@ exec "$EXPERIMENTS" merge "$OUT" "${{shards[@]}}"
     );
     let shards_path = job_dir.join(SHARDS_SBATCH);
     let merge_path = job_dir.join(MERGE_SBATCH);
-    runner::write_atomic(&shards_path, shards_script.as_bytes())?;
-    runner::write_atomic(&merge_path, merge_script.as_bytes())?;
+    rmt_runfolder::write_atomic(&shards_path, shards_script.as_bytes())?;
+    rmt_runfolder::write_atomic(&merge_path, merge_script.as_bytes())?;
     let record = JobRecord {
         manifest: manifest_path,
         manifest_sha256: shard::manifest_hash(manifest_text),
@@ -263,7 +264,7 @@ exec "$EXPERIMENTS" merge "$OUT" "${{shards[@]}}"
         cpus,
         submissions: Vec::new(),
     };
-    runner::write_json(&job_dir.join(JOB_JSON), &record)?;
+    write_json(&job_dir.join(JOB_JSON), &record)?;
     Ok(Prepared {
         job_dir,
         out,
@@ -330,7 +331,7 @@ pub fn submit(job_dir: &Path, tasks: Option<&str>) -> Result<Submission> {
         merge_job,
     };
     record.submissions.push(submission.clone());
-    runner::write_json(&job_dir.join(JOB_JSON), &record)?;
+    write_json(&job_dir.join(JOB_JSON), &record)?;
     Ok(submission)
 }
 

@@ -1,6 +1,6 @@
 //! The studio's backend ([`rmt_server::studio::Backend`]): the page's parameters are the options
-//! of `experiments extract`, parsed by the command line's own parser ([`cmd_extract::Args`]) and
-//! checked by the same [`cmd_extract::extraction`] (object parameters, settings, memory
+//! of `experiments extract`, parsed by the command line's own parser ([`extract_args::Args`]) and
+//! checked by the same [`extract_args::extraction`] (object parameters, settings, memory
 //! estimate), so the page refuses what the command line refuses, with the same message. The
 //! parameter list the page shows (help texts and defaults) is read from the same parser.
 //!
@@ -20,8 +20,8 @@ use rmt_server::studio::{Backend, BackendError, Extracted, Params};
 use rmt_terrain::World;
 use serde_json::{json, Map, Value};
 
-use crate::cmd_extract::{self, Args};
-use crate::config::Extraction;
+use crate::config::{self, Extraction};
+use crate::extract_args::{self, Args};
 use crate::objects::ObjectKind;
 
 /// `extract` options the page may set (object parameters come from [`ObjectKind::accepted`]).
@@ -46,19 +46,14 @@ pub const SCULPT_SIZE: usize = 128;
 /// Default chunk edge of the sculpt world, in cells.
 pub const SCULPT_CHUNK: usize = 16;
 
-/// Choices of the options whose parser is a function (not listed by clap).
+/// Choices of the options whose parser is a function (not listed by clap): the lists the
+/// parsers accept ([`config::LATTICES`], ...).
 fn choices(option: &str) -> Option<Vec<&'static str>> {
     Some(match option {
-        "lattice" => vec!["bcdl", "simple"],
-        "method" => vec!["mt", "mc"],
-        "clustering" => vec![
-            "none",
-            "integrated",
-            "integrated-unchecked",
-            "postprocessed",
-            "meshopt",
-        ],
-        "normals" => vec!["area", "gradient", "none"],
+        "lattice" => config::names(&config::LATTICES, rmt_extract::Lattice::name),
+        "method" => config::names(&config::METHODS, config::method_name),
+        "clustering" => config::names(&config::CLUSTERINGS, rmt_extract::Clustering::name),
+        "normals" => config::names(&config::NORMALS, config::Normals::name),
         _ => return None,
     })
 }
@@ -125,7 +120,7 @@ impl StudioBackend {
             line.push(format!("--{}={value}", id.replace('_', "-")));
         }
         let parsed = ExtractLine::try_parse_from(&line).map_err(|e| clap_message(&e))?;
-        let (e, _) = cmd_extract::extraction(&Args {
+        let (e, _) = extract_args::extraction(&Args {
             threads: Some(self.threads),
             ..parsed.args
         })
@@ -154,8 +149,8 @@ impl StudioBackend {
             .extract(field.as_ref(), &settings, &mut mesh)
             .map_err(|err| format!("extracting {}: {err}", e.object.kind))?;
         let m = rmt_extract::measure(&mesh, &stats, Some(field.as_ref()), &settings);
-        let mut out: Map<String, Value> = cmd_extract::config_json(e, self.threads);
-        out.extend(cmd_extract::measurement_json(&m).map_err(|e| e.to_string())?);
+        let mut out: Map<String, Value> = config::config_json(e, self.threads);
+        out.extend(config::measurement_json(&m).map_err(|e| e.to_string())?);
         let (s, v, q) = (&m.stats, &m.validation, &m.quality);
         let ms = |t: f64| t * 1e3;
         out.insert(
@@ -388,7 +383,7 @@ mod tests {
         assert!(err(&[("resolution", "0")]).contains("resolution"));
         assert!(err(&[("lattice", "hex")]).contains("hex"));
         // The same message as `experiments extract --resolution 20000`.
-        let cli = cmd_extract::extraction(
+        let cli = extract_args::extraction(
             &ExtractLine::parse_from(["extract", "--resolution=20000"]).args,
         )
         .unwrap_err();

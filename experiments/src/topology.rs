@@ -22,36 +22,13 @@ use std::collections::HashMap;
 
 use anyhow::Result;
 
+use rmt_runfolder::schema::{
+    TOPOLOGY_CHECKS as CHECKS, TOPOLOGY_COUNTS, TOPOLOGY_FAILED, TOPOLOGY_FAILURES,
+    TOPOLOGY_PREFIX as PREFIX,
+};
+use rmt_runfolder::Table;
+
 use crate::manifest::Plan;
-use crate::runner::Table;
-
-/// The tally file of a seed study.
-pub const TOPOLOGY_CSV: &str = "topology.csv";
-/// The failing fields of a seed study, one row per (configuration, seed, check).
-pub const FAILURES_CSV: &str = "topology_failures.csv";
-
-/// The checks, in column order.
-pub const CHECKS: [&str; 6] = [
-    "open",
-    "non_manifold",
-    "orientation",
-    "duplicates",
-    "euler",
-    "components",
-];
-
-/// Configuration columns of `topology.csv` (from the first seed's summary row).
-const PREFIX: [&str; 9] = [
-    "id",
-    "object",
-    "kind",
-    "method",
-    "lattice",
-    "clustering",
-    "rx",
-    "ry",
-    "rz",
-];
 
 /// Integer value of a summary column (0 when absent or not a number).
 fn int(summary: &Table, row: usize, column: &str) -> i64 {
@@ -116,7 +93,8 @@ fn failures(summary: &Table, row: usize, reference: Option<usize>) -> Vec<(&'sta
 ///
 /// `topology.csv`: one row per configuration without seed (plan order): the configuration
 /// columns, `fields` (seeds run), `reference` (the id of its unclustered reference, empty for a
-/// reference or when the study has none), one count per check of [`CHECKS`], and
+/// reference or when the study has none), one count per check of
+/// [`TOPOLOGY_CHECKS`](rmt_runfolder::schema::TOPOLOGY_CHECKS), and
 /// `failed_fields` (fields failing any check). `topology_failures.csv`: `id`, `base_id`, `seed`,
 /// `check`, `detail`, in plan order.
 pub fn topology_tables(summary: &Table, plan: &Plan) -> Result<Option<(Table, Table)>> {
@@ -166,9 +144,9 @@ pub fn tally(summary: &Table, configurations: &[(&str, &str, u32)]) -> Option<(T
         return None;
     }
     let mut header: Vec<String> = PREFIX.iter().map(|s| s.to_string()).collect();
-    header.extend(["fields", "reference"].map(String::from));
+    header.extend(TOPOLOGY_COUNTS.map(String::from));
     header.extend(CHECKS.iter().map(|s| s.to_string()));
-    header.push("failed_fields".into());
+    header.push(TOPOLOGY_FAILED.into());
     let mut rows = Vec::new();
     let mut failed_rows = Vec::new();
     for base in order {
@@ -214,9 +192,7 @@ pub fn tally(summary: &Table, configurations: &[(&str, &str, u32)]) -> Option<(T
     Some((
         Table { header, rows },
         Table {
-            header: ["id", "base_id", "seed", "check", "detail"]
-                .map(String::from)
-                .to_vec(),
+            header: TOPOLOGY_FAILURES.map(String::from).to_vec(),
             rows: failed_rows,
         },
     ))

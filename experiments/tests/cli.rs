@@ -316,8 +316,8 @@ fn repeated_extractions_give_identical_meshes() {
                 );
             }
             assert_eq!(
-                experiments::runner::mesh_fingerprint(&meshes[0]),
-                experiments::runner::mesh_fingerprint(&fresh)
+                experiments::runner::repetitions::mesh_fingerprint(&meshes[0]),
+                experiments::runner::repetitions::mesh_fingerprint(&fresh)
             );
         }
     }

@@ -7,7 +7,11 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use experiments::manifest::{self, Overrides};
-use experiments::runner::{self, RunOptions, Status, Table, RAW_PREFIX};
+use experiments::run_csv::raw_header;
+use experiments::run_record::Status;
+use experiments::runner::{self, RunOptions};
+use rmt_runfolder::schema::{is_time_column, RAW_PREFIX};
+use rmt_runfolder::Table;
 
 fn ci_manifest() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("manifests/ci.toml")
@@ -32,7 +36,7 @@ fn rows_without_times(folder: &Path) -> Vec<Vec<String>> {
     let keep: Vec<usize> = (0..raw.header.len())
         .filter(|&i| {
             let h = &raw.header[i];
-            h != "run_id" && !runner::is_time_column(h)
+            h != "run_id" && !is_time_column(h)
         })
         .collect();
     raw.rows
@@ -69,7 +73,7 @@ fn ci_manifest_runs_end_to_end_into_the_documented_files() {
 
     // raw.csv: configurations x repetitions rows, the prefix then every measurement key.
     let raw = Table::read(&folder.join("raw.csv")).unwrap();
-    assert_eq!(raw.header, runner::raw_header());
+    assert_eq!(raw.header, raw_header());
     assert_eq!(
         &raw.header[..RAW_PREFIX.len()],
         RAW_PREFIX.map(String::from).as_slice()
@@ -189,7 +193,7 @@ fn ci_manifest_runs_end_to_end_into_the_documented_files() {
     );
 
     // Paper comparison: the CI grids are far coarser than the dissertation's, so no row is
-    // comparable (the join itself is tested in `runner::tests`).
+    // comparable (the join itself is tested in `paper::tests`).
     let cmp = Table::read(&folder.join("paper_comparison.csv")).unwrap();
     assert_eq!(cmp.header, ["id", "metric", "ours", "theirs", "ratio"]);
     assert!(cmp.rows.is_empty(), "{:?}", cmp.rows);
@@ -237,7 +241,7 @@ fn a_run_stopped_and_resumed_gives_the_rows_of_an_uninterrupted_run() {
     let raw_path = parts.join("raw.csv");
     let rows_before = Table::read(&raw_path).unwrap().rows.len();
     let mut f = fs::OpenOptions::new().append(true).open(&raw_path).unwrap();
-    let header = runner::raw_header();
+    let header = raw_header();
     let fake: Vec<String> = header.iter().map(|_| "7".to_string()).collect();
     writeln!(f, "{}", fake.join(",")).unwrap();
     write!(f, "parts,ss_su,sphere,sph").unwrap();
@@ -428,10 +432,10 @@ radius = 2.0
     assert_eq!(report.status, Status::Finished);
     assert_eq!(report.configurations_run, 2);
     let edits = Table::read(&folder.join("edits.csv")).unwrap();
-    assert_eq!(edits.header, experiments::edit::EDITS_HEADER);
+    assert_eq!(edits.header, rmt_runfolder::schema::EDITS);
     assert_eq!(edits.rows.len(), 10);
     let summary = Table::read(&folder.join("summary.csv")).unwrap();
-    assert_eq!(summary.header, experiments::edit::EDIT_SUMMARY_HEADER);
+    assert_eq!(summary.header, rmt_runfolder::schema::EDIT_SUMMARY);
     assert_eq!(summary.rows.len(), 2);
     for r in 0..2 {
         assert_eq!(summary.get(r, "chunked_equals_whole"), Some("true"));

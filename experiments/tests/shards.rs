@@ -8,8 +8,10 @@ use std::path::{Path, PathBuf};
 
 use experiments::manifest::Overrides;
 use experiments::merge;
-use experiments::runner::{self, RunOptions, Status, Table};
+use experiments::run_record::Status;
+use experiments::runner::{self, RunOptions};
 use experiments::shard::ShardSpec;
+use rmt_runfolder::Table;
 
 fn quiet() -> RunOptions {
     RunOptions {

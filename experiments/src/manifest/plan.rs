@@ -1,0 +1,514 @@
+//! [`Manifest::plan`] in named steps, in the order errors are reported: [`check_options`] (name,
+//! repetitions, threads, data paths), [`check_objects`], [`base_configurations`] (the matrix and
+//! the explicit list), [`sweep_values`], [`check_seeds`], [`expand`] (objects x lattices x
+//! clusterings x sweeps, each configuration checked, and [`plan_seeds`] for a seed study), and
+//! [`plan_edits`].
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use rmt_extract::{Clustering, Lattice, Method};
+
+use super::{
+    base_id, safe_name, Configuration, EditPlan, Manifest, ManifestError, Overrides, Plan, SeedOf,
+    SeedRange,
+};
+use crate::config::{self, Extraction};
+use crate::objects::{self, Bounds, ObjectKind, ObjectSpec, Resolution};
+
+/// Builds the errors of one manifest.
+struct Invalid<'a>(&'a Path);
+
+impl Invalid<'_> {
+    /// The error at `key` (`objects[1] (sphere)`, `configuration as_bi`, ...).
+    fn at(&self, key: &str, message: impl Into<String>) -> ManifestError {
+        ManifestError::Invalid {
+            path: self.0.to_path_buf(),
+            key: key.to_string(),
+            message: message.into(),
+        }
+    }
+}
+
+/// The run options of a manifest after the command line's overrides.
+struct Options {
+    repetitions: usize,
+    warmup: usize,
+    threads: usize,
+    collapse_default: f32,
+    search: Vec<PathBuf>,
+    paper_benchmark: Option<PathBuf>,
+}
+
+/// One `[[objects]]` entry, checked.
+struct PlannedObject {
+    name: String,
+    code: String,
+    spec: ObjectSpec,
+    resolution: Resolution,
+    bounds: Bounds,
+}
+
+/// A configuration before sweeps: its object, id, method, lattice, clustering, its own
+/// resolution, threshold and isovalue when it sets them, and where the manifest defines it.
+struct BaseConfiguration {
+    obj: usize,
+    id: String,
+    method: Method,
+    lattice: Lattice,
+    clustering: Clustering,
+    resolution: Option<Resolution>,
+    threshold: Option<f32>,
+    iso: Option<f32>,
+    key: String,
+}
+
+/// The sweep's values (`None`: the configuration's own) and the variables swept.
+struct SweepValues {
+    resolutions: Vec<Option<Resolution>>,
+    thresholds: Vec<Option<f32>>,
+    variables: Vec<String>,
+}
+
+impl Manifest {
+    /// Expands into a checked [`Plan`]. `path` names the manifest in errors; `base` is the folder
+    /// relative data paths are searched from (before the workspace root).
+    pub fn plan(
+        &self,
+        path: &Path,
+        base: &Path,
+        overrides: &Overrides,
+    ) -> Result<Plan, ManifestError> {
+        let invalid = Invalid(path);
+        let options = check_options(self, base, overrides, &invalid)?;
+        let objects = check_objects(self, &invalid)?;
+        let bases = base_configurations(self, &objects, &invalid)?;
+        let sweep = sweep_values(self, &invalid)?;
+        check_seeds(self, &objects, &bases, &invalid)?;
+        let configurations = expand(self, &options, &objects, &bases, &sweep, &invalid)?;
+        let edit = plan_edits(self, &configurations, &invalid)?;
+        Ok(Plan {
+            name: self.name.clone(),
+            repetitions: options.repetitions,
+            warmup: options.warmup,
+            threads: options.threads,
+            save_meshes: overrides.save_meshes.unwrap_or(self.save_meshes),
+            output: self
+                .output
+                .clone()
+                .unwrap_or_else(|| PathBuf::from("results")),
+            paper_benchmark: options.paper_benchmark,
+            search: options.search,
+            sweep_variables: sweep.variables,
+            configurations,
+            edit,
+        })
+    }
+}
+
+/// Checks the run name and the run options (with the command line's overrides), and resolves
+/// the dissertation's table.
+fn check_options(
+    m: &Manifest,
+    base: &Path,
+    overrides: &Overrides,
+    invalid: &Invalid,
+) -> Result<Options, ManifestError> {
+    if !safe_name(&m.name) {
+        return Err(invalid.at(
+            "name",
+            format!(
+                "`{}` must be non-empty letters, digits, '-', '_' or '.'",
+                m.name
+            ),
+        ));
+    }
+    let repetitions = overrides.repetitions.unwrap_or(m.repetitions);
+    if repetitions == 0 {
+        return Err(invalid.at("repetitions", "must be at least 1"));
+    }
+    let warmup = overrides.warmup.unwrap_or(m.warmup);
+    let threads = overrides
+        .threads
+        .or(m.threads)
+        .unwrap_or_else(config::default_threads);
+    if !(1..=1024).contains(&threads) {
+        return Err(invalid.at("threads", format!("must be 1 to 1024, got {threads}")));
+    }
+    let collapse_default = m
+        .collapse_threshold
+        .unwrap_or_else(config::default_collapse_threshold);
+    let search = vec![base.to_path_buf()];
+    let paper_benchmark = match &m.paper_benchmark {
+        Some(p) => Some(
+            objects::resolve_data_path(p, &search)
+                .map_err(|e| invalid.at("paper_benchmark", e.to_string()))?,
+        ),
+        None => None,
+    };
+    Ok(Options {
+        repetitions,
+        warmup,
+        threads,
+        collapse_default,
+        search,
+        paper_benchmark,
+    })
+}
+
+/// Checks every `[[objects]]` entry: unique safe names, a kind, parameters the kind takes (the
+/// manifest's seed for seeded kinds that set none), a safe id code.
+fn check_objects(m: &Manifest, invalid: &Invalid) -> Result<Vec<PlannedObject>, ManifestError> {
+    if m.objects.is_empty() {
+        return Err(invalid.at("objects", "the manifest defines no [[objects]]"));
+    }
+    let mut objs: Vec<PlannedObject> = Vec::new();
+    for (i, o) in m.objects.iter().enumerate() {
+        let key = format!("objects[{i}] ({})", o.name);
+        if !safe_name(&o.name) {
+            return Err(invalid.at(&key, "name must be letters, digits, '-', '_' or '.'"));
+        }
+        if objs.iter().any(|x| x.name == o.name) {
+            return Err(invalid.at(&key, format!("object name `{}` is used twice", o.name)));
+        }
+        let kind = match o.kind {
+            Some(k) => k,
+            None => o.name.parse::<ObjectKind>().map_err(|e| {
+                invalid.at(&key, format!("{e}; set `kind` when the name is not a kind"))
+            })?,
+        };
+        let mut params = o.params();
+        if kind.accepted().contains(&"seed") && params.seed.is_none() {
+            params.seed = m.seed;
+        }
+        let spec = ObjectSpec::new(kind, params).map_err(|e| invalid.at(&key, e.to_string()))?;
+        let code = o.code.clone().unwrap_or_else(|| kind.code().to_string());
+        if !safe_name(&code) {
+            return Err(invalid.at(&key, format!("code `{code}` must be letters or digits")));
+        }
+        objs.push(PlannedObject {
+            name: o.name.clone(),
+            code,
+            spec,
+            resolution: o.resolution.map(|c| c.0).unwrap_or(Resolution::Cube(50)),
+            bounds: o.bounds.unwrap_or_default(),
+        });
+    }
+    Ok(objs)
+}
+
+/// The configurations before sweeps: the matrix's (objects x methods x lattices x clusterings;
+/// marching cubes gives one), then the explicit list's.
+fn base_configurations(
+    m: &Manifest,
+    objs: &[PlannedObject],
+    invalid: &Invalid,
+) -> Result<Vec<BaseConfiguration>, ManifestError> {
+    let find = |name: &str, key: &str| {
+        objs.iter().position(|o| o.name == name).ok_or_else(|| {
+            let names: Vec<&str> = objs.iter().map(|o| o.name.as_str()).collect();
+            invalid.at(
+                key,
+                format!("no object named `{name}` (defined: {})", names.join(", ")),
+            )
+        })
+    };
+    let mut bases = Vec::new();
+    if let Some(matrix) = &m.matrix {
+        let names: Vec<String> = match &matrix.objects {
+            Some(list) => list.clone(),
+            None => objs.iter().map(|o| o.name.clone()).collect(),
+        };
+        for (key, empty) in [
+            ("matrix.objects", names.is_empty()),
+            ("matrix.methods", matrix.methods.is_empty()),
+            ("matrix.lattices", matrix.lattices.is_empty()),
+            ("matrix.clustering", matrix.clustering.is_empty()),
+        ] {
+            if empty {
+                return Err(invalid.at(key, "the list is empty"));
+            }
+        }
+        for name in &names {
+            let obj = find(name, "matrix.objects")?;
+            for &method in &matrix.methods {
+                // Marching cubes has no lattice choice and no clustering: one configuration.
+                let combos: Vec<(Lattice, Clustering)> = match method {
+                    Method::Mc => vec![(Lattice::Simple, Clustering::None)],
+                    Method::Mt => matrix
+                        .lattices
+                        .iter()
+                        .flat_map(|&l| matrix.clustering.iter().map(move |&c| (l, c)))
+                        .collect(),
+                };
+                for (lattice, clustering) in combos {
+                    bases.push(BaseConfiguration {
+                        obj,
+                        id: base_id(&objs[obj].code, method, lattice, clustering),
+                        method,
+                        lattice,
+                        clustering,
+                        resolution: None,
+                        threshold: None,
+                        iso: None,
+                        key: "matrix".into(),
+                    });
+                }
+            }
+        }
+    }
+    for (i, c) in m.configurations.iter().enumerate() {
+        let key = format!("configurations[{i}]");
+        let obj = find(&c.object, &key)?;
+        let method = c.method.unwrap_or(Method::Mt);
+        let lattice = match method {
+            Method::Mc => Lattice::Simple,
+            Method::Mt => c.lattice.unwrap_or(Lattice::BodyCentred),
+        };
+        let clustering = c.clustering.unwrap_or(Clustering::None);
+        let id = match &c.id {
+            Some(id) => id.clone(),
+            None => base_id(&objs[obj].code, method, lattice, clustering),
+        };
+        bases.push(BaseConfiguration {
+            obj,
+            id,
+            method,
+            lattice,
+            clustering,
+            resolution: c.resolution.map(|r| r.0),
+            threshold: c.collapse_threshold,
+            iso: c.iso,
+            key,
+        });
+    }
+    if bases.is_empty() {
+        return Err(invalid.at(
+            "configurations",
+            "no configurations: add a [matrix] or [[configurations]]",
+        ));
+    }
+    Ok(bases)
+}
+
+/// The `[sweep]` lists (each non-empty when given).
+fn sweep_values(m: &Manifest, invalid: &Invalid) -> Result<SweepValues, ManifestError> {
+    let sweep = m.sweep.clone().unwrap_or_default();
+    let mut variables = Vec::new();
+    let resolutions: Vec<Option<Resolution>> = match &sweep.resolution {
+        Some(list) if list.is_empty() => {
+            return Err(invalid.at("sweep.resolution", "the list is empty"))
+        }
+        Some(list) => {
+            variables.push("resolution".to_string());
+            list.iter().map(|c| Some(c.0)).collect()
+        }
+        None => vec![None],
+    };
+    let thresholds: Vec<Option<f32>> = match &sweep.collapse_threshold {
+        Some(list) if list.is_empty() => {
+            return Err(invalid.at("sweep.collapse_threshold", "the list is empty"))
+        }
+        Some(list) => {
+            variables.push("collapse_threshold".to_string());
+            list.iter().map(|&t| Some(t)).collect()
+        }
+        None => vec![None],
+    };
+    Ok(SweepValues {
+        resolutions,
+        thresholds,
+        variables,
+    })
+}
+
+/// Checks a seed study's range and that some configuration uses a seeded object.
+fn check_seeds(
+    m: &Manifest,
+    objs: &[PlannedObject],
+    bases: &[BaseConfiguration],
+    invalid: &Invalid,
+) -> Result<(), ManifestError> {
+    let Some(range) = m.seeds else {
+        return Ok(());
+    };
+    if !(1..=100_000).contains(&range.count) {
+        return Err(invalid.at(
+            "seeds.count",
+            format!("must be 1 to 100000, got {}", range.count),
+        ));
+    }
+    if range.from.checked_add(range.count - 1).is_none() {
+        return Err(invalid.at(
+            "seeds",
+            format!(
+                "seeds {} .. {} + {} leave the 32-bit range",
+                range.from, range.from, range.count
+            ),
+        ));
+    }
+    if !bases
+        .iter()
+        .any(|b| objs[b.obj].spec.kind.accepted().contains(&"seed"))
+    {
+        return Err(invalid.at(
+            "seeds",
+            "no configuration uses a seeded object (asteroid, terrain, caves, random)",
+        ));
+    }
+    Ok(())
+}
+
+/// Every base configuration for every sweep value (ids get `_r<cells>`, `_t<threshold>`), each
+/// checked, ids unique; in a seed study, configurations of seeded objects once per seed.
+fn expand(
+    m: &Manifest,
+    options: &Options,
+    objs: &[PlannedObject],
+    bases: &[BaseConfiguration],
+    sweep: &SweepValues,
+    invalid: &Invalid,
+) -> Result<Vec<Configuration>, ManifestError> {
+    let mut configurations = Vec::new();
+    let mut ids = HashSet::new();
+    for b in bases {
+        let o = &objs[b.obj];
+        for r in &sweep.resolutions {
+            for t in &sweep.thresholds {
+                let mut id = b.id.clone();
+                if let Some(r) = r {
+                    id += &format!("_r{}", r.label());
+                }
+                if let Some(t) = t {
+                    id += &format!("_t{t}");
+                }
+                if !safe_name(&id) {
+                    return Err(invalid.at(
+                        &b.key,
+                        format!("id `{id}` must be letters, digits, '-', '_' or '.'"),
+                    ));
+                }
+                if !ids.insert(id.clone()) {
+                    return Err(
+                        invalid.at(&b.key, format!("configuration id `{id}` is used twice"))
+                    );
+                }
+                let extraction = Extraction {
+                    object: o.spec.clone(),
+                    bounds: o.bounds,
+                    resolution: r.or(b.resolution).unwrap_or(o.resolution),
+                    method: b.method,
+                    lattice: b.lattice,
+                    clustering: b.clustering,
+                    collapse_threshold: t.or(b.threshold).unwrap_or(options.collapse_default),
+                    iso: b.iso.or(m.iso).unwrap_or(0.0),
+                    normals: m.normals.unwrap_or_default(),
+                };
+                extraction
+                    .check(options.threads)
+                    .map_err(|e| invalid.at(&format!("configuration {id}"), e))?;
+                let configuration = Configuration {
+                    id,
+                    object: o.name.clone(),
+                    extraction,
+                    seed_of: None,
+                };
+                let seeded = o.spec.kind.accepted().contains(&"seed");
+                match m.seeds {
+                    Some(range) if seeded => {
+                        plan_seeds(configuration, range, &mut ids, &mut configurations).map_err(
+                            |sid| {
+                                invalid
+                                    .at(&b.key, format!("configuration id `{sid}` is used twice"))
+                            },
+                        )?
+                    }
+                    _ => configurations.push(configuration),
+                }
+            }
+        }
+    }
+    Ok(configurations)
+}
+
+/// A seed study's configurations of `c` (a configuration of a seeded object): one per seed of
+/// `range`, id `<id>_s<seed>`, pushed to `out`. Fails with the id when it is taken.
+fn plan_seeds(
+    c: Configuration,
+    range: SeedRange,
+    ids: &mut HashSet<String>,
+    out: &mut Vec<Configuration>,
+) -> Result<(), String> {
+    for seed in range.from..=range.from + (range.count - 1) {
+        let mut e = c.extraction.clone();
+        e.object.params.seed = Some(seed);
+        let sid = format!("{}_s{seed}", c.id);
+        if !ids.insert(sid.clone()) {
+            return Err(sid);
+        }
+        out.push(Configuration {
+            id: sid,
+            object: c.object.clone(),
+            extraction: e,
+            seed_of: Some(SeedOf {
+                base_id: c.id.clone(),
+                seed,
+            }),
+        });
+    }
+    Ok(())
+}
+
+/// The `edit` workload of `workload = "edit"` (its `[edit]` table checked, defaults filled in;
+/// meshopt refused), or None for repeated extractions.
+fn plan_edits(
+    m: &Manifest,
+    configurations: &[Configuration],
+    invalid: &Invalid,
+) -> Result<Option<EditPlan>, ManifestError> {
+    match (m.workload.as_deref(), &m.edit) {
+        (None | Some("extract"), None) => Ok(None),
+        (None | Some("extract"), Some(_)) => {
+            Err(invalid.at("edit", "an [edit] table needs `workload = \"edit\"`"))
+        }
+        (Some("edit"), entry) => {
+            let e = entry.clone().unwrap_or_default();
+            let plan = EditPlan {
+                chunk: e.chunk.unwrap_or(32),
+                strokes: e.strokes.unwrap_or(200),
+                warmup: e.warmup.unwrap_or(20),
+                seed: e.seed.unwrap_or(1),
+                radius: e.radius.unwrap_or(4.0),
+            };
+            if !(1..=4096).contains(&plan.chunk) {
+                return Err(invalid.at(
+                    "edit.chunk",
+                    format!("must be 1 to 4096 cells, got {}", plan.chunk),
+                ));
+            }
+            if plan.strokes == 0 {
+                return Err(invalid.at("edit.strokes", "must be at least 1"));
+            }
+            if !(plan.radius.is_finite() && plan.radius > 0.0) {
+                return Err(invalid.at(
+                    "edit.radius",
+                    format!("must be finite and > 0 (cells), got {}", plan.radius),
+                ));
+            }
+            if let Some(c) = configurations.iter().find(|c| {
+                c.extraction.method == Method::Mt && c.extraction.clustering == Clustering::Meshopt
+            }) {
+                return Err(invalid.at(
+                    &format!("configuration {}", c.id),
+                    "the edit workload cannot use meshopt (a global simplifier: chunks \
+                     cannot reproduce it)",
+                ));
+            }
+            Ok(Some(plan))
+        }
+        (Some(other), _) => Err(invalid.at(
+            "workload",
+            format!("unknown workload `{other}` (expected `extract` or `edit`)"),
+        )),
+    }
+}
