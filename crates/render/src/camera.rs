@@ -122,6 +122,14 @@ impl Camera {
     }
 }
 
+/// The model matrix of a turntable: the object turned by `angle_radians` about the vertical
+/// (+y) axis through `center` (its bounding sphere's centre, so the sphere stays in place).
+pub fn turntable_model(center: Vec3, angle_radians: f32) -> Mat4 {
+    Mat4::from_translation(center)
+        * Mat4::from_rotation_y(angle_radians)
+        * Mat4::from_translation(-center)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

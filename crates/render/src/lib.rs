@@ -28,6 +28,11 @@
 //!    order, reversed pairs, controls), the HTML answer sheet, and the run-folder layout used by
 //!    `experiments render` and `experiments questionnaire`.
 //!
+//! Beside the pictures, [`cost`] measures what drawing a mesh costs a GPU ([`cost::RenderCost`]):
+//! quad occupancy after a depth pre-pass at four screen sizes over eight views, on the same
+//! rasteriser ([`raster`]'s edge functions, top-left rule and depth test, shared, not copied),
+//! meshoptimizer's vertex-cache, overdraw and vertex-fetch analyzers, and buffer sizes.
+//!
 //! Determinism: no threads share mutable state, no hash-map iteration order reaches the output,
 //! random choices come from a seeded SplitMix64, and floating-point work is the same sequence of
 //! IEEE operations on every run; the same mesh and settings give the same bytes.
@@ -50,6 +55,7 @@
 pub mod animation;
 pub mod camera;
 pub mod color;
+pub mod cost;
 pub mod names;
 pub mod palette;
 pub mod questionnaire;

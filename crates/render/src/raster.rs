@@ -26,7 +26,7 @@
 use glam::{Mat4, Vec3};
 
 /// Fixed-point steps per sample.
-const SUBSAMPLE: i64 = 256;
+pub(crate) const SUBSAMPLE: i64 = 256;
 /// Vertices farther than this many samples off-frame are not rasterised (the fitted framing keeps
 /// every vertex inside the frame, so this only guards against overflow).
 const GUARD_BAND: f32 = 1.0e6;
@@ -125,15 +125,38 @@ fn inclusive(u: [i64; 2], v: [i64; 2]) -> bool {
     dy > 0 || (dy == 0 && dx < 0)
 }
 
-/// Draws the front-facing triangles of `indices` (three per triangle, into `vertices`) into
-/// `gbuffer`. Returns the number of front-facing triangles.
-pub fn rasterize(vertices: &[ScreenVertex], indices: &[u32], gbuffer: &mut GBuffer) -> usize {
-    let (width, height) = (gbuffer.width as i64, gbuffer.height as i64);
-    let mut front = 0;
-    for (t, tri) in indices.chunks_exact(3).enumerate() {
-        let v = [tri[0], tri[1], tri[2]].map(|i| vertices[i as usize]);
+/// Which original vertex each of [`TriangleSetup`]'s positive-area corners is: the last two
+/// vertices are swapped, so corner `k` is vertex `CORNER_VERTEX[k]` of the triangle.
+const CORNER_VERTEX: [usize; 3] = [0, 2, 1];
+
+/// A front-facing triangle ready for scan conversion: vertices snapped to 1/256 of a sample and
+/// wound to positive area, and its sample bounding box clipped to the frame. The one
+/// implementation of the edge functions, the top-left rule and the `1/w` interpolation, shared by
+/// [`rasterize`] and the quad-occupancy pass ([`crate::cost::occupancy`]), so both see exactly the
+/// same samples with exactly the same depths.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TriangleSetup {
+    /// Snapped corners in positive-area order (corner `k` is vertex `CORNER_VERTEX[k]`).
+    q: [[i64; 2]; 3],
+    /// 1/w of each corner.
+    iw: [f32; 3],
+    /// Twice the area in (1/256 sample)^2; positive.
+    area: i64,
+    /// Inclusive sample bounding box clipped to the frame; empty when `x0 > x1` or `y0 > y1`.
+    x0: i64,
+    x1: i64,
+    y0: i64,
+    y1: i64,
+}
+
+impl TriangleSetup {
+    /// Sets up the triangle `v` (its three vertices in index order) for a `width` x `height`
+    /// sample grid. `None` for a triangle with an invalid vertex, a back face, or a triangle whose
+    /// snapped area is zero; a front face outside the frame gives an empty box.
+    #[inline]
+    pub(crate) fn new(v: [ScreenVertex; 3], width: i64, height: i64) -> Option<Self> {
         if !(v[0].valid && v[1].valid && v[2].valid) {
-            continue;
+            return None;
         }
         let snap = |s: &ScreenVertex| {
             [
@@ -144,25 +167,45 @@ pub fn rasterize(vertices: &[ScreenVertex], indices: &[u32], gbuffer: &mut GBuff
         let p = [snap(&v[0]), snap(&v[1]), snap(&v[2])];
         let area = edge(p[0], p[1], p[2]);
         if area >= 0 {
-            continue; // back face or degenerate
+            return None; // back face or degenerate
         }
-        front += 1;
-        // Swap the last two vertices so the area is positive; q[k] is original vertex order[k].
-        let order = [0usize, 2, 1];
-        let q = [p[0], p[2], p[1]];
-        let iw = [v[0].inv_w, v[2].inv_w, v[1].inv_w];
-        let area = -area;
-
+        // Swap the last two vertices so the area is positive.
+        let q = CORNER_VERTEX.map(|k| p[k]);
+        let iw = CORNER_VERTEX.map(|k| v[k].inv_w);
         // Samples whose centres 256 i + 128 lie in the bounding box.
         let lo = |c: i64| (c - SUBSAMPLE / 2 + SUBSAMPLE - 1).div_euclid(SUBSAMPLE);
         let hi = |c: i64| (c - SUBSAMPLE / 2).div_euclid(SUBSAMPLE);
-        let x0 = lo(q[0][0].min(q[1][0]).min(q[2][0])).max(0);
-        let x1 = hi(q[0][0].max(q[1][0]).max(q[2][0])).min(width - 1);
-        let y0 = lo(q[0][1].min(q[1][1]).min(q[2][1])).max(0);
-        let y1 = hi(q[0][1].max(q[1][1]).max(q[2][1])).min(height - 1);
+        Some(Self {
+            q,
+            iw,
+            area: -area,
+            x0: lo(q[0][0].min(q[1][0]).min(q[2][0])).max(0),
+            x1: hi(q[0][0].max(q[1][0]).max(q[2][0])).min(width - 1),
+            y0: lo(q[0][1].min(q[1][1]).min(q[2][1])).max(0),
+            y1: hi(q[0][1].max(q[1][1]).max(q[2][1])).min(height - 1),
+        })
+    }
+
+    /// Twice the triangle's area in units of (1/[`SUBSAMPLE`] sample)^2, exact; positive.
+    #[inline]
+    pub(crate) fn twice_area_fixed(&self) -> i64 {
+        self.area
+    }
+
+    /// Calls `covered(s, l, z)` for every sample the triangle covers (top-left rule), in row
+    /// order: `s` is the sample's index `y * width + x`, `l` the screen-space barycentric weights
+    /// of the corners and `z` the interpolated `1/w`.
+    #[inline]
+    pub(crate) fn for_each_sample(
+        &self,
+        width: i64,
+        mut covered: impl FnMut(usize, [f32; 3], f32),
+    ) {
+        let (x0, x1, y0, y1) = (self.x0, self.x1, self.y0, self.y1);
         if x0 > x1 || y0 > y1 {
-            continue;
+            return;
         }
+        let q = self.q;
         let edges = [(q[1], q[2]), (q[2], q[0]), (q[0], q[1])];
         let bias = edges.map(|(u, v)| if inclusive(u, v) { 0 } else { -1 });
         let step_x = edges.map(|(u, v)| -(v[1] - u[1]) * SUBSAMPLE);
@@ -172,7 +215,8 @@ pub fn rasterize(vertices: &[ScreenVertex], indices: &[u32], gbuffer: &mut GBuff
             y0 * SUBSAMPLE + SUBSAMPLE / 2,
         ];
         let mut w_row = edges.map(|(u, v)| edge(u, v, start));
-        let inv_area = 1.0 / area as f32;
+        let inv_area = 1.0 / self.area as f32;
+        let iw = self.iw;
         for y in y0..=y1 {
             let mut w = w_row;
             let row = (y * width) as usize;
@@ -180,17 +224,7 @@ pub fn rasterize(vertices: &[ScreenVertex], indices: &[u32], gbuffer: &mut GBuff
                 if w[0] + bias[0] >= 0 && w[1] + bias[1] >= 0 && w[2] + bias[2] >= 0 {
                     let l = w.map(|w| w as f32 * inv_area);
                     let z = l[0] * iw[0] + l[1] * iw[1] + l[2] * iw[2];
-                    let s = row + x as usize;
-                    if z > gbuffer.inv_w[s] {
-                        gbuffer.inv_w[s] = z;
-                        gbuffer.triangle[s] = t as u32;
-                        // Perspective-correct weight of q[k]: (l_k / w_k) / (sum l_j / w_j).
-                        let mut b = [0.0f32; 3];
-                        for k in 0..3 {
-                            b[order[k]] = l[k] * iw[k] / z;
-                        }
-                        gbuffer.barycentric[s] = [b[1], b[2]];
-                    }
+                    covered(row + x as usize, l, z);
                 }
                 for k in 0..3 {
                     w[k] += step_x[k];
@@ -200,6 +234,39 @@ pub fn rasterize(vertices: &[ScreenVertex], indices: &[u32], gbuffer: &mut GBuff
                 w_row[k] += step_y[k];
             }
         }
+    }
+
+    /// Perspective-correct barycentric weights of the triangle's second and third vertex (index
+    /// order) at a sample with screen-space weights `l` and depth `z`.
+    #[inline]
+    fn perspective_weights(&self, l: [f32; 3], z: f32) -> [f32; 2] {
+        // Weight of corner k: (l_k / w_k) / (sum l_j / w_j).
+        let mut b = [0.0f32; 3];
+        for k in 0..3 {
+            b[CORNER_VERTEX[k]] = l[k] * self.iw[k] / z;
+        }
+        [b[1], b[2]]
+    }
+}
+
+/// Draws the front-facing triangles of `indices` (three per triangle, into `vertices`) into
+/// `gbuffer`. Returns the number of front-facing triangles.
+pub fn rasterize(vertices: &[ScreenVertex], indices: &[u32], gbuffer: &mut GBuffer) -> usize {
+    let (width, height) = (gbuffer.width as i64, gbuffer.height as i64);
+    let mut front = 0;
+    for (t, tri) in indices.chunks_exact(3).enumerate() {
+        let v = [tri[0], tri[1], tri[2]].map(|i| vertices[i as usize]);
+        let Some(setup) = TriangleSetup::new(v, width, height) else {
+            continue;
+        };
+        front += 1;
+        setup.for_each_sample(width, |s, l, z| {
+            if z > gbuffer.inv_w[s] {
+                gbuffer.inv_w[s] = z;
+                gbuffer.triangle[s] = t as u32;
+                gbuffer.barycentric[s] = setup.perspective_weights(l, z);
+            }
+        });
     }
     front
 }

@@ -7,14 +7,14 @@
 //! animations use the same 255 colours and can be composed without requantising.
 
 use crate::animation::{frame_delays, IndexedAnimation};
-use crate::camera::{BoundingSphere, Camera};
+use crate::camera::{turntable_model, BoundingSphere, Camera};
 use crate::color::Rgb8;
 use crate::palette::{histogram, median_cut, Palette};
 use crate::raster::{project, rasterize, GBuffer, ScreenVertex};
 use crate::shade::{resolve, LightRig, Normals, Shader, Shading};
 use crate::wireframe::{draw_wireframe, Wireframe};
 use crate::{io_error, RenderError, Result};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Vec3};
 use rmt_mesh::Mesh;
 use serde::{Deserialize, Serialize};
 use std::f32::consts::TAU;
@@ -315,9 +315,7 @@ fn render_prepared(
     angle: f32,
     scratch: &mut Scratch,
 ) -> Frame {
-    let c = mesh.sphere.center;
-    let model =
-        Mat4::from_translation(c) * Mat4::from_rotation_y(angle) * Mat4::from_translation(-c);
+    let model = turntable_model(mesh.sphere.center, angle);
     let model_view = camera.view * model;
     let s = settings.supersampling;
     let g = &mut scratch.gbuffer;
