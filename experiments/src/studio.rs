@@ -22,7 +22,7 @@ use serde_json::{json, Map, Value};
 
 use crate::config::{self, Extraction};
 use crate::extract_args::{self, Args};
-use crate::objects::ObjectKind;
+use crate::objects::{ObjectError, ObjectKind};
 
 /// `extract` options the page may set (object parameters come from [`ObjectKind::accepted`]).
 pub const PAGE_OPTIONS: [&str; 8] = [
@@ -82,10 +82,55 @@ fn describe(command: &clap::Command, option: &str) -> Value {
     v
 }
 
+/// The studio's budget for one extraction, in sample slots of cubic cells
+/// ([`extraction_work`]): about 300^3 cells, a few seconds on two cores. Past it the page gets a
+/// 400 (the command line has no such budget, only the memory estimate).
+pub const WORK_BUDGET: u64 = 64 << 20;
+
+/// The work of an extraction for the studio's budget: its sample slots (the memory estimate's)
+/// times the ratio of its longest cell edge to its shortest. Flat cells are what makes an
+/// extraction slow for its size: at `resolution=100000,1,1` nearly every cell is crossed (2
+/// million triangles from 1.5 million slots) and integrated clustering takes about 14 s, where a
+/// 64^3 cube takes 0.07 s.
+pub fn extraction_work(settings: &rmt_extract::ExtractSettings) -> f64 {
+    let slots = crate::config::estimated_bytes(settings) / crate::config::BYTES_PER_SAMPLE_ESTIMATE;
+    let h = settings.grid.spacing();
+    let aspect = f64::from(h.max_element()) / f64::from(h.min_element());
+    slots as f64
+        * if aspect.is_finite() {
+            aspect.max(1.0)
+        } else {
+            f64::INFINITY
+        }
+}
+
+/// Refuses an extraction over [`WORK_BUDGET`], with what to change.
+pub fn check_budget(e: &Extraction) -> Result<(), String> {
+    let settings = e.settings(1);
+    let work = extraction_work(&settings);
+    // A box so large that its cells' size is not finite is the extraction's to refuse (its
+    // field is not finite there), with that message.
+    if work <= WORK_BUDGET as f64 || !settings.grid.spacing().is_finite() {
+        return Ok(());
+    }
+    let h = settings.grid.spacing();
+    Err(format!(
+        "resolution {:?} is over the studio's budget for one extraction: {work:.3e} units of \
+         work (sample slots times the cells' longest / shortest edge, {:.3e}), at most {:.3e}; \
+         lower the resolution or make the cells closer to cubes (the command line has no such \
+         budget)",
+        e.resolution.cells(),
+        f64::from(h.max_element()) / f64::from(h.min_element()),
+        WORK_BUDGET as f64
+    ))
+}
+
 /// The studio backend of the `experiments` binary.
 pub struct StudioBackend {
     threads: usize,
-    extractor: Mutex<Extractor>,
+    /// Extractors with their buffers, one taken per running extraction (extractions run side
+    /// by side; the studio decides how many).
+    extractors: Mutex<Vec<Extractor>>,
 }
 
 impl StudioBackend {
@@ -93,7 +138,7 @@ impl StudioBackend {
     pub fn new(threads: usize) -> Self {
         Self {
             threads: threads.max(1),
-            extractor: Mutex::new(Extractor::new()),
+            extractors: Mutex::new(Vec::new()),
         }
     }
 
@@ -128,10 +173,12 @@ impl StudioBackend {
         Ok(e)
     }
 
-    /// Builds the field of `e` and extracts it (reusing the extractor's buffers): the mesh and
+    /// Builds the field of `e` and extracts it (reusing an extractor's buffers): the mesh and
     /// the measurement `experiments extract --json` prints, plus a `studio` object with what the
-    /// page shows.
-    pub fn run(&self, e: &Extraction) -> Result<(Mesh, Value), String> {
+    /// page shows. Errors the request caused (an object parameter out of range, a field that is
+    /// not finite over the box, ...) are [`BackendError::Invalid`], as the command line refuses
+    /// them; the others are [`BackendError::Failed`].
+    pub fn run(&self, e: &Extraction) -> Result<(Mesh, Value), BackendError> {
         let settings = e.settings(self.threads);
         let field = e
             .object
@@ -140,17 +187,40 @@ impl StudioBackend {
                 Some(e.settings(1).grid.spacing().max_element()),
                 &[],
             )
-            .map_err(|err| format!("building object {}: {err}", e.object.kind))?;
+            .map_err(|err| {
+                let message = format!("building object {}: {err}", e.object.kind);
+                match err {
+                    // The data files the server reads: not the request's fault.
+                    ObjectError::MissingMesh { .. } | ObjectError::MeshIo(_) => {
+                        BackendError::Failed(message)
+                    }
+                    _ => BackendError::Invalid(message),
+                }
+            })?;
         let mut mesh = Mesh::default();
-        let stats = self
-            .extractor
+        let mut extractor = self
+            .extractors
             .lock()
             .unwrap_or_else(|p| p.into_inner())
-            .extract(field.as_ref(), &settings, &mut mesh)
-            .map_err(|err| format!("extracting {}: {err}", e.object.kind))?;
+            .pop()
+            .unwrap_or_default();
+        let stats = extractor.extract(field.as_ref(), &settings, &mut mesh);
+        self.extractors
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .push(extractor);
+        let stats = stats.map_err(|err| {
+            let message = format!("extracting {}: {err}", e.object.kind);
+            match err {
+                rmt_extract::ExtractError::ThreadPool { .. } => BackendError::Failed(message),
+                _ => BackendError::Invalid(message),
+            }
+        })?;
         let m = rmt_extract::measure(&mesh, &stats, Some(field.as_ref()), &settings);
-        let mut out: Map<String, Value> = config::config_json(e, self.threads);
-        out.extend(config::measurement_json(&m).map_err(|e| e.to_string())?);
+        let mut out: Map<String, Value> = cmd_extract::config_json(e, self.threads);
+        out.extend(
+            cmd_extract::measurement_json(&m).map_err(|e| BackendError::Failed(e.to_string()))?,
+        );
         let (s, v, q) = (&m.stats, &m.validation, &m.quality);
         let ms = |t: f64| t * 1e3;
         out.insert(
@@ -278,7 +348,8 @@ impl Backend for StudioBackend {
 
     fn extract(&self, params: &Params) -> Result<Extracted, BackendError> {
         let e = self.parse(params, &[]).map_err(BackendError::Invalid)?;
-        let (mesh, summary) = self.run(&e).map_err(BackendError::Failed)?;
+        check_budget(&e).map_err(BackendError::Invalid)?;
+        let (mesh, summary) = self.run(&e)?;
         Ok(Extracted { mesh, summary })
     }
 

@@ -405,3 +405,99 @@ fn a_brush_stroke_remeshes_and_sends_only_the_chunks_it_should_and_undo_redo_res
     let r = post(a, &format!("/studio/api/sculpt/{id}/brush"), Some(&big));
     assert_eq!(r.status, 413);
 }
+
+/// Defect: invalid object parameters and extreme finite bounds were 500s on both extraction
+/// routes; the command line refuses them, so the page gets a 400 with the same message.
+#[test]
+fn invalid_object_parameters_and_extreme_bounds_are_400s() {
+    let server = start();
+    let a = server.addr;
+    let cases = [
+        ("object=sphere&radius=-1", "radius"),
+        ("object=sphere&radius=NaN", "radius"),
+        ("object=asteroid&octaves=0", "octaves"),
+        ("object=asteroid&octaves=1000000000", "octaves"),
+        ("object=asteroid&amplitude=NaN", "amplitude"),
+        ("object=asteroid&frequency=-2", "frequency"),
+        ("object=torus&minor=-0.1", "minor"),
+        ("object=bunny&margin=0.6", "margin"),
+        ("bounds=-1e30,-1e30,-1e30,1e30,1e30,1e30", "finite"),
+        ("bounds=-3e38,-3e38,-3e38,3e38,3e38,3e38", "finite"),
+    ];
+    for (query, needle) in cases {
+        for route in ["mesh", "export"] {
+            let r = get(
+                a,
+                &format!("/studio/api/{route}?{query}&resolution=8"),
+                None,
+            )
+            .unwrap();
+            assert!(r.status < 500, "{route}?{query}: {} {}", r.status, r.text());
+            let message = error_of(&r, 400);
+            assert!(
+                message.to_lowercase().contains(needle),
+                "{route}?{query}: {message}"
+            );
+        }
+    }
+    assert_eq!(get(a, "/healthz", None).unwrap().text(), "ok");
+}
+
+/// Defect: `resolution=100000,1,1` took about 14 s (and blocked every other extraction);
+/// flat cells are over the studio's per-request budget and get a 400 at once.
+#[test]
+fn extractions_over_the_budget_are_refused_with_a_400() {
+    let server = start();
+    let a = server.addr;
+    for resolution in ["100000,1,1", "400,400,1", "400"] {
+        let r = get(
+            a,
+            &format!("/studio/api/mesh?resolution={resolution}"),
+            None,
+        )
+        .unwrap();
+        let message = error_of(&r, 400);
+        assert!(message.contains("budget"), "{resolution}: {message}");
+    }
+    // Thin boxes with cubic cells are cheap and stay allowed.
+    let r = get(
+        a,
+        "/studio/api/mesh?resolution=64,64,2&bounds=-1,-1,-0.03125,1,1,0.03125&object=gyroid",
+        None,
+    )
+    .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+}
+
+/// Defect: extractions ran one at a time, so one slow request stalled everyone. A small
+/// extraction on another connection now completes while a large one is still running.
+#[test]
+fn a_small_extraction_is_not_stuck_behind_a_large_one() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let server = start();
+    let a = server.addr;
+    let big_done = Arc::new(AtomicBool::new(false));
+    let big = {
+        let big_done = big_done.clone();
+        std::thread::spawn(move || {
+            let start = std::time::Instant::now();
+            let r = get(a, "/studio/api/mesh?object=gyroid&resolution=200", None).unwrap();
+            big_done.store(true, Ordering::SeqCst);
+            (r.status, start.elapsed())
+        })
+    };
+    // Let the large request reach its extraction.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let start = std::time::Instant::now();
+    let small = get(a, "/studio/api/mesh?resolution=64", None).unwrap();
+    let small_time = start.elapsed();
+    let big_was_running = !big_done.load(Ordering::SeqCst);
+    assert_eq!(small.status, 200, "{}", small.text());
+    let (status, big_time) = big.join().unwrap();
+    assert_eq!(status, 200);
+    eprintln!("64^3 beside a running 200^3 gyroid: {small_time:?} (the 200^3: {big_time:?})");
+    assert!(
+        big_was_running,
+        "the 64^3 request finished only after the 200^3 one ({small_time:?}, {big_time:?})"
+    );
+}
