@@ -217,10 +217,8 @@ impl StudioBackend {
             }
         })?;
         let m = rmt_extract::measure(&mesh, &stats, Some(field.as_ref()), &settings);
-        let mut out: Map<String, Value> = cmd_extract::config_json(e, self.threads);
-        out.extend(
-            cmd_extract::measurement_json(&m).map_err(|e| BackendError::Failed(e.to_string()))?,
-        );
+        let mut out: Map<String, Value> = config::config_json(e, self.threads);
+        out.extend(config::measurement_json(&m).map_err(|e| BackendError::Failed(e.to_string()))?);
         let (s, v, q) = (&m.stats, &m.validation, &m.quality);
         let ms = |t: f64| t * 1e3;
         out.insert(
