@@ -12,6 +12,7 @@
 //!   [`studio::Backend`] that the application provides;
 //! - [`http`]: what any page of this crate shares (JSON errors, bounded bodies, tokens, embedded
 //!   assets, running a router);
+//! - [`error`]: the JSON error reply both share;
 //! - [`serve`]: the connection loop both servers run on: read timeouts, a connection cap, size
 //!   limits, and one JSON error shape for everything refused.
 //!
@@ -30,6 +31,7 @@
 //! ```
 
 pub mod clock;
+pub mod error;
 pub mod export;
 pub mod http;
 pub mod serve;

@@ -25,7 +25,7 @@ use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::TcpListener;
 use tokio::sync::Semaphore;
 
-use crate::http::ApiError;
+use crate::error::ApiError;
 
 /// The limits a server applies to every connection; [`Limits::default`] is what the survey and
 /// the studio use (README, "Limits").
