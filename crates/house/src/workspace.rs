@@ -239,10 +239,10 @@ pub fn render(packages: &[PackageCheck]) -> String {
         "{} packages, {} crate targets: {}",
         packages.len(),
         packages.iter().map(|p| p.targets.len()).sum::<usize>(),
-        if total == 0 {
-            "no cycles".to_string()
-        } else {
-            format!("{total} cycles")
+        match total {
+            0 => "no cycles".to_string(),
+            1 => "1 cycle".to_string(),
+            n => format!("{n} cycles"),
         }
     );
     out
