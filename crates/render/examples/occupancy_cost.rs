@@ -29,7 +29,8 @@ fn best_of_3<T>(mut f: impl FnMut() -> T) -> (f64, T) {
     (best, out.expect("three runs"))
 }
 
-fn report(name: &str, mesh: &Mesh) -> Result<(), Box<dyn Error>> {
+/// Measures and prints one mesh; returns the best wall time of the whole measure, ms.
+fn report(name: &str, mesh: &Mesh) -> Result<f64, Box<dyn Error>> {
     let mut meter = RenderCostMeter::new();
     let (total, cost) = best_of_3(|| meter.measure(mesh));
     let cost: RenderCost = cost?;
@@ -91,25 +92,33 @@ fn report(name: &str, mesh: &Mesh) -> Result<(), Box<dyn Error>> {
         cost.vertex_bytes,
         cost.glb_bytes,
     );
-    Ok(())
+    Ok(total)
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
     let paths: Vec<String> = std::env::args().skip(1).collect();
+    let (mut sum, mut meshes, mut triangles) = (0.0, 0, 0);
+    let mut one = |name: &str, mesh: &Mesh| -> Result<(), Box<dyn Error>> {
+        sum += report(name, mesh)?;
+        meshes += 1;
+        triangles += mesh.triangle_count();
+        Ok(())
+    };
     if paths.is_empty() {
         // 2 s (r - 1) triangles: about 20k, 100k and 400k.
         for (segments, rings) in [(100, 100), (224, 224), (448, 448)] {
-            report(
+            one(
                 &format!("uv sphere {segments}x{rings}"),
                 &uv_sphere(1.0, segments, rings),
             )?;
         }
         let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/bunny.obj");
-        report("bunny", &rmt_mesh::io::read_obj(bunny)?)?;
+        one("bunny", &rmt_mesh::io::read_obj(bunny)?)?;
     }
     for p in paths {
         let mesh = rmt_mesh::io::read_mesh(&p)?;
-        report(&p, &mesh)?;
+        one(&p, &mesh)?;
     }
+    println!("all {meshes} meshes ({triangles} triangles): {sum:.0} ms for the whole measure");
     Ok(())
 }
