@@ -180,7 +180,7 @@ mod tests {
     }
 
     #[test]
-    fn a_convex_closed_mesh_draws_each_pixel_about_twice() {
+    fn a_convex_closed_mesh_shades_each_pixel_about_once() {
         // Front and back faces go to separate buffers, and a convex mesh has one layer of each
         // in every direction: one shade per covered pixel, but for ties on shared edges.
         let o = overdraw(&uv_sphere(1.0, 48, 24)).unwrap();
