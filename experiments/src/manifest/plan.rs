@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use rmt_extract::{Clustering, Lattice, Method};
 
 use super::{
-    base_id, safe_name, Configuration, EditPlan, Manifest, ManifestError, Overrides, Plan, SeedOf,
-    SeedRange,
+    base_id, safe_name, Configuration, EditPlan, Manifest, ManifestError, Matrix, Overrides, Plan,
+    SeedOf, SeedRange,
 };
 use crate::config::{self, Extraction};
 use crate::objects::{self, Bounds, ObjectKind, ObjectSpec, Resolution};
@@ -197,69 +197,35 @@ fn check_objects(m: &Manifest, invalid: &Invalid) -> Result<Vec<PlannedObject>, 
     Ok(objs)
 }
 
-/// The configurations before sweeps: the matrix's (objects x methods x lattices x clusterings;
-/// marching cubes gives one), then the explicit list's.
+/// The index of the object named `name` (`key` says where the manifest names it).
+fn find_object(
+    objs: &[PlannedObject],
+    name: &str,
+    key: &str,
+    invalid: &Invalid,
+) -> Result<usize, ManifestError> {
+    objs.iter().position(|o| o.name == name).ok_or_else(|| {
+        let names: Vec<&str> = objs.iter().map(|o| o.name.as_str()).collect();
+        invalid.at(
+            key,
+            format!("no object named `{name}` (defined: {})", names.join(", ")),
+        )
+    })
+}
+
+/// The configurations before sweeps: the matrix's, then the explicit list's.
 fn base_configurations(
     m: &Manifest,
     objs: &[PlannedObject],
     invalid: &Invalid,
 ) -> Result<Vec<BaseConfiguration>, ManifestError> {
-    let find = |name: &str, key: &str| {
-        objs.iter().position(|o| o.name == name).ok_or_else(|| {
-            let names: Vec<&str> = objs.iter().map(|o| o.name.as_str()).collect();
-            invalid.at(
-                key,
-                format!("no object named `{name}` (defined: {})", names.join(", ")),
-            )
-        })
+    let mut bases = match &m.matrix {
+        Some(matrix) => matrix_configurations(matrix, objs, invalid)?,
+        None => Vec::new(),
     };
-    let mut bases = Vec::new();
-    if let Some(matrix) = &m.matrix {
-        let names: Vec<String> = match &matrix.objects {
-            Some(list) => list.clone(),
-            None => objs.iter().map(|o| o.name.clone()).collect(),
-        };
-        for (key, empty) in [
-            ("matrix.objects", names.is_empty()),
-            ("matrix.methods", matrix.methods.is_empty()),
-            ("matrix.lattices", matrix.lattices.is_empty()),
-            ("matrix.clustering", matrix.clustering.is_empty()),
-        ] {
-            if empty {
-                return Err(invalid.at(key, "the list is empty"));
-            }
-        }
-        for name in &names {
-            let obj = find(name, "matrix.objects")?;
-            for &method in &matrix.methods {
-                // Marching cubes has no lattice choice and no clustering: one configuration.
-                let combos: Vec<(Lattice, Clustering)> = match method {
-                    Method::Mc => vec![(Lattice::Simple, Clustering::None)],
-                    Method::Mt => matrix
-                        .lattices
-                        .iter()
-                        .flat_map(|&l| matrix.clustering.iter().map(move |&c| (l, c)))
-                        .collect(),
-                };
-                for (lattice, clustering) in combos {
-                    bases.push(BaseConfiguration {
-                        obj,
-                        id: base_id(&objs[obj].code, method, lattice, clustering),
-                        method,
-                        lattice,
-                        clustering,
-                        resolution: None,
-                        threshold: None,
-                        iso: None,
-                        key: "matrix".into(),
-                    });
-                }
-            }
-        }
-    }
     for (i, c) in m.configurations.iter().enumerate() {
         let key = format!("configurations[{i}]");
-        let obj = find(&c.object, &key)?;
+        let obj = find_object(objs, &c.object, &key, invalid)?;
         let method = c.method.unwrap_or(Method::Mt);
         let lattice = match method {
             Method::Mc => Lattice::Simple,
@@ -287,6 +253,58 @@ fn base_configurations(
             "configurations",
             "no configurations: add a [matrix] or [[configurations]]",
         ));
+    }
+    Ok(bases)
+}
+
+/// The matrix's configurations: objects x methods x lattices x clusterings (marching cubes
+/// gives one per object), every list non-empty.
+fn matrix_configurations(
+    matrix: &Matrix,
+    objs: &[PlannedObject],
+    invalid: &Invalid,
+) -> Result<Vec<BaseConfiguration>, ManifestError> {
+    let names: Vec<String> = match &matrix.objects {
+        Some(list) => list.clone(),
+        None => objs.iter().map(|o| o.name.clone()).collect(),
+    };
+    for (key, empty) in [
+        ("matrix.objects", names.is_empty()),
+        ("matrix.methods", matrix.methods.is_empty()),
+        ("matrix.lattices", matrix.lattices.is_empty()),
+        ("matrix.clustering", matrix.clustering.is_empty()),
+    ] {
+        if empty {
+            return Err(invalid.at(key, "the list is empty"));
+        }
+    }
+    let mut bases = Vec::new();
+    for name in &names {
+        let obj = find_object(objs, name, "matrix.objects", invalid)?;
+        for &method in &matrix.methods {
+            // Marching cubes has no lattice choice and no clustering: one configuration.
+            let combos: Vec<(Lattice, Clustering)> = match method {
+                Method::Mc => vec![(Lattice::Simple, Clustering::None)],
+                Method::Mt => matrix
+                    .lattices
+                    .iter()
+                    .flat_map(|&l| matrix.clustering.iter().map(move |&c| (l, c)))
+                    .collect(),
+            };
+            for (lattice, clustering) in combos {
+                bases.push(BaseConfiguration {
+                    obj,
+                    id: base_id(&objs[obj].code, method, lattice, clustering),
+                    method,
+                    lattice,
+                    clustering,
+                    resolution: None,
+                    threshold: None,
+                    iso: None,
+                    key: "matrix".into(),
+                });
+            }
+        }
     }
     Ok(bases)
 }
