@@ -1,6 +1,10 @@
 //! The chunked world: samples of the whole volume, one mesh per chunk, dirty flags.
+//!
+//! Modules, each importing only from those below it: `settings.rs` (what a world is),
+//! `state.rs` (the fields of [`World`]), `weld.rs` (meshes by exact position), then the three
+//! that add methods to `World`: this file (the public ones), `exact.rs` (exact seams) and
+//! `undo.rs` (undo and redo).
 
-use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
@@ -9,8 +13,8 @@ use rayon::prelude::*;
 use rmt_extract::lattice::LatticeTables;
 use rmt_extract::samples::sampled_lattice;
 use rmt_extract::{
-    thread_pool, CellRange, Clustering, ExtractError, ExtractSettings, Extractor, Grid, Lattice,
-    Method, NormalMode, Samples, Stats, ThreadPlacement, Tiling,
+    thread_pool, CellRange, ExtractError, ExtractSettings, Extractor, Grid, Lattice, Samples,
+    Stats, Tiling,
 };
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
@@ -18,226 +22,21 @@ use rmt_mesh::Mesh;
 use crate::{Brush, TerrainError};
 
 mod exact;
+mod settings;
+mod state;
 mod undo;
+mod weld;
 pub use exact::{PROPOSAL_REACH, QUIET_BAND};
+pub use settings::{Seams, WorldSettings};
+pub use state::World;
+use state::{Cells, Exact};
 pub use undo::StrokeRecord;
+pub use weld::{canonical_triangles, weld};
 
 /// Cells of halo around a chunk's own cells (clipped at the world box): enough for the
 /// body-centred tetrahedra on the chunk's faces and for the cluster proposals of the points on
 /// them (see the crate doc).
 pub const HALO: usize = 1;
-
-/// How chunk meshes meet at the seams.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Seams {
-    /// The tile rule with tiles equal to the chunks (see the crate doc): every chunk is meshed
-    /// on its own, and no collapse crosses a chunk face. Every mode but integrated clustering
-    /// of marching tetrahedra, checked or not (which has exact seams only); the chunks equal
-    /// the whole volume *under the tile rule*, which costs triangles along the seams.
-    Tiles,
-    /// The whole volume's own mesh (marching tetrahedra with integrated clustering, checked or
-    /// not, or with none; no tile rule), cut by anchor cell; an edit re-extracts a box around it and keeps what is provably the
-    /// whole volume's (see `world/exact.rs`). The chunks equal the whole volume extracted at
-    /// once, with no triangle added at the seams. The first meshing (and one after
-    /// [`World::mark_all_dirty`]) extracts the whole volume at once: its working memory is about
-    /// twice the world's samples, beside them.
-    Exact,
-}
-
-/// What a world is and how it is meshed.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WorldSettings {
-    /// Cells per axis of the whole volume (each >= 1).
-    pub cells: [usize; 3],
-    /// World position of the corner of cell (0, 0, 0).
-    pub origin: Vec3,
-    /// Cell edge length in world units (> 0; the same on every axis).
-    pub h: f32,
-    /// Chunk edge in cells (>= 1; the last chunk along an axis may be shorter).
-    pub chunk: usize,
-    /// Marching tetrahedra or marching cubes.
-    pub method: Method,
-    /// Lattice of marching tetrahedra (ignored by marching cubes).
-    pub lattice: Lattice,
-    /// Vertex merging (meshopt is not supported).
-    pub clustering: Clustering,
-    /// Edge-collapse threshold in cells (post-processed mode).
-    pub collapse_threshold: f32,
-    /// The isovalue (inside is f < iso).
-    pub iso: f32,
-    /// Worker threads: chunks are meshed in parallel on this many threads.
-    pub threads: usize,
-    /// Where the workers run ([`ThreadPlacement::Os`] unless set; pinned workers keep their
-    /// parallel speed after the pool has been idle between strokes, see
-    /// `rmt_extract::threads`).
-    pub placement: ThreadPlacement,
-    /// How chunks meet: [`Seams::Exact`] for integrated clustering of marching tetrahedra,
-    /// checked or not (the only seams there; plain marching tetrahedra takes them too),
-    /// [`Seams::Tiles`] for every other mode (the default there).
-    pub seams: Seams,
-}
-
-impl WorldSettings {
-    /// Marching tetrahedra on `lattice` with `clustering`, chunks of 32 cells, one thread.
-    pub fn new(
-        cells: [usize; 3],
-        origin: Vec3,
-        h: f32,
-        lattice: Lattice,
-        clustering: Clustering,
-    ) -> Self {
-        let defaults = ExtractSettings::new(Grid::cube(1, 1.0), lattice, clustering);
-        Self {
-            cells,
-            origin,
-            h,
-            chunk: 32,
-            method: Method::Mt,
-            lattice,
-            clustering,
-            collapse_threshold: defaults.collapse_threshold,
-            iso: 0.0,
-            threads: 1,
-            placement: ThreadPlacement::Os,
-            seams: if integrated(clustering) {
-                Seams::Exact
-            } else {
-                Seams::Tiles
-            },
-        }
-    }
-
-    /// Marching cubes, chunks of 32 cells, one thread.
-    pub fn marching_cubes(cells: [usize; 3], origin: Vec3, h: f32) -> Self {
-        Self {
-            method: Method::Mc,
-            seams: Seams::Tiles,
-            ..Self::new(cells, origin, h, Lattice::Simple, Clustering::None)
-        }
-    }
-
-    /// The same settings with chunk seams `seams`.
-    pub fn with_seams(mut self, seams: Seams) -> Self {
-        self.seams = seams;
-        self
-    }
-
-    /// The same settings with chunks of `chunk` cells.
-    pub fn with_chunk(mut self, chunk: usize) -> Self {
-        self.chunk = chunk;
-        self
-    }
-
-    /// The same settings with the workers placed as `placement` says.
-    pub fn with_placement(mut self, placement: ThreadPlacement) -> Self {
-        self.placement = placement;
-        self
-    }
-
-    /// The same settings with `threads` worker threads.
-    pub fn with_threads(mut self, threads: usize) -> Self {
-        self.threads = threads;
-        self
-    }
-
-    /// The whole volume's box in world coordinates.
-    pub fn world_grid(&self) -> Grid {
-        let n = Vec3::new(
-            self.cells[0] as f32,
-            self.cells[1] as f32,
-            self.cells[2] as f32,
-        );
-        Grid::new(self.cells, self.origin, self.origin + n * self.h)
-    }
-
-    /// Chunks per axis.
-    pub fn chunk_counts(&self) -> [usize; 3] {
-        self.cells.map(|n| n.div_ceil(self.chunk.max(1)))
-    }
-
-    /// Checks the settings: chunk size, cell size, origin, mode, and the extractor's own checks.
-    pub fn check(&self) -> Result<(), TerrainError> {
-        let bad = |m: String| Err(TerrainError::InvalidSettings(m));
-        if self.chunk == 0 {
-            return bad("chunk size must be at least 1 cell, got 0".into());
-        }
-        if !(self.h.is_finite() && self.h > 0.0) {
-            return bad(format!(
-                "cell size h must be finite and > 0, got {}",
-                self.h
-            ));
-        }
-        if !self.origin.is_finite() {
-            return bad(format!("origin must be finite, got {}", self.origin));
-        }
-        // Lattice coordinates are exact floats only up to 2^23 half cells.
-        if self.cells.iter().any(|&n| n > 1 << 22) {
-            return bad(format!(
-                "at most {} cells per axis, got {:?}",
-                1 << 22,
-                self.cells
-            ));
-        }
-        if self.method == Method::Mt && self.clustering == Clustering::Meshopt {
-            return Err(TerrainError::Unsupported(
-                "the meshopt mode simplifies the whole mesh at once, so chunks cannot reproduce \
-                 it; use integrated or post-processed clustering"
-                    .into(),
-            ));
-        }
-        if self.seams == Seams::Exact
-            && !(self.method == Method::Mt
-                && (integrated(self.clustering) || self.clustering == Clustering::None))
-        {
-            return Err(TerrainError::Unsupported(format!(
-                "exact seams need marching tetrahedra with integrated clustering (checked or \
-                 not) or none (got {:?} with {:?} clustering); use Seams::Tiles",
-                self.method, self.clustering
-            )));
-        }
-        if self.seams == Seams::Tiles && self.method == Method::Mt && integrated(self.clustering) {
-            return Err(TerrainError::Unsupported(format!(
-                "{} clustering has exact seams only: its chunks are the whole volume's mesh, \
-                 with no tile rule; use Seams::Exact (the default)",
-                self.clustering.name()
-            )));
-        }
-        self.world_grid().check()?;
-        self.unit_settings().check()?;
-        Ok(())
-    }
-
-    /// Extraction settings of the whole volume in lattice units (cell edge 1, box from 0 to
-    /// `cells`), under the tile rule with tiles equal to the chunks ([`Seams::Tiles`]) or with
-    /// no tiles ([`Seams::Exact`]).
-    pub fn unit_settings(&self) -> ExtractSettings {
-        let n = Vec3::new(
-            self.cells[0] as f32,
-            self.cells[1] as f32,
-            self.cells[2] as f32,
-        );
-        let mut s = ExtractSettings::new(
-            Grid::new(self.cells, Vec3::ZERO, n),
-            self.lattice,
-            self.clustering,
-        );
-        s.method = self.method;
-        s.collapse_threshold = self.collapse_threshold;
-        s.iso = self.iso;
-        s.threads = self.threads;
-        s.normals = NormalMode::Skip;
-        s.tiles = (self.seams == Seams::Tiles).then(|| Tiling::new([self.chunk; 3], [0; 3]));
-        s
-    }
-}
-
-/// Integrated clustering, checked or not: the modes with exact seams only.
-fn integrated(clustering: Clustering) -> bool {
-    matches!(
-        clustering,
-        Clustering::Integrated | Clustering::IntegratedUnchecked
-    )
-}
 
 /// What one [`World::remesh_dirty`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -258,28 +57,6 @@ pub struct RemeshStats {
 
 /// One re-meshing job: chunk index, its own cells, its input box, its mesh (reused).
 type Job = (usize, CellRange, ([usize; 3], [usize; 3]), Mesh);
-
-/// A sampled volume meshed in chunks; see the crate doc.
-pub struct World {
-    settings: WorldSettings,
-    unit: ExtractSettings,
-    samples: Samples,
-    counts: [usize; 3],
-    /// Chunk meshes in lattice units, chunk `(cx, cy, cz)` at `cx + nx * (cy + ny * cz)`.
-    chunks: Vec<Mesh>,
-    dirty: Vec<bool>,
-    pool: Arc<rayon::ThreadPool>,
-    extractors: Mutex<Vec<Extractor>>,
-    /// Old values of the last stroke's box (working memory of [`World::apply_brush`]).
-    stroke_old: Vec<f32>,
-    /// [`Seams::Exact`]: the anchor cells of the chunks' triangles, the whole volume's activity
-    /// and the edits waiting.
-    exact: Option<exact::Exact>,
-    /// [`Seams::Exact`]: the cells the last stroke changed in a way that matters (for undo).
-    last_edit: Option<exact::Cells>,
-    /// The chunks the last [`World::remesh_dirty`] rebuilt, ascending.
-    remeshed: Vec<usize>,
-}
 
 impl World {
     /// Samples `field` over the world box (in parallel) and marks every chunk dirty; call
@@ -312,7 +89,7 @@ impl World {
             pool,
             extractors: Mutex::new(Vec::new()),
             stroke_old: Vec::new(),
-            exact: (settings.seams == Seams::Exact).then(exact::Exact::default),
+            exact: (settings.seams == Seams::Exact).then(Exact::default),
             last_edit: None,
             remeshed: Vec::new(),
         })
@@ -527,7 +304,7 @@ impl World {
             return Ok(0);
         }
         if self.exact.is_some() {
-            let edit = exact::Cells::of_points(lattice, clo, chi);
+            let edit = Cells::of_points(lattice, clo, chi);
             self.last_edit = Some(edit);
             return Ok(self.mark_edit(edit));
         }
@@ -549,7 +326,7 @@ impl World {
 
     /// [`Seams::Exact`]: adds `edit` to the pending edits and marks the chunks its first cut
     /// meets; returns how many it marked.
-    fn mark_edit(&mut self, edit: exact::Cells) -> usize {
+    fn mark_edit(&mut self, edit: Cells) -> usize {
         let Some(state) = self.exact.as_mut() else {
             return 0;
         };
@@ -558,7 +335,7 @@ impl World {
         let mut marked = 0;
         for i in 0..self.chunks.len() {
             let r = self.chunk_cells(i);
-            let own = exact::Cells {
+            let own = Cells {
                 lo: r.lo.map(|c| c as i64),
                 hi: r.hi.map(|c| c as i64),
             };
@@ -761,47 +538,4 @@ fn extract_chunk(
     mesh.normals.clear();
     mesh.drop_unused_vertices(&mut Vec::new());
     Ok(stats)
-}
-
-/// Bit pattern of a position, with -0.0 taken as 0.0.
-fn key(p: [f32; 3]) -> [u32; 3] {
-    p.map(|c| (c + 0.0).to_bits())
-}
-
-/// Concatenates `meshes` and joins vertices at exactly the same position (first occurrence
-/// first, so the result depends only on the order of the meshes). No normals.
-pub fn weld<'a>(meshes: impl Iterator<Item = &'a Mesh>) -> Mesh {
-    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
-    let mut out = Mesh::default();
-    let mut map = Vec::new();
-    for m in meshes {
-        map.clear();
-        for &p in &m.positions {
-            let next = out.positions.len() as u32;
-            let id = *ids.entry(key(p)).or_insert_with(|| {
-                out.positions.push(p);
-                next
-            });
-            map.push(id);
-        }
-        out.indices
-            .extend(m.indices.iter().map(|&v| map[v as usize]));
-    }
-    out
-}
-
-/// The triangles of `mesh` as position bit patterns, each rotated to start at its smallest
-/// corner (orientation kept), sorted: equal for two meshes exactly when they have the same
-/// triangles, whatever their vertex numbering.
-pub fn canonical_triangles(mesh: &Mesh) -> Vec<[[u32; 3]; 3]> {
-    let mut out: Vec<[[u32; 3]; 3]> = mesh
-        .triangles()
-        .map(|t| {
-            let k = t.map(|v| key(mesh.positions[v as usize]));
-            let r = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
-            [k[r], k[(r + 1) % 3], k[(r + 2) % 3]]
-        })
-        .collect();
-    out.sort_unstable();
-    out
 }

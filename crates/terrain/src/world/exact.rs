@@ -75,7 +75,8 @@ use rmt_extract::samples::sampled_lattice;
 use rmt_extract::{CellRange, Extractor, Grid, Lattice};
 use rmt_mesh::Mesh;
 
-use super::{key, World};
+use super::state::{Cells, Exact, World};
+use super::weld::key;
 use crate::TerrainError;
 
 /// Lattice steps (cells) within which the proposals and their lone crossings read samples and
@@ -88,83 +89,6 @@ pub const QUIET_BAND: i64 = 5;
 
 /// Where the cut lies inside the quiet band, in cells from its inner side.
 const CUT: i64 = 2;
-
-/// A box of cells `lo .. hi` (global cell indices, `hi` exclusive).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Cells {
-    pub(crate) lo: [i64; 3],
-    pub(crate) hi: [i64; 3],
-}
-
-impl Cells {
-    pub(crate) fn grow(self, by: i64) -> Self {
-        Self {
-            lo: self.lo.map(|c| c - by),
-            hi: self.hi.map(|c| c + by),
-        }
-    }
-
-    pub(crate) fn clip(self, n: [usize; 3]) -> Self {
-        Self {
-            lo: self.lo.map(|c| c.max(0)),
-            hi: [0, 1, 2].map(|a| self.hi[a].min(n[a] as i64)),
-        }
-    }
-
-    pub(crate) fn union(self, o: Self) -> Self {
-        Self {
-            lo: [0, 1, 2].map(|a| self.lo[a].min(o.lo[a])),
-            hi: [0, 1, 2].map(|a| self.hi[a].max(o.hi[a])),
-        }
-    }
-
-    pub(crate) fn intersects(&self, o: &Self) -> bool {
-        (0..3).all(|a| self.lo[a] < o.hi[a] && o.lo[a] < self.hi[a])
-    }
-
-    pub(crate) fn contains_box(&self, o: &Self) -> bool {
-        (0..3).all(|a| self.lo[a] <= o.lo[a] && o.hi[a] <= self.hi[a])
-    }
-
-    pub(crate) fn contains(&self, c: [i64; 3]) -> bool {
-        (0..3).all(|a| self.lo[a] <= c[a] && c[a] < self.hi[a])
-    }
-
-    pub(crate) fn is_world(&self, n: [usize; 3]) -> bool {
-        (0..3).all(|a| self.lo[a] <= 0 && self.hi[a] >= n[a] as i64)
-    }
-
-    /// The cells touching lattice points `lo ..= hi` (lattice coordinates: half cells on the
-    /// body-centred lattice, corners even; cells on the simple one).
-    pub(crate) fn of_points(lattice: Lattice, lo: [i64; 3], hi: [i64; 3]) -> Self {
-        match lattice {
-            Lattice::BodyCentred => Self {
-                lo: lo.map(|p| (p - 1).div_euclid(2)),
-                hi: hi.map(|p| (p + 1).div_euclid(2) + 1),
-            },
-            Lattice::Simple => Self {
-                lo: lo.map(|p| p - 1),
-                hi: hi.map(|p| p + 1),
-            },
-        }
-    }
-}
-
-/// The exact mode's state beside the chunk meshes.
-#[derive(Default)]
-pub(crate) struct Exact {
-    /// Per chunk, the anchor cell (global linear index) of each triangle of its mesh, ascending.
-    pub(crate) cells: Vec<Vec<u32>>,
-    /// The whole volume's activity (global lattice coordinates), as of the chunk meshes.
-    activity: Vec<[i64; 3]>,
-    /// Cells whose samples changed in a way that matters since the last re-meshing.
-    pub(crate) pending: Option<Cells>,
-    /// Whether the chunk meshes hold the whole volume (false until the first re-meshing, and
-    /// after [`World::mark_all_dirty`]).
-    pub(crate) built: bool,
-    /// The extractor of the boxes (buffers reused between edits).
-    extractor: Option<Extractor>,
-}
 
 /// What one exact re-meshing did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -11,7 +11,7 @@
 use rmt_extract::samples::sampled_lattice;
 use rmt_extract::Lattice;
 
-use super::World;
+use super::state::{Cells, World};
 use crate::{Brush, TerrainError};
 
 /// The sample values one stroke changed and the chunks it marked dirty; see [`World::undo_stroke`].
@@ -26,7 +26,7 @@ pub struct StrokeRecord {
     /// The chunks dirty after the stroke (those it marked, and any that were dirty already).
     chunks: Vec<usize>,
     /// Exact seams: the cells the stroke changed in a way that matters.
-    region: Option<super::exact::Cells>,
+    region: Option<Cells>,
 }
 
 impl StrokeRecord {
