@@ -8,7 +8,49 @@
 
 use rmt_mesh::Mesh;
 
-use super::merge::MergeBuffers;
+use super::merge::{MergeBuffers, Reject};
+
+/// What edge collapse did with one candidate edge (recorded with
+/// [`crate::Extractor::set_recording`], see [`crate::Extractor::collapse_log`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CollapseOutcome {
+    /// Collapsed.
+    Collapsed,
+    /// Skipped by the rule: its ends already belonged to one vertex.
+    AlreadyMerged,
+    /// Skipped by the rule: earlier collapses moved its ends apart, to the threshold or beyond.
+    MovedApart,
+    /// Skipped by the tile rule: its ends lie in different tiles.
+    OtherTile,
+    /// Refused by the check: the region around the edge is not a disc (or touches the box).
+    NotADisc,
+    /// Refused by the check: the new fan would not be the cone over the region's boundary.
+    NotACone,
+    /// Refused by the check: a new triangle would flip or become flat.
+    Flip,
+}
+
+impl From<Reject> for CollapseOutcome {
+    fn from(r: Reject) -> Self {
+        match r {
+            Reject::NotADisc => Self::NotADisc,
+            Reject::NotACone => Self::NotACone,
+            Reject::Flip => Self::Flip,
+        }
+    }
+}
+
+/// One candidate edge of edge collapse and what became of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CollapseAttempt {
+    /// The output vertices its two ends ended up in (equal when they were merged; `u32::MAX`
+    /// for an end whose triangles all collapsed).
+    pub ends: [u32; 2],
+    /// Its length when it was considered, in world units.
+    pub length: f32,
+    /// What happened.
+    pub outcome: CollapseOutcome,
+}
 
 /// Collapses edges of `mesh` shorter than `max_len`, in order of increasing initial length (ties by
 /// vertex ids, so the result is deterministic). Returns (collapses done, triangles dropped).
@@ -18,17 +60,20 @@ pub fn collapse_short_edges(
     mesh: &mut Mesh,
     max_len: f32,
 ) -> (usize, usize) {
-    collapse_short_edges_tiled(merge, mesh, max_len, None)
+    collapse_short_edges_tiled(merge, mesh, max_len, None, None)
 }
 
 /// [`collapse_short_edges`] under the tile rule ([`crate::Tiling`]): with `tile_keys = Some(keys)`
 /// (one key per vertex of `mesh`) an edge is collapsed only when both its end points carry the
-/// same tile key, so collapses in different tiles never interact.
+/// same tile key, so collapses in different tiles never interact. With `log`, every candidate
+/// edge and its outcome is appended to it (in original vertex ids until the end, then in output
+/// ids).
 pub fn collapse_short_edges_tiled(
     merge: &mut MergeBuffers,
     mesh: &mut Mesh,
     max_len: f32,
     tile_keys: Option<&[u64]>,
+    mut log: Option<&mut Vec<CollapseAttempt>>,
 ) -> (usize, usize) {
     let max2 = max_len * max_len;
     let pos = |p: &[[f32; 3]], i: u32| glam::Vec3::from(p[i as usize]);
@@ -53,26 +98,49 @@ pub fn collapse_short_edges_tiled(
     merge.load(mesh.positions.len(), &mesh.indices);
     edges.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
     let (mut collapses, mut dropped) = (0, 0);
+    let first_logged = log.as_ref().map_or(0, |l| l.len());
     for &(_, a, b) in &edges {
         let (ra, rb) = (merge.rep(a), merge.rep(b));
+        let mut note = |outcome: CollapseOutcome, length: f32| {
+            if let Some(l) = log.as_deref_mut() {
+                l.push(CollapseAttempt {
+                    ends: [a, b],
+                    length,
+                    outcome,
+                });
+            }
+        };
         if ra == rb {
+            note(CollapseOutcome::AlreadyMerged, 0.0);
             continue;
         }
         // Vertices move as they merge: re-measure.
         let (pa, pb) = (pos(&mesh.positions, ra), pos(&mesh.positions, rb));
-        if pa.distance_squared(pb) >= max2 {
+        let now = pa.distance_squared(pb);
+        if now >= max2 {
+            note(CollapseOutcome::MovedApart, now.sqrt());
             continue;
         }
         if tile_keys.is_some_and(|keys| !crate::tiles::same_tile(keys, &[ra, rb])) {
+            note(CollapseOutcome::OtherTile, now.sqrt());
             continue;
         }
         let k = [ra.min(rb), ra.max(rb)];
-        if let Ok(d) = merge.merge(&mut mesh.positions, &k, ((pa + pb) * 0.5).to_array(), true) {
-            collapses += 1;
-            dropped += d;
+        match merge.merge(&mut mesh.positions, &k, ((pa + pb) * 0.5).to_array(), true) {
+            Ok(d) => {
+                collapses += 1;
+                dropped += d;
+                note(CollapseOutcome::Collapsed, now.sqrt());
+            }
+            Err(r) => note(r.into(), now.sqrt()),
         }
     }
     merge.finish(&mut mesh.positions, &mut mesh.indices);
+    if let Some(l) = log {
+        for e in &mut l[first_logged..] {
+            e.ends = e.ends.map(|v| merge.output_id(v));
+        }
+    }
     (collapses, dropped)
 }
 

@@ -633,6 +633,12 @@ impl MergeBuffers {
         mesh.drop_unused_vertices(&mut self.next_member);
     }
 
+    /// After [`MergeBuffers::finish`]: the output vertex that original vertex `v` ended up in,
+    /// or `u32::MAX` ([`rmt_mesh::UNUSED_VERTEX`]) when no output triangle uses it.
+    pub fn output_id(&self, v: u32) -> u32 {
+        self.next_member[self.rep[v as usize] as usize]
+    }
+
     /// Writes the merged mesh: live triangles in their original order, vertices that live
     /// triangles use, renumbered in increasing old order. Returns the number of vertices.
     ///

@@ -15,6 +15,7 @@ pub(crate) mod collapse;
 pub(crate) mod merge;
 pub(crate) mod simplify;
 
+pub use collapse::{CollapseAttempt, CollapseOutcome};
 pub(crate) use merge::MergeBuffers;
 
 /// Post-processing (counted in the geometry pass, as in the dissertation): edge collapse, or
@@ -26,6 +27,7 @@ pub(crate) fn process(
     merge: &mut MergeBuffers,
     mesh: &mut Mesh,
     stats: &mut Stats,
+    log: Option<&mut Vec<CollapseAttempt>>,
 ) {
     let clustering = settings.clustering;
     if clustering == Clustering::Postprocessed {
@@ -36,6 +38,7 @@ pub(crate) fn process(
             mesh,
             settings.collapse_threshold * h,
             keys,
+            log,
         );
         stats.collapses = collapses;
         stats.discarded += dropped;
@@ -69,6 +72,7 @@ fn weld_coincident(
         mesh,
         crate::mt::WELD * settings.grid.h(),
         tile_keys,
+        None,
     );
     stats.collapses += welds;
     stats.discarded += dropped;
