@@ -151,7 +151,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ex.extract(field.as_ref(), &s, &mut plain)?;
             s.clustering = Clustering::Postprocessed;
             let mut post = Mesh::default();
-            ex.extract(field.as_ref(), &s, &mut post)?;
+            let stats = ex.extract(field.as_ref(), &s, &mut post)?;
             let before = row(&plain, grid, threshold);
             let after = row(&post, grid, threshold);
             // What edge collapse did with each output edge's candidates.
@@ -226,7 +226,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             println!(
                 "{name:5} {:7} {:7.3} | {:7} {:7.3} {:7.3} {:10.1} {:5} {:5} {:5} {:4} {:>6} {:5} | \
-                 {disc}/{cone}/{flip} / {apart}/{tile} / {none}",
+                 {disc}/{cone}/{flip} / {apart}/{tile} / {none} | {} collapses, geometry {:.1} ms",
                 before.triangles,
                 before.mean,
                 after.triangles,
@@ -239,6 +239,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 after.caps,
                 after.closed,
                 after.euler,
+                stats.collapses,
+                stats.t_geometry_s * 1e3,
             );
         }
     }

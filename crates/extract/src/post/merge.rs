@@ -230,6 +230,19 @@ impl MergeBuffers {
         self.tris[t]
     }
 
+    /// The live triangles, as current vertex ids, in their original order.
+    pub fn live_triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
+        self.tris.iter().copied().filter(|t| *t != DEAD)
+    }
+
+    /// The live triangles touching current vertex `v`, as current vertex ids, into `out`
+    /// (`ids` is working memory).
+    pub fn triangles_around(&self, v: u32, ids: &mut Vec<u32>, out: &mut Vec<[u32; 3]>) {
+        self.collect_region(&[v], ids);
+        out.clear();
+        out.extend(ids.iter().map(|&t| self.tris[t as usize]));
+    }
+
     /// Collects the live triangles touching any vertex of `k` into `region`, sorted.
     fn collect_region(&self, k: &[u32], region: &mut Vec<u32>) {
         self.collect_region_with_repeats(k, region);

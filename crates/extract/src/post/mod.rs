@@ -4,7 +4,8 @@
 //! after [`crate::mt::extract`].
 //!
 //! - `merge`: the exact local check of merging vertices of a mesh (the link condition);
-//! - `collapse`: short edges collapsed under that check, with the tile rule of chunks;
+//! - `collapse`: edge collapses under that check, with the tile rule of chunks: what makes a
+//!   triangle degenerate (post-processed clustering), or short edges (the weld before meshopt);
 //! - `simplify`: meshoptimizer's simplifier.
 
 use rmt_mesh::Mesh;
@@ -18,8 +19,8 @@ pub(crate) mod simplify;
 pub use collapse::{CollapseAttempt, CollapseOutcome};
 pub(crate) use merge::MergeBuffers;
 
-/// Post-processing (counted in the geometry pass, as in the dissertation): edge collapse, or
-/// meshopt after welding coincident crossings.
+/// Post-processing (counted in the geometry pass, as in the dissertation): edge collapse of
+/// short edges and slivers, or meshopt after welding coincident crossings.
 pub(crate) fn process(
     settings: &ExtractSettings,
     keys: Option<&[u64]>,
@@ -33,10 +34,12 @@ pub(crate) fn process(
     if clustering == Clustering::Postprocessed {
         let t = std::time::Instant::now();
         let h = settings.grid.h();
-        let (collapses, dropped) = collapse::collapse_short_edges_tiled(
+        let (collapses, dropped) = collapse::collapse_degenerate_tiled(
             merge,
             mesh,
             settings.collapse_threshold * h,
+            crate::mt::WELD * h,
+            collapse::SLIVER_RATIO,
             keys,
             log,
         );
@@ -72,7 +75,6 @@ fn weld_coincident(
         mesh,
         crate::mt::WELD * settings.grid.h(),
         tile_keys,
-        None,
     );
     stats.collapses += welds;
     stats.discarded += dropped;
