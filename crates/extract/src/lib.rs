@@ -81,6 +81,7 @@ pub(crate) mod util;
 
 pub use error::ExtractError;
 pub use measure::{measure, Measurement};
+pub use post::{CollapseAttempt, CollapseOutcome};
 pub use samples::{Samples, Sampling};
 pub use settings::{
     CellRange, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Tiling,
@@ -119,6 +120,8 @@ pub struct Extractor {
     pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>, bool)>,
     pub(crate) sampling: Sampling,
     pub(crate) placement: ThreadPlacement,
+    /// Edge collapse's candidates and outcomes, when recording ([`Extractor::collapse_log`]).
+    pub(crate) collapse_log: Vec<CollapseAttempt>,
 }
 
 impl Extractor {
@@ -264,7 +267,9 @@ impl Extractor {
     /// ([`Extractor::triangle_cells`]) and where the clustering did anything after its
     /// proposals ([`Extractor::activity`]: always empty unless checked); other modes record
     /// nothing. Off by default: it costs a pass over the crossings per lone and sliver pass,
-    /// and four bytes per triangle. The meshes do not depend on it.
+    /// and four bytes per triangle. With post-processed clustering it records edge collapse's
+    /// candidate edges and their outcomes instead ([`Extractor::collapse_log`]). The meshes do
+    /// not depend on it.
     ///
     /// Activity is what makes a sub-box's result checkable against the whole volume's: where
     /// neither did anything after the proposals, both kept their proposals, which depend on
@@ -302,6 +307,13 @@ impl Extractor {
         &self.mt.clustering.activity
     }
 
+    /// Recorded by the last extraction ([`Extractor::set_recording`]) with post-processed
+    /// clustering: every candidate edge of edge collapse, in the order considered, with its
+    /// outcome and the output vertices its ends ended up in; empty otherwise.
+    pub fn collapse_log(&self) -> &[CollapseAttempt] {
+        &self.collapse_log
+    }
+
     /// The sample array (to fill it yourself before [`Extractor::extract_presampled`]).
     pub fn samples_mut(&mut self) -> &mut Samples {
         &mut self.samples
@@ -322,6 +334,7 @@ impl Extractor {
     ) -> Result<(), ExtractError> {
         let pool = self.pool(settings.threads)?;
         mesh.clear();
+        self.collapse_log.clear();
         match settings.method {
             settings::Method::Mc => {
                 if settings.clustering != Clustering::None {
@@ -338,6 +351,7 @@ impl Extractor {
                 let emitted =
                     mt::extract(&self.samples, settings, &pool, &mut self.mt, mesh, stats)?;
                 let keys = settings.tiles.is_some().then_some(&emitted.tile_keys[..]);
+                let log = self.mt.record.then_some(&mut self.collapse_log);
                 post::process(
                     settings,
                     keys,
@@ -345,6 +359,7 @@ impl Extractor {
                     &mut self.merge,
                     mesh,
                     stats,
+                    log,
                 );
                 let lean = self.mt.lean;
                 stats.bytes_edges = emitted.table_bytes

@@ -37,7 +37,8 @@ pub enum Clustering {
     Integrated,
     /// The dissertation's rules without the exact check (for comparison; may break the mesh).
     IntegratedUnchecked,
-    /// Plain MT followed by edge collapse of short edges (link condition, no normal flips).
+    /// Plain MT followed by edge collapse of short edges and of slivers' shortest edges (link
+    /// condition, no normal flips).
     Postprocessed,
     /// Plain MT followed by the meshoptimizer simplifier (QEM) with an error bound tied to h.
     Meshopt,
@@ -175,8 +176,9 @@ pub struct ExtractSettings {
     pub lattice: Lattice,
     /// Vertex merging.
     pub clustering: Clustering,
-    /// Edge collapse merges edges shorter than this many grid spacings (post-processed mode);
-    /// the meshopt mode uses it as its error bound, in grid spacings.
+    /// Edge collapse merges edges shorter than this many grid spacings (post-processed mode,
+    /// which also collapses the shortest edge of slivers whatever its length); the meshopt mode
+    /// uses it as its error bound, in grid spacings.
     pub collapse_threshold: f32,
     /// The isovalue T; inside is f < T, f = T counts as outside.
     pub iso: f32,

@@ -168,3 +168,44 @@ fn activity_is_where_clustering_worked_and_does_not_depend_on_threads() {
         }
     }
 }
+
+/// With post-processed clustering, recording logs edge collapse's candidates: one `Collapsed`
+/// entry per collapse counted, whose two ends ended in one output vertex; every other entry
+/// joins two output vertices, or an end that no triangle uses any more. The mesh does not
+/// depend on it, and the other modes log nothing.
+#[test]
+fn post_processing_logs_every_candidate_edge() {
+    use rmt_extract::CollapseOutcome;
+    for lattice in LATTICES {
+        let sphere = Sphere::new(Vec3::new(0.03, -0.02, 0.01), 0.7);
+        let s = ExtractSettings::new(Grid::cube(16, 1.0), lattice, Clustering::Postprocessed);
+        let mut ex = Extractor::new();
+        ex.set_recording(true);
+        let mut mesh = Mesh::default();
+        let stats = ex.extract(&sphere, &s, &mut mesh).expect("extraction runs");
+        let log = ex.collapse_log().to_vec();
+        let collapsed: Vec<_> = log
+            .iter()
+            .filter(|a| a.outcome == CollapseOutcome::Collapsed)
+            .collect();
+        assert!(stats.collapses > 0, "{lattice:?}");
+        assert_eq!(collapsed.len(), stats.collapses, "{lattice:?}");
+        let n = mesh.vertex_count() as u32;
+        for a in &log {
+            if a.outcome == CollapseOutcome::Collapsed {
+                assert_eq!(a.ends[0], a.ends[1], "{lattice:?} {a:?}");
+            }
+            assert!(
+                a.ends.iter().all(|&v| v < n || v == u32::MAX),
+                "{lattice:?} {a:?}"
+            );
+        }
+        let (plain, _, _) = extract(&sphere, &s, false);
+        assert_eq!(corners(&plain), corners(&mesh), "{lattice:?}");
+        for clustering in RECORDING {
+            let s = ExtractSettings::new(Grid::cube(16, 1.0), lattice, clustering);
+            ex.extract(&sphere, &s, &mut mesh).expect("extraction runs");
+            assert!(ex.collapse_log().is_empty(), "{clustering:?}");
+        }
+    }
+}

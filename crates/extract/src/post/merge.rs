@@ -230,6 +230,19 @@ impl MergeBuffers {
         self.tris[t]
     }
 
+    /// The live triangles, as current vertex ids, in their original order.
+    pub fn live_triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
+        self.tris.iter().copied().filter(|t| *t != DEAD)
+    }
+
+    /// The live triangles touching current vertex `v`, as current vertex ids, into `out`
+    /// (`ids` is working memory).
+    pub fn triangles_around(&self, v: u32, ids: &mut Vec<u32>, out: &mut Vec<[u32; 3]>) {
+        self.collect_region(&[v], ids);
+        out.clear();
+        out.extend(ids.iter().map(|&t| self.tris[t as usize]));
+    }
+
     /// Collects the live triangles touching any vertex of `k` into `region`, sorted.
     fn collect_region(&self, k: &[u32], region: &mut Vec<u32>) {
         self.collect_region_with_repeats(k, region);
@@ -631,6 +644,12 @@ impl MergeBuffers {
     /// adjacency. Like `finish`, it ends any merging in progress.
     pub fn drop_unused_vertices(&mut self, mesh: &mut rmt_mesh::Mesh) {
         mesh.drop_unused_vertices(&mut self.next_member);
+    }
+
+    /// After [`MergeBuffers::finish`]: the output vertex that original vertex `v` ended up in,
+    /// or `u32::MAX` ([`rmt_mesh::UNUSED_VERTEX`]) when no output triangle uses it.
+    pub fn output_id(&self, v: u32) -> u32 {
+        self.next_member[self.rep[v as usize] as usize]
     }
 
     /// Writes the merged mesh: live triangles in their original order, vertices that live

@@ -4,7 +4,8 @@
 //! after [`crate::mt::extract`].
 //!
 //! - `merge`: the exact local check of merging vertices of a mesh (the link condition);
-//! - `collapse`: short edges collapsed under that check, with the tile rule of chunks;
+//! - `collapse`: edge collapses under that check, with the tile rule of chunks: what makes a
+//!   triangle degenerate (post-processed clustering), or short edges (the weld before meshopt);
 //! - `simplify`: meshoptimizer's simplifier.
 
 use rmt_mesh::Mesh;
@@ -15,10 +16,11 @@ pub(crate) mod collapse;
 pub(crate) mod merge;
 pub(crate) mod simplify;
 
+pub use collapse::{CollapseAttempt, CollapseOutcome};
 pub(crate) use merge::MergeBuffers;
 
-/// Post-processing (counted in the geometry pass, as in the dissertation): edge collapse, or
-/// meshopt after welding coincident crossings.
+/// Post-processing (counted in the geometry pass, as in the dissertation): edge collapse of
+/// short edges and slivers, or meshopt after welding coincident crossings.
 pub(crate) fn process(
     settings: &ExtractSettings,
     keys: Option<&[u64]>,
@@ -26,16 +28,20 @@ pub(crate) fn process(
     merge: &mut MergeBuffers,
     mesh: &mut Mesh,
     stats: &mut Stats,
+    log: Option<&mut Vec<CollapseAttempt>>,
 ) {
     let clustering = settings.clustering;
     if clustering == Clustering::Postprocessed {
         let t = std::time::Instant::now();
         let h = settings.grid.h();
-        let (collapses, dropped) = collapse::collapse_short_edges_tiled(
+        let (collapses, dropped) = collapse::collapse_degenerate_tiled(
             merge,
             mesh,
             settings.collapse_threshold * h,
+            crate::mt::WELD * h,
+            collapse::SLIVER_RATIO,
             keys,
+            log,
         );
         stats.collapses = collapses;
         stats.discarded += dropped;
