@@ -7,11 +7,13 @@
 //! with [`rmt_extract::BufferPolicy::Lean`]; `dense`: [`rmt_extract::Sampling::Dense`] instead of
 //! the default sparse sampling; every listing must equal the default one). Marching cubes, the
 //! meshopt mode and the terrains come after the original listing, so an older listing is a
-//! prefix-free subset: compare with `comm`. `mesh_hashes.txt` beside this file is the listing
+//! prefix-free subset: compare with `comm`. Surface nets comes last (its chunk line keeps cells
+//! only: "kept"). `mesh_hashes.txt` beside this file is the listing
 //! of the last change that meant to change meshes: integrated-unchecked clustering stopped
 //! taking tiles (as integrated clustering had before it), so its 42 "tiled" lines became "kept"
 //! lines (the same cells, no tile rule, fewer triangles); every other line is as the
-//! order-free integrated clustering left it.
+//! order-free integrated clustering left it. Surface nets' 63 lines were appended after them
+//! (every earlier line unchanged).
 use rmt_extract::{
     BufferPolicy, CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Method,
     NormalMode, Sampling, Tiling,
@@ -55,17 +57,21 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
         (Method::Mc, Clustering::None),
     ];
     let all: Vec<(Method, Clustering)> = original.iter().chain(&added).copied().collect();
+    // Surface nets (a peer) last, for every field, so every earlier line stays where it was.
+    let peers = [(Method::SurfaceNets, Clustering::None)];
     let runs = [
         (&fields, &original[..]),
         (&fields, &added[..]),
         (&more, &all[..]),
+        (&fields, &peers[..]),
+        (&more, &peers[..]),
     ];
     for (fields, modes) in runs {
         for (name, field) in fields {
             for n in [16, 33, 64] {
                 for lattice in [Lattice::BodyCentred, Lattice::Simple] {
                     for &(method, clustering) in modes {
-                        if method == Method::Mc && lattice != Lattice::Simple {
+                        if method != Method::Mt && lattice != Lattice::Simple {
                             continue;
                         }
                         for (threads, tiled) in [(1, false), (2, false), (2, true)] {
@@ -81,6 +87,7 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             // chunks are exact without them): its chunk keeps the cells only
                             // ("kept").
                             let tiles = tiled
+                                && method == Method::Mt
                                 && !matches!(
                                     clustering,
                                     Clustering::Integrated | Clustering::IntegratedUnchecked
@@ -123,10 +130,10 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             ] {
                                 fnv(&mut h, c as u64);
                             }
-                            let mode = if method == Method::Mc {
-                                "marching-cubes"
-                            } else {
-                                clustering.name()
+                            let mode = match method {
+                                Method::Mc => "marching-cubes",
+                                Method::SurfaceNets => "surface-nets",
+                                Method::Mt => clustering.name(),
                             };
                             println!(
                             "{name:9} n={n:2} {:6} {:20} t={threads}{}: {:6} triangles {h:016x}",
