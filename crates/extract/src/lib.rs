@@ -8,8 +8,8 @@
 //!   [`Extractor::set_recording`], the anchor cell of every triangle and the clustering's
 //!   activity);
 //! - [`ExtractSettings`]: the [`Grid`], the [`Lattice`], the [`Method`] (marching tetrahedra or
-//!   cubes, or surface nets as a peer), the [`Clustering`] mode, the [`NormalMode`], and for chunks the [`Tiling`] and the
-//!   kept [`CellRange`];
+//!   cubes, or surface nets as a peer), the [`Clustering`] mode, the [`NormalMode`], and for
+//!   chunks the [`Tiling`] and the kept [`CellRange`];
 //! - [`Stats`]: counters, stage timings and bytes of one extraction ([`Stats::merge_steps_text`]
 //!   splits integrated clustering's time); [`ExtractError`] when it cannot run;
 //! - [`measure()`]: the quality of a mesh ([`Measurement`]; [`measure::on_box_boundary`]);
