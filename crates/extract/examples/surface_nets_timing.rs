@@ -57,15 +57,18 @@ fn main() -> Result<(), String> {
             direct.push(t.elapsed().as_secs_f64());
         }
         assert_eq!(buffer.indices, mesh.indices, "the same triangles");
+        let report = rmt_mesh::validate(&mesh, &|_| false);
         let (ours, passes, direct) = (median(ours), median(passes), median(direct));
         println!(
             "{name:8} {n}^3: extractor {:.3} ms (crate call + mapping {:.3} ms), direct {:.3} ms, \
-             ratio {:.3}; {} triangles, median of {runs}",
+             ratio {:.3}; {} triangles, {} boundary and {} non-manifold edges, median of {runs}",
             ours * 1e3,
             passes * 1e3,
             direct * 1e3,
             ours / direct,
-            mesh.triangle_count()
+            mesh.triangle_count(),
+            report.boundary_edges_interior,
+            report.non_manifold_edges
         );
     }
     Ok(())
