@@ -7,11 +7,12 @@
 //! with [`rmt_extract::BufferPolicy::Lean`]; `dense`: [`rmt_extract::Sampling::Dense`] instead of
 //! the default sparse sampling; every listing must equal the default one). Marching cubes, the
 //! meshopt mode and the terrains come after the original listing, so an older listing is a
-//! prefix-free subset: compare with `comm`. `mesh_hashes.txt` beside this file is the listing
-//! of the last change that meant to change meshes: post-processed clustering (edge collapse)
-//! collapses what makes a triangle degenerate (coincident crossings at once, slivers' shortest
-//! edges, in rounds), so its 126 lines changed (0-4% fewer triangles); every other line is as
-//! before.
+//! prefix-free subset: compare with `comm`. Surface nets comes last (its chunk line keeps cells
+//! only: "kept"). `mesh_hashes.txt` beside this file is the listing of the last changes that
+//! meant to change meshes: post-processed clustering (edge collapse) collapses what makes a
+//! triangle degenerate (coincident crossings at once, slivers' shortest edges, in rounds), so its
+//! 126 lines changed (0-4% fewer triangles); surface nets' 63 lines were appended after every
+//! earlier line; every other line is as before.
 use rmt_extract::{
     BufferPolicy, CellRange, Clustering, ExtractSettings, Extractor, Grid, Lattice, Method,
     NormalMode, Sampling, Tiling,
@@ -55,17 +56,21 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
         (Method::Mc, Clustering::None),
     ];
     let all: Vec<(Method, Clustering)> = original.iter().chain(&added).copied().collect();
+    // Surface nets (a peer) last, for every field, so every earlier line stays where it was.
+    let peers = [(Method::SurfaceNets, Clustering::None)];
     let runs = [
         (&fields, &original[..]),
         (&fields, &added[..]),
         (&more, &all[..]),
+        (&fields, &peers[..]),
+        (&more, &peers[..]),
     ];
     for (fields, modes) in runs {
         for (name, field) in fields {
             for n in [16, 33, 64] {
                 for lattice in [Lattice::BodyCentred, Lattice::Simple] {
                     for &(method, clustering) in modes {
-                        if method == Method::Mc && lattice != Lattice::Simple {
+                        if method != Method::Mt && lattice != Lattice::Simple {
                             continue;
                         }
                         for (threads, tiled) in [(1, false), (2, false), (2, true)] {
@@ -81,6 +86,7 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             // chunks are exact without them): its chunk keeps the cells only
                             // ("kept").
                             let tiles = tiled
+                                && method == Method::Mt
                                 && !matches!(
                                     clustering,
                                     Clustering::Integrated | Clustering::IntegratedUnchecked
@@ -123,10 +129,10 @@ fn main() -> Result<(), rmt_extract::ExtractError> {
                             ] {
                                 fnv(&mut h, c as u64);
                             }
-                            let mode = if method == Method::Mc {
-                                "marching-cubes"
-                            } else {
-                                clustering.name()
+                            let mode = match method {
+                                Method::Mc => "marching-cubes",
+                                Method::SurfaceNets => "surface-nets",
+                                Method::Mt => clustering.name(),
                             };
                             println!(
                             "{name:9} n={n:2} {:6} {:20} t={threads}{}: {:6} triangles {h:016x}",

@@ -8,8 +8,8 @@
 //!   [`Extractor::set_recording`], the anchor cell of every triangle and the clustering's
 //!   activity);
 //! - [`ExtractSettings`]: the [`Grid`], the [`Lattice`], the [`Method`] (marching tetrahedra or
-//!   cubes), the [`Clustering`] mode, the [`NormalMode`], and for chunks the [`Tiling`] and the
-//!   kept [`CellRange`];
+//!   cubes, or surface nets as a peer), the [`Clustering`] mode, the [`NormalMode`], and for
+//!   chunks the [`Tiling`] and the kept [`CellRange`];
 //! - [`Stats`]: counters, stage timings and bytes of one extraction ([`Stats::merge_steps_text`]
 //!   splits integrated clustering's time); [`ExtractError`] when it cannot run;
 //! - [`measure()`]: the quality of a mesh ([`Measurement`]; [`measure::on_box_boundary`]);
@@ -39,7 +39,9 @@
 //!    under the exact check, or meshoptimizer's simplifier;
 //! 6. **normals**.
 //!
-//! Marching cubes (`mc`) replaces steps 2 to 5 for [`Method::Mc`].
+//! Marching cubes (`mc`) replaces steps 2 to 5 for [`Method::Mc`], and surface nets
+//! (`surface_nets`: the `fast-surface-nets` crate on the same simple-cubic samples, its
+//! non-manifold edges left in and reported by validation) for [`Method::SurfaceNets`].
 //!
 //! Cost, on a 2-vCPU Intel Xeon VM on one thread (pre-sampled values; README, Performance):
 //! about 12.6 ns per sample point for marching tetrahedra on the body-centred lattice without
@@ -75,6 +77,7 @@ pub(crate) mod post;
 pub mod samples;
 pub(crate) mod settings;
 pub(crate) mod stats;
+pub(crate) mod surface_nets;
 pub mod threads;
 pub(crate) mod tiles;
 pub(crate) mod util;
@@ -115,6 +118,7 @@ pub struct Extractor {
     pub(crate) samples: Samples,
     pub(crate) mt: mt::MtBuffers,
     pub(crate) merge: post::MergeBuffers,
+    pub(crate) surface_nets: surface_nets::SurfaceNetsBuffers,
     /// Thread pools by worker count; `true` marks a pool given by [`Extractor::set_pool`] (the
     /// caller's: kept when the placement changes).
     pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>, bool)>,
@@ -344,6 +348,19 @@ impl Extractor {
                     )));
                 }
                 mc::extract(&self.samples, settings, &pool, mesh, stats);
+            }
+            settings::Method::SurfaceNets => {
+                if settings.clustering != Clustering::None {
+                    return Err(ExtractError::Unsupported(format!(
+                        "surface nets takes clustering none, got {}",
+                        settings.clustering.name()
+                    )));
+                }
+                surface_nets::extract(&self.samples, settings, &mut self.surface_nets, mesh, stats);
+                stats.bytes_edges = self.surface_nets.bytes();
+                if self.mt.lean {
+                    self.surface_nets = surface_nets::SurfaceNetsBuffers::default();
+                }
             }
             settings::Method::Mt => {
                 // Marching tetrahedra (with its clustering), then the post-processing modes on

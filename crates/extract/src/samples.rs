@@ -93,10 +93,11 @@ pub enum Sampling {
     Sparse,
 }
 
-/// The lattice that a method samples: marching cubes uses the simple cubic corners.
+/// The lattice that a method samples: marching cubes and surface nets use the simple cubic
+/// corners.
 pub fn sampled_lattice(settings: &ExtractSettings) -> Lattice {
     match settings.method {
-        Method::Mc => Lattice::Simple,
+        Method::Mc | Method::SurfaceNets => Lattice::Simple,
         Method::Mt => settings.lattice,
     }
 }

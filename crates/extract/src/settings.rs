@@ -65,6 +65,12 @@ pub enum Method {
     Mt,
     /// Marching cubes on the plain cubic grid (lattice ignored).
     Mc,
+    /// Naive surface nets (the `fast-surface-nets` crate, its quads split as it splits them) on
+    /// the plain cubic grid's samples, the same values marching cubes reads (lattice ignored,
+    /// clustering none). Not always manifold: its defects are reported, not repaired. Named
+    /// `surface-nets` in settings files.
+    #[serde(rename = "surface-nets")]
+    SurfaceNets,
 }
 
 /// How vertex normals are computed.
@@ -170,9 +176,9 @@ impl Grid {
 pub struct ExtractSettings {
     /// The sampled box and its resolution.
     pub grid: Grid,
-    /// Marching tetrahedra or marching cubes.
+    /// Marching tetrahedra, marching cubes or surface nets.
     pub method: Method,
-    /// The tetrahedral lattice (ignored by marching cubes).
+    /// The tetrahedral lattice (ignored by marching cubes and surface nets).
     pub lattice: Lattice,
     /// Vertex merging.
     pub clustering: Clustering,

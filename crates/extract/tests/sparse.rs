@@ -1,6 +1,6 @@
 //! Sparse sampling (blocks whose field range excludes the isovalue are not evaluated) gives the
 //! same meshes, byte for byte, as dense sampling: random fields with a range, random boxes,
-//! resolutions and isovalues, both lattices, every clustering mode, marching cubes, 1 and 2
+//! resolutions and isovalues, both lattices, every clustering mode, marching cubes, surface nets, 1 and 2
 //! threads. The stored values agree in side everywhere and in value wherever they were
 //! evaluated.
 
@@ -65,7 +65,10 @@ fn field(kind: usize, seed: u32, c: Vec3, r: f32) -> Box<dyn ScalarField> {
 
 /// Every extraction mode: (method, lattice, clustering).
 fn modes() -> Vec<(Method, Lattice, Clustering)> {
-    let mut m = vec![(Method::Mc, Lattice::Simple, Clustering::None)];
+    let mut m = vec![
+        (Method::Mc, Lattice::Simple, Clustering::None),
+        (Method::SurfaceNets, Lattice::Simple, Clustering::None),
+    ];
     for lattice in [Lattice::BodyCentred, Lattice::Simple] {
         for clustering in [
             Clustering::None,
