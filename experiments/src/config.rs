@@ -57,7 +57,7 @@ pub const CLUSTERINGS: [Clustering; 5] = [
 ];
 
 /// Every method, in the order help texts and errors list them.
-pub const METHODS: [Method; 2] = [Method::Mt, Method::Mc];
+pub const METHODS: [Method; 3] = [Method::Mt, Method::Mc, Method::SurfaceNets];
 
 /// Every normals mode, in the order help texts and errors list them.
 pub const NORMALS: [Normals; 3] = [Normals::Area, Normals::Gradient, Normals::None];
@@ -126,27 +126,29 @@ pub fn parse_normals(s: &str) -> Result<Normals, String> {
     })
 }
 
-/// The method's name (`mt`, `mc`).
+/// The method's name (`mt`, `mc`, `surface-nets`).
 pub fn method_name(m: Method) -> &'static str {
     match m {
         Method::Mt => "mt",
         Method::Mc => "mc",
+        Method::SurfaceNets => "surface-nets",
     }
 }
 
-/// The method's full name (`marching tetrahedra`, `marching cubes`).
+/// The method's full name (`marching tetrahedra`, `marching cubes`, `surface nets`).
 pub fn method_title(m: Method) -> &'static str {
     match m {
         Method::Mt => "marching tetrahedra",
         Method::Mc => "marching cubes",
+        Method::SurfaceNets => "surface nets",
     }
 }
 
-/// The lattice a configuration samples, by name: marching cubes samples the simple cubic
-/// lattice whatever the setting says.
+/// The lattice a configuration samples, by name: marching cubes and surface nets sample the
+/// simple cubic lattice whatever the setting says.
 pub fn lattice_name(method: Method, lattice: Lattice) -> &'static str {
     match method {
-        Method::Mc => Lattice::Simple.name(),
+        Method::Mc | Method::SurfaceNets => Lattice::Simple.name(),
         Method::Mt => lattice.name(),
     }
 }
@@ -224,7 +226,7 @@ impl Extraction {
     pub fn settings(&self, threads: usize) -> ExtractSettings {
         let grid = Grid::new(self.resolution.cells(), self.bounds.min, self.bounds.max);
         let lattice = match self.method {
-            Method::Mc => Lattice::Simple,
+            Method::Mc | Method::SurfaceNets => Lattice::Simple,
             Method::Mt => self.lattice,
         };
         let mut s = ExtractSettings::new(grid, lattice, self.clustering);
@@ -241,9 +243,10 @@ impl Extraction {
     pub fn check(&self, threads: usize) -> Result<(), String> {
         let settings = self.settings(threads);
         settings.check().map_err(|e| e.to_string())?;
-        if self.method == Method::Mc && self.clustering != Clustering::None {
+        if self.method != Method::Mt && self.clustering != Clustering::None {
             return Err(format!(
-                "marching cubes takes clustering none, got {}",
+                "{} takes clustering none, got {}",
+                method_title(self.method),
                 self.clustering.name()
             ));
         }
@@ -252,11 +255,11 @@ impl Extraction {
 }
 
 /// The clustering a method takes when none is named: integrated (RMT) for marching tetrahedra,
-/// none for marching cubes (which takes no other).
+/// none for marching cubes and surface nets (which take no other).
 pub fn default_clustering(method: Method) -> Clustering {
     match method {
         Method::Mt => Clustering::Integrated,
-        Method::Mc => Clustering::None,
+        Method::Mc | Method::SurfaceNets => Clustering::None,
     }
 }
 

@@ -39,6 +39,9 @@ pub fn world_settings(e: &Extraction, chunk: usize, threads: usize) -> Result<Wo
     let base = match e.method {
         Method::Mc => WorldSettings::marching_cubes(cells, e.bounds.min, spacing.x),
         Method::Mt => WorldSettings::new(cells, e.bounds.min, spacing.x, e.lattice, e.clustering),
+        Method::SurfaceNets => {
+            bail!("a chunked world takes method mt or mc: surface nets has no chunked terrain")
+        }
     };
     Ok(WorldSettings {
         collapse_threshold: e.collapse_threshold,

@@ -556,10 +556,11 @@ pub fn clustering_letter(c: Clustering) -> char {
     }
 }
 
-/// The lattice letter of ids (`m` for marching cubes).
+/// The lattice letter of ids (`m` for marching cubes, `n` for surface nets).
 pub fn lattice_letter(method: Method, l: Lattice) -> char {
     match (method, l) {
         (Method::Mc, _) => 'm',
+        (Method::SurfaceNets, _) => 'n',
         (Method::Mt, Lattice::BodyCentred) => 'b',
         (Method::Mt, Lattice::Simple) => 's',
     }

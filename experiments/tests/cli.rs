@@ -128,6 +128,42 @@ fn extract_with_marching_cubes_alone_takes_no_clustering() {
 }
 
 #[test]
+fn extract_with_surface_nets_counts_its_defects_and_takes_no_clustering() {
+    // The asteroid at 64^3: surface nets leaves non-manifold edges there, which are reported in
+    // the measurement, not hidden and not an error.
+    let o = experiments(&[
+        "extract",
+        "--object",
+        "asteroid",
+        "--method",
+        "surface-nets",
+        "--resolution",
+        "64",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["method"], "surface-nets");
+    assert_eq!(v["lattice"], "simple");
+    assert_eq!(v["clustering"], "none");
+    assert!(v["triangles"].as_u64().unwrap() > 0);
+    assert!(v["non_manifold_edges"].as_u64().unwrap() > 0, "{v}");
+    let o = experiments(&[
+        "extract",
+        "--method",
+        "surface-nets",
+        "--clustering",
+        "integrated",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("surface nets takes clustering none"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
 fn extract_prints_a_readable_summary_without_json() {
     let o = experiments(&[
         "extract",

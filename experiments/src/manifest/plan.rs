@@ -228,7 +228,7 @@ fn base_configurations(
         let obj = find_object(objs, &c.object, &key, invalid)?;
         let method = c.method.unwrap_or(Method::Mt);
         let lattice = match method {
-            Method::Mc => Lattice::Simple,
+            Method::Mc | Method::SurfaceNets => Lattice::Simple,
             Method::Mt => c.lattice.unwrap_or(Lattice::BodyCentred),
         };
         let clustering = c.clustering.unwrap_or(Clustering::None);
@@ -282,9 +282,10 @@ fn matrix_configurations(
     for name in &names {
         let obj = find_object(objs, name, "matrix.objects", invalid)?;
         for &method in &matrix.methods {
-            // Marching cubes has no lattice choice and no clustering: one configuration.
+            // Marching cubes and surface nets have no lattice choice and no clustering: one
+            // configuration.
             let combos: Vec<(Lattice, Clustering)> = match method {
-                Method::Mc => vec![(Lattice::Simple, Clustering::None)],
+                Method::Mc | Method::SurfaceNets => vec![(Lattice::Simple, Clustering::None)],
                 Method::Mt => matrix
                     .lattices
                     .iter()
