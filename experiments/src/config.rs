@@ -374,7 +374,7 @@ mod tests {
         );
         assert_eq!(
             parse_method("x").unwrap_err(),
-            "unknown method `x` (expected mt or mc)"
+            "unknown method `x` (expected mt, mc or surface-nets)"
         );
         assert_eq!(
             parse_normals("x").unwrap_err(),

@@ -226,7 +226,7 @@ mod tests {
         }
         assert_eq!(
             help_of("method"),
-            "Method: mt (marching tetrahedra) or mc (marching cubes)"
+            "Method: mt (marching tetrahedra), mc (marching cubes) or surface-nets (surface nets)"
         );
     }
 

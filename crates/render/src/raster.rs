@@ -24,6 +24,9 @@
 //! barycentric weights of its second and third vertex: shading happens later, once per sample.
 
 use glam::{Mat4, Vec3};
+use rmt_mesh::Mesh;
+
+use crate::{RenderError, Result};
 
 /// Fixed-point steps per sample.
 pub(crate) const SUBSAMPLE: i64 = 256;
@@ -269,6 +272,29 @@ pub fn rasterize(vertices: &[ScreenVertex], indices: &[u32], gbuffer: &mut GBuff
         });
     }
     front
+}
+
+/// Checks that `mesh` is whole triangles whose indices are in range.
+pub(crate) fn check_indices(mesh: &Mesh) -> Result<()> {
+    if !mesh.indices.chunks_exact(3).remainder().is_empty() {
+        return Err(RenderError::InvalidMesh(format!(
+            "{} indices is not a multiple of 3",
+            mesh.indices.len()
+        )));
+    }
+    if let Some(pos) = mesh
+        .indices
+        .iter()
+        .position(|&i| i as usize >= mesh.positions.len())
+    {
+        return Err(RenderError::InvalidMesh(format!(
+            "triangle {} refers to vertex {} but the mesh has {} vertices",
+            pos / 3,
+            mesh.indices[pos],
+            mesh.positions.len()
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use crate::animation::{frame_delays, IndexedAnimation};
 use crate::camera::{turntable_model, BoundingSphere, Camera};
 use crate::color::Rgb8;
 use crate::palette::{histogram, median_cut, Palette};
-use crate::raster::{project, rasterize, GBuffer, ScreenVertex};
+use crate::raster::{check_indices, project, rasterize, GBuffer, ScreenVertex};
 use crate::shade::{resolve, LightRig, Normals, Shader, Shading};
 use crate::wireframe::{draw_wireframe, Wireframe};
 use crate::{io_error, RenderError, Result};
@@ -216,24 +216,7 @@ struct PreparedMesh {
 
 impl PreparedMesh {
     fn new(mesh: &Mesh) -> Result<Self> {
-        if !mesh.indices.chunks_exact(3).remainder().is_empty() {
-            return Err(RenderError::InvalidMesh(format!(
-                "{} indices is not a multiple of 3",
-                mesh.indices.len()
-            )));
-        }
-        if let Some(pos) = mesh
-            .indices
-            .iter()
-            .position(|&i| i as usize >= mesh.positions.len())
-        {
-            return Err(RenderError::InvalidMesh(format!(
-                "triangle {} refers to vertex {} but the mesh has {} vertices",
-                pos / 3,
-                mesh.indices[pos],
-                mesh.positions.len()
-            )));
-        }
+        check_indices(mesh)?;
         let sphere = BoundingSphere::of_mesh(mesh)?;
         let positions: Vec<Vec3> = mesh.positions.iter().map(|&p| Vec3::from(p)).collect();
         let vertex_normals = if mesh.normals.is_empty() {

@@ -17,7 +17,7 @@
 //! meshoptimizer trusts its inputs (an index out of range is undefined behaviour in C++), so
 //! every function here checks the mesh first.
 
-use crate::cost::occupancy::check_indices;
+use crate::raster::check_indices;
 use crate::{RenderError, Result};
 use rmt_mesh::Mesh;
 

@@ -28,7 +28,7 @@ pub struct BufferSizes {
 /// Errors when the `.glb` cannot be written (indices out of range, normals that are neither
 /// absent nor one per vertex, a mesh too large for the format).
 pub fn buffer_sizes(mesh: &Mesh) -> Result<BufferSizes> {
-    crate::cost::occupancy::check_indices(mesh)?;
+    crate::raster::check_indices(mesh)?;
     let with_normals = if mesh.normals.is_empty() && !mesh.positions.is_empty() {
         let mut m = mesh.clone();
         m.compute_area_weighted_normals();

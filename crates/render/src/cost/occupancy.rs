@@ -50,7 +50,7 @@
 //! occupancy_cost`).
 
 use crate::camera::{turntable_model, BoundingSphere, Camera};
-use crate::raster::{project, ScreenVertex, TriangleSetup, NO_TRIANGLE, SUBSAMPLE};
+use crate::raster::{check_indices, project, ScreenVertex, TriangleSetup, NO_TRIANGLE, SUBSAMPLE};
 use crate::{RenderError, Result};
 use glam::Vec3;
 use rmt_mesh::Mesh;
@@ -316,29 +316,6 @@ pub struct OccupancyMeter {
     raster: QuadRaster,
     positions: Vec<Vec3>,
     screen: Vec<ScreenVertex>,
-}
-
-/// Checks that `mesh` is whole triangles whose indices are in range.
-pub(crate) fn check_indices(mesh: &Mesh) -> Result<()> {
-    if !mesh.indices.chunks_exact(3).remainder().is_empty() {
-        return Err(RenderError::InvalidMesh(format!(
-            "{} indices is not a multiple of 3",
-            mesh.indices.len()
-        )));
-    }
-    if let Some(pos) = mesh
-        .indices
-        .iter()
-        .position(|&i| i as usize >= mesh.positions.len())
-    {
-        return Err(RenderError::InvalidMesh(format!(
-            "triangle {} refers to vertex {} but the mesh has {} vertices",
-            pos / 3,
-            mesh.indices[pos],
-            mesh.positions.len()
-        )));
-    }
-    Ok(())
 }
 
 impl OccupancyMeter {
