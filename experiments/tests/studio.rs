@@ -501,3 +501,93 @@ fn a_small_extraction_is_not_stuck_behind_a_large_one() {
         "the 64^3 request finished only after the 200^3 one ({small_time:?}, {big_time:?})"
     );
 }
+
+/// Where the ground of a sculpt world is near world (x, z): the y of the nearest vertex of its
+/// chunk meshes.
+fn ground_of(parts: &[wire::Part], x: f32, z: f32) -> f32 {
+    parts
+        .iter()
+        .flat_map(|p| p.mesh.positions.iter())
+        .min_by(|p, q| {
+            let d = |p: &[f32; 3]| (p[0] - x).powi(2) + (p[2] - z).powi(2);
+            d(p).total_cmp(&d(q))
+        })
+        .unwrap()[1]
+}
+
+/// Defect: one lock covered every sculpt session, so a stroke waited for strokes on other
+/// sessions. Session A is a caves world of 192 x 48 x 192 cells in chunks of 96 cells with
+/// postprocessed clustering (tile seams: a stroke re-meshes every chunk it touches), and a stroke
+/// on the corner of its four chunks re-meshes all of them (one to two seconds). A stroke on
+/// session B, sent while that one runs, has come back whole before the first byte of A's reply
+/// arrives. (With the sessions' lock held through the stroke, as before, B's reply came after.)
+#[test]
+fn a_stroke_on_one_session_is_not_stuck_behind_a_long_one_on_another() {
+    use std::io::{Read, Write};
+    const LARGE: &str = "object=caves&size=192&chunk=96&clustering=postprocessed";
+    const SMALL: &str = "size=32&chunk=8";
+    let server = start();
+    let a = server.addr;
+    let create = |query: &str| {
+        let (h, parts) = decode(&post(a, &format!("/studio/api/sculpt?{query}"), None));
+        (h["session"].as_str().unwrap().to_string(), parts)
+    };
+    let (small, small_parts) = create(SMALL);
+    let (large, large_parts) = create(LARGE);
+    let body = |centre: [f32; 3], radius: f32, strength: f32| {
+        serde_json::json!({
+            "centre": centre, "mode": "add", "radius_cells": radius, "strength": strength
+        })
+        .to_string()
+    };
+
+    // A's stroke on a connection of its own, whose reply is read only after B's.
+    let long = body([0.0, ground_of(&large_parts, 0.0, 0.0), 0.0], 32.0, 20.0);
+    let mut stream = std::net::TcpStream::connect(a).unwrap();
+    stream
+        .set_read_timeout(Some(std::time::Duration::from_secs(60)))
+        .unwrap();
+    write!(
+        stream,
+        "POST /studio/api/sculpt/{large}/brush HTTP/1.1\r\nHost: {a}\r\nConnection: close\r\n\
+         Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{long}",
+        long.len()
+    )
+    .unwrap();
+    // Let the long stroke reach its session.
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let start = std::time::Instant::now();
+    let centre = [0.0, ground_of(&small_parts, 0.0, 0.0), 0.0];
+    let r = post(
+        a,
+        &format!("/studio/api/sculpt/{small}/brush"),
+        Some(&body(centre, 4.0, 3.0)),
+    );
+    let small_time = start.elapsed();
+    // Has any of A's reply arrived yet?
+    stream.set_nonblocking(true).unwrap();
+    let long_was_running = matches!(
+        stream.peek(&mut [0u8; 1]),
+        Err(e) if e.kind() == std::io::ErrorKind::WouldBlock
+    );
+    stream.set_nonblocking(false).unwrap();
+    let (h, parts) = decode(&r);
+    assert!(h["changed_values"].as_u64().unwrap() > 0);
+    assert_eq!(parts.len(), 4, "B's stroke on its four chunks' corner");
+    let mut raw = Vec::new();
+    stream.read_to_end(&mut raw).unwrap();
+    let long_time = start.elapsed();
+    let (h, parts) = decode(&client::parse(&raw).unwrap());
+    assert!(h["changed_values"].as_u64().unwrap() > 0);
+    assert_eq!(h["chunk_count"], 4);
+    assert_eq!(parts.len(), 4, "the long stroke re-meshes all four chunks");
+    eprintln!(
+        "a stroke on session B beside a running stroke on A ({LARGE}): {small_time:?} \
+         (A's reply read {long_time:?} after B's stroke was sent)"
+    );
+    assert!(
+        long_was_running,
+        "A's reply had begun when B's stroke came back: B waited for A \
+         ({small_time:?}, {long_time:?})"
+    );
+}
