@@ -15,7 +15,10 @@
 //! - [`measure()`]: the quality of a mesh ([`Measurement`]; [`measure::on_box_boundary`]);
 //! - [`lattice`]: the lattices' derived tables ([`lattice::LatticeTables`]); [`samples`]: the
 //!   sample array ([`Samples`], [`samples::sampled_lattice`]); [`threads`]: the worker pools
-//!   ([`thread_pool`]).
+//!   ([`thread_pool`]);
+//! - [`finish`]: what an engine does to any method's mesh before upload: meshoptimizer's
+//!   simplifier down to a triangle budget ([`finish::simplify_to`]) and its vertex-cache order
+//!   ([`finish::optimize_vertex_cache`]).
 //!
 //! # The passes
 //!
@@ -68,6 +71,7 @@
 //! field value, so their right-hand normals point outward for a signed distance field.
 
 mod error;
+pub mod finish;
 pub(crate) mod incidence;
 pub mod lattice;
 pub(crate) mod mc;

@@ -18,6 +18,7 @@ pub(crate) mod simplify;
 
 pub use collapse::{CollapseAttempt, CollapseOutcome};
 pub(crate) use merge::MergeBuffers;
+pub(crate) use simplify::compact_vertices;
 
 /// Post-processing (counted in the geometry pass, as in the dissertation): edge collapse of
 /// short edges and slivers, or meshopt after welding coincident crossings.

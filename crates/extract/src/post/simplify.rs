@@ -35,7 +35,7 @@ pub fn meshopt_simplify(mesh: &mut Mesh, h: f32, error_in_h: f32) -> usize {
 }
 
 /// Removes unreferenced vertices, keeping the survivors in their original order.
-fn compact_vertices(mesh: &mut Mesh) {
+pub(crate) fn compact_vertices(mesh: &mut Mesh) {
     let mut remap = vec![u32::MAX; mesh.positions.len()];
     for &i in &mesh.indices {
         remap[i as usize] = 0;
