@@ -1,0 +1,101 @@
+"""Type stubs of rmt_terrain (signatures for IDEs; the docstrings are in __init__.py)."""
+
+import os
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+OBJECTS: Tuple[str, ...]
+
+_Field = Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]], Any]
+
+class Mesh:
+    """A triangle mesh: vertices (N, 3) float32 (x, y, z), faces (M, 3) uint32, normals, stats."""
+
+    vertices: npt.NDArray[np.float32]
+    faces: npt.NDArray[np.uint32]
+    normals: Optional[npt.NDArray[np.float32]]
+    stats: Dict[str, Any]
+    def __init__(
+        self,
+        vertices: npt.NDArray[np.float32],
+        faces: npt.NDArray[np.uint32],
+        normals: Optional[npt.NDArray[np.float32]],
+        stats: Dict[str, Any],
+        box: Any = ...,
+    ) -> None: ...
+    def validate(self) -> Dict[str, Any]:
+        """closed, manifold, oriented, euler, components, watertight_manifold and counts."""
+    def quality(self) -> Dict[str, Any]:
+        """Radius ratio statistics (ar_mean, ar_sd, ar_median, ar_max, ...), angles, areas."""
+    def to_trimesh(self) -> Any:
+        """A trimesh.Trimesh (needs trimesh)."""
+    def write(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Binary PLY, OBJ or binary glTF by the extension (.ply, .obj, .glb)."""
+
+class Sampled:
+    """A built-in object sampled on a lattice (from sample())."""
+
+    volume: npt.NDArray[np.float32]
+    centres: Optional[npt.NDArray[np.float32]]
+    spacing: Tuple[float, float, float]
+    origin: Tuple[float, float, float]
+    lattice: str
+    object: str
+    def __init__(
+        self,
+        volume: npt.NDArray[np.float32],
+        centres: Optional[npt.NDArray[np.float32]],
+        spacing: Tuple[float, float, float],
+        origin: Tuple[float, float, float],
+        lattice: str,
+        object: str,
+    ) -> None: ...
+    def extract(self, level: float = 0.0, **kwargs: Any) -> Mesh:
+        """extract() on these values; the command line's mesh, byte for byte."""
+
+def extract(
+    volume: npt.ArrayLike,
+    level: float = 0.0,
+    *,
+    spacing: Sequence[float] = (1.0, 1.0, 1.0),
+    lattice: str = "simple",
+    clustering: Optional[str] = None,
+    method: str = "mt",
+    normals: str = "gradient",
+    threads: Optional[int] = None,
+    centres: Union[npt.ArrayLike, _Field, None] = None,
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
+) -> Mesh:
+    """The isosurface volume == level of volume[z, y, x] (scikit-image's reading); vertices in
+    (x, y, z). lattice: simple | bcdl (needs centres); method: mt | mc | surface-nets;
+    clustering: None (the method's default) | integrated | integrated-unchecked | none |
+    postprocessed | meshopt; normals: gradient | area | none."""
+
+def extract_field(
+    f: _Field,
+    bounds: Sequence[float] = (-1.0, -1.0, -1.0, 1.0, 1.0, 1.0),
+    resolution: Union[int, Sequence[int]] = 64,
+    *,
+    lattice: str = "bcdl",
+    level: float = 0.0,
+    clustering: Optional[str] = None,
+    method: str = "mt",
+    normals: str = "gradient",
+    threads: Optional[int] = None,
+    batch: int = 1048576,
+) -> Mesh:
+    """The isosurface f == level of a vectorised f(x, y, z), called once per batch of points."""
+
+def sample(
+    object: str,
+    resolution: Union[int, Sequence[int]] = 50,
+    lattice: str = "bcdl",
+    seed: Optional[int] = None,
+    *,
+    bounds: Sequence[float] = (-1.0, -1.0, -1.0, 1.0, 1.0, 1.0),
+    threads: Optional[int] = None,
+    **params: Any,
+) -> Sampled:
+    """A built-in object (OBJECTS) sampled as the command line samples it."""
