@@ -35,16 +35,15 @@ pub fn result<'py>(
     for (k, v) in extra {
         stats.set_item(*k, *v)?;
     }
-    let grid_box = (
-        grid.min.to_array(),
-        grid.max.to_array(),
-        grid.cells,
-    );
+    let grid_box = (grid.min.to_array(), grid.max.to_array(), grid.cells);
     (vertices, faces, normals, stats, grid_box).into_pyobject(py)
 }
 
 /// A serialisable report as a dict (via JSON values: numbers, strings, booleans, lists, maps).
-pub fn to_dict<'py, T: serde::Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyDict>> {
+pub fn to_dict<'py, T: serde::Serialize>(
+    py: Python<'py>,
+    value: &T,
+) -> PyResult<Bound<'py, PyDict>> {
     let json = serde_json::to_value(value).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let Value::Object(map) = json else {
         return Err(PyValueError::new_err("report is not a map"));
@@ -135,7 +134,11 @@ pub fn mesh_from_arrays(
 /// nx + 1)`, the centres with their ghost layer `(nz + 2, ny + 2, nx + 2)` (NaN where no point
 /// exists), spacing and origin in array order (z, y, x), the spacing in double precision from
 /// the box, so that `extract` rebuilds the same float32 box.
-pub fn sampled<'py>(py: Python<'py>, samples: &Samples, grid: &Grid) -> PyResult<Bound<'py, PyTuple>> {
+pub fn sampled<'py>(
+    py: Python<'py>,
+    samples: &Samples,
+    grid: &Grid,
+) -> PyResult<Bound<'py, PyTuple>> {
     let [nx, ny, nz] = samples.cells;
     let shape = (nz + 1, ny + 1, nx + 1);
     let (volume, centres) = match samples.lattice {
@@ -162,7 +165,8 @@ pub fn sampled<'py>(py: Python<'py>, samples: &Samples, grid: &Grid) -> PyResult
     let volume = Array3::from_shape_vec(shape, volume)
         .map_err(|e| PyValueError::new_err(e.to_string()))?
         .into_pyarray(py);
-    let spacing = |a: usize| (f64::from(grid.max[a]) - f64::from(grid.min[a])) / grid.cells[a] as f64;
+    let spacing =
+        |a: usize| (f64::from(grid.max[a]) - f64::from(grid.min[a])) / grid.cells[a] as f64;
     let spacing = (spacing(2), spacing(1), spacing(0));
     let origin = (
         f64::from(grid.min.z),

@@ -349,11 +349,8 @@ fn validate<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let mesh = convert::mesh_from_arrays(&vertices, &faces, None)?;
     let grid = Grid::new(cells, Vec3::from(lo), Vec3::from(hi));
-    let report = py.detach(|| {
-        rmt_mesh::validate(&mesh, &|p| {
-            rmt_extract::measure::on_box_boundary(&grid, p)
-        })
-    });
+    let report = py
+        .detach(|| rmt_mesh::validate(&mesh, &|p| rmt_extract::measure::on_box_boundary(&grid, p)));
     let dict = convert::to_dict(py, &report)?;
     dict.set_item("closed", report.boundary_edges_interior == 0)?;
     dict.set_item(

@@ -10,8 +10,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rmt_extract::Grid;
 use rmt_fields::{
-    Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, MeshSdf, RandomField,
-    ScalarField, Sphere, SvobodaParams, SvobodaTerrain, Torus,
+    Asteroid, AsteroidParams, CaveParams, CaveTerrain, Gyroid, MeshSdf, RandomField, ScalarField,
+    Sphere, SvobodaParams, SvobodaTerrain, Torus,
 };
 
 use crate::errors::Error;

@@ -23,7 +23,11 @@ pub struct Input<'a> {
 
 /// The C-order index (`[i, j, k]`) of flat position `at` in an array of `shape`.
 fn index_of(at: usize, shape: [usize; 3]) -> [usize; 3] {
-    [at / (shape[1] * shape[2]), (at / shape[2]) % shape[1], at % shape[2]]
+    [
+        at / (shape[1] * shape[2]),
+        (at / shape[2]) % shape[1],
+        at % shape[2],
+    ]
 }
 
 /// The first non-finite value of `v`, if any (a vectorisable scan first; the search only when
@@ -149,13 +153,23 @@ impl Input<'_> {
         for k in 0..nz {
             for j in 0..ny {
                 for (x, sx) in [(0, 0), (nx, nx + 1)] {
-                    let m = mean(v(k, j, x), v(k, j + 1, x), v(k + 1, j, x), v(k + 1, j + 1, x));
+                    let m = mean(
+                        v(k, j, x),
+                        v(k, j + 1, x),
+                        v(k + 1, j, x),
+                        v(k + 1, j + 1, x),
+                    );
                     samples.values[slot(2 * k + 2, j + 1, sx)] = m;
                 }
             }
             for i in 0..nx {
                 for (y, sy) in [(0, 0), (ny, ny + 1)] {
-                    let m = mean(v(k, y, i), v(k, y, i + 1), v(k + 1, y, i), v(k + 1, y, i + 1));
+                    let m = mean(
+                        v(k, y, i),
+                        v(k, y, i + 1),
+                        v(k + 1, y, i),
+                        v(k + 1, y, i + 1),
+                    );
                     samples.values[slot(2 * k + 2, sy, i + 1)] = m;
                 }
             }
@@ -163,7 +177,12 @@ impl Input<'_> {
         for j in 0..ny {
             for i in 0..nx {
                 for (z, plane) in [(0, 0), (nz, 2 * nz + 2)] {
-                    let m = mean(v(z, j, i), v(z, j, i + 1), v(z, j + 1, i), v(z, j + 1, i + 1));
+                    let m = mean(
+                        v(z, j, i),
+                        v(z, j, i + 1),
+                        v(z, j + 1, i),
+                        v(z, j + 1, i + 1),
+                    );
                     samples.values[slot(plane, j + 1, i + 1)] = m;
                 }
             }
