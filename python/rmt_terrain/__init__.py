@@ -272,15 +272,19 @@ def extract_field(f: Callable[[np.ndarray, np.ndarray, np.ndarray], Any],
                   resolution: Union[int, Sequence[int]] = 64, *, lattice: str = "bcdl",
                   level: float = 0.0, clustering: Optional[str] = None, method: str = "mt",
                   normals: str = "gradient", threads: Optional[int] = None,
-                  batch: int = 1 << 20) -> Mesh:
+                  batch: int = 1 << 16) -> Mesh:
     """Samples a vectorised callable and extracts its isosurface ``f == level``.
 
     ``f(x, y, z)`` receives three float64 arrays of equal length (one batch of lattice points,
     up to ``batch`` points, world coordinates) and returns one value per point (any real
     dtype, converted to float32). It is called once per batch, never once per point: a 64^3
-    body-centred grid (about 560,000 points) is one call. Its overhead is that of building
-    the coordinate arrays and copying the answers, about 10-20 ns per point, on top of ``f``'s
-    own numpy work; gradient normals cost one more call on six points per vertex.
+    body-centred grid (561,345 points) is 9 calls of 65,536 points. The overhead beyond ``f``'s
+    own numpy work (listing the points, the coordinate arrays, the conversion and copy of the
+    answers) was 25-45 ns per point on a busy 2-vCPU VM (``python/examples/overhead.py``),
+    about as much as ``np.sqrt(x*x + y*y + z*z)`` itself; batches much larger than the default
+    cost more (fresh memory for every batch). Sampling runs on the calling thread, with the
+    GIL; the extraction after it runs on ``threads`` workers without the GIL. Gradient normals
+    call ``f`` again on six points per vertex.
 
     ``bounds`` is ``(xmin, ymin, zmin, xmax, ymax, zmax)`` and ``resolution`` the cells per
     axis, ``N`` or ``(nx, ny, nz)``, in the command line's (x, y, z) order. The body-centred

@@ -84,7 +84,7 @@ def extract_field(
     method: str = "mt",
     normals: str = "gradient",
     threads: Optional[int] = None,
-    batch: int = 1048576,
+    batch: int = 65536,
 ) -> Mesh:
     """The isosurface f == level of a vectorised f(x, y, z), called once per batch of points."""
 

@@ -12,13 +12,15 @@ use rmt_mesh::Mesh;
 use serde_json::Value;
 
 /// `(vertices (N, 3) float32, faces (M, 3) uint32, normals (N, 3) float32 or None, stats dict,
-/// (box min, box max, cells))`. The arrays take over the mesh's buffers.
+/// (box min, box max, cells))`. The arrays take over the mesh's buffers. The stats get the
+/// `extra` entries and `t_call_s`, the time since `started` (the native call's entry).
 pub fn result<'py>(
     py: Python<'py>,
     mesh: Mesh,
     stats: &Stats,
     grid: &Grid,
     extra: &[(&str, f64)],
+    started: std::time::Instant,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let Mesh {
         positions,
@@ -36,6 +38,7 @@ pub fn result<'py>(
         stats.set_item(*k, *v)?;
     }
     let grid_box = (grid.min.to_array(), grid.max.to_array(), grid.cells);
+    stats.set_item("t_call_s", started.elapsed().as_secs_f64())?;
     (vertices, faces, normals, stats, grid_box).into_pyobject(py)
 }
 

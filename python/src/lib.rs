@@ -101,7 +101,7 @@ impl Options {
         let threads = match threads {
             Some(0) => return Err(PyValueError::new_err("threads must be at least 1, got 0")),
             Some(n) => n,
-            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            None => pool::default_threads(),
         };
         Ok(Self {
             level,
@@ -191,6 +191,7 @@ fn extract_volume<'py>(
     normals: &str,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyTuple>> {
+    let started = std::time::Instant::now();
     let options = Options::parse(level, lattice, method, clustering, normals, threads)?;
     let shape: [usize; 3] = volume.shape().try_into().map_err(|_| {
         PyValueError::new_err(format!(
@@ -226,7 +227,9 @@ fn extract_volume<'py>(
         let mut ex = pool::take();
         let result = (|| {
             let t = std::time::Instant::now();
-            input.fill(&settings, ex.samples_mut())?;
+            let workers = pool::workers(settings.threads)?;
+            ex.set_pool(workers.clone());
+            workers.install(|| input.fill(&settings, ex.samples_mut()))?;
             let t_input = t.elapsed().as_secs_f64();
             let mut mesh = Mesh::default();
             let mut stats = ex
@@ -243,7 +246,14 @@ fn extract_volume<'py>(
         pool::give_back(ex);
         result
     })?;
-    convert::result(py, mesh, &stats, &settings.grid, &[("t_input_s", t_input)])
+    convert::result(
+        py,
+        mesh,
+        &stats,
+        &settings.grid,
+        &[("t_input_s", t_input)],
+        started,
+    )
 }
 
 /// Samples a built-in object on a lattice (the work behind `rmt_terrain.sample`). Returns
@@ -302,6 +312,7 @@ fn extract_field<'py>(
     threads: Option<usize>,
     batch: usize,
 ) -> PyResult<Bound<'py, PyTuple>> {
+    let started = std::time::Instant::now();
     let options = Options::parse(level, lattice, method, clustering, normals, threads)?;
     let grid = Grid::new(
         resolution,
@@ -333,7 +344,7 @@ fn extract_field<'py>(
         stats.t_normals_s += t.elapsed().as_secs_f64();
         stats.t_total_s += stats.t_normals_s;
     }
-    convert::result(py, mesh, &stats, &settings.grid, &[])
+    convert::result(py, mesh, &stats, &settings.grid, &[], started)
 }
 
 /// Validates a mesh: closed, manifold, oriented, Euler characteristic, components. Edges on

@@ -2,7 +2,7 @@
 //! reused, as a game keeps them between frames), and the memory estimate checked before a
 //! large extraction.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use pyo3::exceptions::PyMemoryError;
 use pyo3::PyResult;
@@ -14,6 +14,33 @@ static IDLE: Mutex<Vec<Extractor>> = Mutex::new(Vec::new());
 
 /// At most this many idle extractors are kept (each holds the buffers of its last volume).
 const KEEP: usize = 4;
+
+/// Worker pools by thread count, shared by the extractors (given with `set_pool`) and by the
+/// input copy, so both run on the same warm workers.
+static POOLS: Mutex<Vec<(usize, Arc<rayon::ThreadPool>)>> = Mutex::new(Vec::new());
+
+/// The pool of `threads` workers (built once).
+pub fn workers(threads: usize) -> Result<Arc<rayon::ThreadPool>, crate::errors::Error> {
+    let mut pools = POOLS
+        .lock()
+        .map_err(|_| crate::errors::Error::Library("worker pools poisoned".into()))?;
+    if let Some((_, p)) = pools.iter().find(|(n, _)| *n == threads) {
+        return Ok(p.clone());
+    }
+    let pool =
+        rmt_extract::thread_pool(threads, rmt_extract::ThreadPlacement::Os).map_err(|e| {
+            crate::errors::Error::Library(format!("could not start {threads} worker threads: {e}"))
+        })?;
+    let pool = Arc::new(pool);
+    pools.push((threads, pool.clone()));
+    Ok(pool)
+}
+
+/// The machine's cores (asked once: the answer reads cgroup files).
+pub fn default_threads() -> usize {
+    static CORES: OnceLock<usize> = OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+}
 
 /// An extractor for one call.
 pub fn take() -> Extractor {

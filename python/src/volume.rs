@@ -7,6 +7,7 @@
 //! centres) or `(nz + 2, ny + 2, nx + 2)` (with the ghost layer: index 0 and the last along an
 //! axis are the centres of the cubes just outside the box, sampled on the box face).
 
+use rayon::prelude::*;
 use rmt_extract::{samples::sampled_lattice, ExtractSettings, Lattice, Samples};
 
 use crate::errors::Error;
@@ -30,16 +31,32 @@ fn index_of(at: usize, shape: [usize; 3]) -> [usize; 3] {
     ]
 }
 
-/// The first non-finite value of `v`, if any (a vectorisable scan first; the search only when
-/// there is one).
+/// Values per task of the parallel copy and check.
+const CHUNK: usize = 1 << 15;
+
+/// Whether `v` holds a non-finite value (a vectorisable scan).
+fn has_non_finite(v: &[f32]) -> bool {
+    v.iter().fold(false, |acc, x| acc | !x.is_finite())
+}
+
+/// The first non-finite value of `v`, if any (a parallel vectorisable scan first, on the
+/// current rayon pool; the search only when there is one).
 fn first_non_finite(v: &[f32]) -> Option<(usize, f32)> {
-    let bad = v
-        .chunks(4096)
-        .any(|c| c.iter().fold(false, |acc, x| acc | !x.is_finite()));
-    if !bad {
+    if !v.par_chunks(CHUNK).any(has_non_finite) {
         return None;
     }
     v.iter().position(|x| !x.is_finite()).map(|i| (i, v[i]))
+}
+
+/// Copies `src` into `dst` (same length) in parallel; whether `src` holds a non-finite value.
+fn copy_checked(dst: &mut [f32], src: &[f32]) -> bool {
+    dst.par_chunks_mut(CHUNK)
+        .zip(src.par_chunks(CHUNK))
+        .map(|(d, s)| {
+            d.copy_from_slice(s);
+            has_non_finite(s)
+        })
+        .reduce(|| false, |a, b| a | b)
 }
 
 /// The error for a non-finite value at `at` of array `name` of `shape`.
@@ -58,9 +75,6 @@ impl Input<'_> {
         if self.values.len() != self.shape.iter().product::<usize>() {
             return Err(Error::Value("volume: data and shape disagree".into()));
         }
-        if let Some((i, v)) = first_non_finite(self.values) {
-            return Err(non_finite("volume", i, v, self.shape));
-        }
         match lattice {
             Lattice::Simple => {
                 if self.centres.is_some() {
@@ -71,10 +85,19 @@ impl Input<'_> {
                     ));
                 }
                 samples.prepare(settings);
-                samples.values.copy_from_slice(self.values);
+                if copy_checked(&mut samples.values, self.values) {
+                    if let Some((i, v)) = first_non_finite(self.values) {
+                        return Err(non_finite("volume", i, v, self.shape));
+                    }
+                }
                 Ok(())
             }
-            Lattice::BodyCentred => self.fill_bcdl(settings, samples),
+            Lattice::BodyCentred => {
+                if let Some((i, v)) = first_non_finite(self.values) {
+                    return Err(non_finite("volume", i, v, self.shape));
+                }
+                self.fill_bcdl(settings, samples)
+            }
         }
     }
 
