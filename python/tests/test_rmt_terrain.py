@@ -51,6 +51,8 @@ CLI_CASES = [
     (["--object", "torus"], 20, "simple", "none", "mt", "glb"),
     (["--object", "gyroid"], 16, "bcdl", "postprocessed", "mt", "ply"),
     (["--object", "random", "--seed", "3"], 20, "simple", None, "mc", "ply"),
+    (["--object", "caves", "--octaves", "3"], 20, "bcdl", "integrated-unchecked", "mt", "ply"),
+    (["--object", "bunny"], 24, "simple", None, "mt", "ply"),
 ]
 
 
