@@ -27,6 +27,7 @@
 //! methods = ["mt"]          # mt | mc (default mt); mc gives one configuration (clustering none)
 //! lattices = ["bcdl", "simple"]
 //! clustering = ["none", "integrated", "postprocessed"]
+//! shading = ["smooth", "flat"]   # how `render` draws them (default smooth only)
 //!
 //! [[configurations]]        # and/or an explicit list
 //! object = "sphere"
@@ -36,6 +37,7 @@
 //! id = "my_id"              # default: the naming rule
 //! resolution = 64           # overrides the object's (optional)
 //! collapse_threshold = 0.3  # optional
+//! shading = "flat"          # default smooth
 //!
 //! [sweep]                   # every configuration for each value (cross product)
 //! resolution = [16, 32, 64]
@@ -58,8 +60,15 @@
 //! **Naming rule** (reproduces the dissertation's ids): object code, `_`, lattice letter (`b`
 //! body-centred, `s` simple, `m` marching cubes), clustering letter (`u` none, `i` integrated,
 //! `c` integrated-unchecked, `p` postprocessed, `q` meshopt); each sweep appends `_r<cells>`
-//! (`_r64`, `_r75x40x56`) or `_t<threshold>` (`_t0.3`). So `as_bi` is the asteroid on the
-//! body-centred lattice with integrated clustering.
+//! (`_r64`, `_r75x40x56`) or `_t<threshold>` (`_t0.3`), and flat shading `_flat` (smooth, the
+//! default, appends nothing). So `as_bi` is the asteroid on the body-centred lattice with
+//! integrated clustering, and `as_bi_flat` the same mesh drawn with flat shading.
+//!
+//! **Shading** is a variable of a configuration like the lattice or the clustering: it does not
+//! change the extraction (two configurations that differ only in shading extract the same mesh),
+//! only how `render` draws it. `configurations.csv` gains a `shading` column when some
+//! configuration is not smooth, so manifests that never name shading keep their files byte for
+//! byte.
 
 mod plan;
 
@@ -71,6 +80,7 @@ use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
 use crate::config::{Extraction, Normals};
+pub use rmt_render::shade::Shading;
 use crate::objects::{Bounds, ObjectKind, ObjectParams, Resolution};
 
 /// Why a manifest cannot be run. Every message names the file; semantic errors name the key.
@@ -399,6 +409,13 @@ pub struct Matrix {
     /// Clustering modes (default none, integrated, postprocessed).
     #[serde(default = "default_clusterings")]
     pub clustering: Vec<Clustering>,
+    /// Shadings `render` draws each configuration with (default smooth only).
+    #[serde(default = "default_shadings")]
+    pub shading: Vec<Shading>,
+}
+
+fn default_shadings() -> Vec<Shading> {
+    vec![Shading::Smooth]
 }
 
 /// One `[[configurations]]` entry.
@@ -428,6 +445,9 @@ pub struct ConfigEntry {
     /// Overrides the isovalue.
     #[serde(default)]
     pub iso: Option<f32>,
+    /// How `render` draws it (default smooth).
+    #[serde(default)]
+    pub shading: Option<Shading>,
 }
 
 /// `[sweep]`: lists of values, each configuration repeated for every combination.
@@ -454,6 +474,29 @@ pub struct Configuration {
     /// Set in seed studies for configurations of a seeded object.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seed_of: Option<SeedOf>,
+    /// How `render` draws the mesh (not part of the extraction).
+    #[serde(skip_serializing_if = "is_smooth")]
+    pub shading: Shading,
+}
+
+fn is_smooth(s: &Shading) -> bool {
+    *s == Shading::Smooth
+}
+
+/// The id suffix of a shading: `_flat` for flat, nothing for smooth (the default).
+pub fn shading_suffix(s: Shading) -> &'static str {
+    match s {
+        Shading::Smooth => "",
+        Shading::Flat => "_flat",
+    }
+}
+
+/// The shading's name (`smooth`, `flat`), as manifests and `configurations.csv` write it.
+pub fn shading_name(s: Shading) -> &'static str {
+    match s {
+        Shading::Smooth => "smooth",
+        Shading::Flat => "flat",
+    }
 }
 
 impl Configuration {
@@ -741,6 +784,60 @@ mod tests {
         assert_eq!(p.configurations[0].extraction.object.params.seed, Some(11));
         assert_eq!(p.configurations[1].id, "custom");
         assert_eq!(p.configurations[1].extraction.resolution.cells(), [3, 4, 5]);
+    }
+
+    #[test]
+    fn shading_crosses_configurations_and_flat_ids_get_a_suffix() {
+        let p = plan(
+            r#"
+            name = "t"
+            [[objects]]
+            name = "sphere"
+            [matrix]
+            methods = ["mt", "surface-nets"]
+            lattices = ["bcdl"]
+            clustering = ["integrated"]
+            shading = ["smooth", "flat"]
+            [[configurations]]
+            object = "sphere"
+            method = "mc"
+            shading = "flat"
+            "#,
+        )
+        .unwrap();
+        let ids: Vec<(&str, Shading)> = p
+            .configurations
+            .iter()
+            .map(|c| (c.id.as_str(), c.shading))
+            .collect();
+        assert_eq!(
+            ids,
+            [
+                ("ss_bi", Shading::Smooth),
+                ("ss_bi_flat", Shading::Flat),
+                ("ss_nu", Shading::Smooth),
+                ("ss_nu_flat", Shading::Flat),
+                ("ss_mu_flat", Shading::Flat),
+            ]
+        );
+        // Shading changes no extraction.
+        assert_eq!(
+            p.configurations[0].extraction,
+            p.configurations[1].extraction
+        );
+        // The plan as run.json records it names shading only where it is not smooth.
+        let json = serde_json::to_string(&p.configurations[0]).unwrap();
+        assert!(!json.contains("shading"), "{json}");
+        let json = serde_json::to_string(&p.configurations[1]).unwrap();
+        assert!(json.contains(r#""shading":"flat""#), "{json}");
+        let err = plan("name = \"t\"\n[[objects]]\nname = \"sphere\"\n[matrix]\nshading = []\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("matrix.shading"), "{err}");
+        let err = plan("name = \"t\"\n[[objects]]\nname = \"sphere\"\n[matrix]\nshading = [\"toon\"]\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("toon"), "{err}");
     }
 
     #[test]

@@ -99,20 +99,32 @@ pub fn raw_rows_from(
     Ok(rows)
 }
 
-/// `configurations.csv` of a plan.
+/// `configurations.csv` of a plan: the columns of [`schema::CONFIGURATIONS`], then
+/// [`schema::SHADING`] when some configuration is not smooth (so that the study commands pair
+/// configurations within a shading, and plans that never name shading keep their bytes).
 pub fn configurations_csv(plan: &Plan) -> Result<Vec<u8>> {
-    let mut rows = vec![schema::CONFIGURATIONS
+    let shaded = plan
+        .configurations
+        .iter()
+        .any(|c| c.shading != crate::manifest::Shading::Smooth);
+    let mut header: Vec<String> = schema::CONFIGURATIONS
         .iter()
         .map(|s| s.to_string())
-        .collect::<Vec<_>>()];
+        .collect();
+    if shaded {
+        header.push(schema::SHADING.to_string());
+    }
+    let mut rows = vec![header];
     for c in &plan.configurations {
         let v = config_values(c);
-        rows.push(
-            schema::CONFIGURATIONS
-                .iter()
-                .map(|k| v.get(k).cloned().unwrap_or_default())
-                .collect(),
-        );
+        let mut row: Vec<String> = schema::CONFIGURATIONS
+            .iter()
+            .map(|k| v.get(k).cloned().unwrap_or_default())
+            .collect();
+        if shaded {
+            row.push(crate::manifest::shading_name(c.shading).to_string());
+        }
+        rows.push(row);
     }
     Ok(csv_bytes(&rows)?)
 }
@@ -163,6 +175,31 @@ mod tests {
             csv,
             "id,object,lattice,clustering,method,kind,rx,ry,rz,collapse_threshold,iso,normals\n\
              ss_bu,sphere,bcdl,none,mt,sphere,4,4,4,0.5,0,area\n"
+        );
+    }
+
+    #[test]
+    fn a_shading_column_appears_only_when_some_configuration_is_flat() {
+        let plan = crate::manifest::parse(
+            "name = \"t\"\n[[objects]]\nname = \"sphere\"\nresolution = 4\n\
+             [matrix]\nlattices = [\"bcdl\"]\nclustering = [\"integrated\"]\n\
+             shading = [\"smooth\", \"flat\"]\n",
+            std::path::Path::new("t.toml"),
+        )
+        .unwrap()
+        .plan(
+            std::path::Path::new("t.toml"),
+            std::path::Path::new("."),
+            &Default::default(),
+        )
+        .unwrap();
+        let csv = String::from_utf8(configurations_csv(&plan).unwrap()).unwrap();
+        assert_eq!(
+            csv,
+            "id,object,lattice,clustering,method,kind,rx,ry,rz,collapse_threshold,iso,normals,\
+             shading\n\
+             ss_bi,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,smooth\n\
+             ss_bi_flat,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,flat\n"
         );
     }
 }

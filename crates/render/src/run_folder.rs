@@ -20,6 +20,7 @@ use crate::questionnaire::{
     plan_questions, question_file_name, questionnaire_html, Manifest, PageQuestion, Question,
     QuestionnaireOptions,
 };
+use crate::shade::Shading;
 use crate::turntable::{Renderer, TurntableSettings};
 use crate::{io_error, RenderError, Result};
 use rmt_mesh::Mesh;
@@ -95,6 +96,13 @@ fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
 ///
 /// Earlier `*.gif` files in `render/` are removed first, so the folder holds exactly this run's
 /// animations.
+///
+/// **Shading per configuration.** When `configurations.csv` has a [`SHADING_COLUMN`] (the runner
+/// writes one when some configuration is flat), each configuration is drawn with its own
+/// shading (`smooth` or `flat`), each shading with its own palette (derived from the settings
+/// with that shading, as always); `settings.json` then holds the settings with smooth shading
+/// and `key.csv` says which animation is which. `settings` must then be smooth (an error
+/// otherwise: the run decides). Without the column every animation takes `settings.shading`.
 pub fn render_run(
     run: &Path,
     settings: &TurntableSettings,
@@ -102,7 +110,22 @@ pub fn render_run(
     mut progress: impl FnMut(usize, usize, &RenderedAnimation),
 ) -> Result<Vec<RenderedAnimation>> {
     let manifest = Manifest::read(&run.join(CONFIGURATIONS_FILE))?;
+    let shadings = configuration_shadings(&manifest, &run.join(CONFIGURATIONS_FILE))?;
+    if shadings.is_some() && settings.shading != Shading::Smooth {
+        return Err(RenderError::InvalidSettings(format!(
+            "the run's configurations set their own shading (`{SHADING_COLUMN}` column of {}): \
+             render it without flat shading in the settings",
+            run.join(CONFIGURATIONS_FILE).display()
+        )));
+    }
     let renderer = Renderer::new(settings.clone())?;
+    let flat_renderer = match &shadings {
+        Some(list) if list.contains(&Shading::Flat) => Some(Renderer::new(TurntableSettings {
+            shading: Shading::Flat,
+            ..settings.clone()
+        })?),
+        _ => None,
+    };
     let names = random_names(manifest.configurations.len(), seed)?;
     let render_dir = run.join(RENDER_DIR);
     std::fs::create_dir_all(&render_dir).map_err(io_error(&render_dir))?;
@@ -116,6 +139,11 @@ pub fn render_run(
     for (k, (config, name)) in manifest.configurations.iter().zip(&names).enumerate() {
         let mesh_path = run.join(MESHES_DIR).join(format!("{}.ply", config.id));
         let mesh = load_mesh(&mesh_path)?;
+        let shading = shadings.as_ref().map_or(settings.shading, |s| s[k]);
+        let renderer = match (&flat_renderer, shading) {
+            (Some(flat), Shading::Flat) => flat,
+            _ => &renderer,
+        };
         let animation = renderer.render(&mesh).map_err(|e| RenderError::MeshFile {
             path: mesh_path.clone(),
             message: e.to_string(),
@@ -155,6 +183,33 @@ pub fn render_run(
     rows.sort();
     write_csv(&key_path, &header, &rows)?;
     Ok(rendered)
+}
+
+/// The column of `configurations.csv` that gives each configuration's shading.
+pub const SHADING_COLUMN: &str = rmt_runfolder::schema::SHADING;
+
+/// Each configuration's shading, in manifest order, when the configurations have a
+/// [`SHADING_COLUMN`] (`None` without one); `path` names the file in errors.
+pub fn configuration_shadings(manifest: &Manifest, path: &Path) -> Result<Option<Vec<Shading>>> {
+    let Some(column) = manifest.variable_index(SHADING_COLUMN) else {
+        return Ok(None);
+    };
+    manifest
+        .configurations
+        .iter()
+        .map(|c| match c.values[column].as_str() {
+            "smooth" => Ok(Shading::Smooth),
+            "flat" => Ok(Shading::Flat),
+            other => Err(RenderError::BadFile {
+                path: path.to_path_buf(),
+                message: format!(
+                    "configuration `{}`: unknown shading `{other}` (expected smooth or flat)",
+                    c.id
+                ),
+            }),
+        })
+        .collect::<Result<Vec<_>>>()
+        .map(Some)
 }
 
 /// Reads `key.csv`: configuration id -> animation name.
@@ -510,6 +565,53 @@ mod tests {
         let err = build_questionnaire(dir.path(), &QuestionnaireOptions::default(), |_, _, _| {})
             .unwrap_err();
         assert!(err.to_string().contains("experiments render"), "{err}");
+    }
+
+    #[test]
+    fn a_shading_column_draws_each_configuration_with_its_own_shading() {
+        let dir = tempfile::tempdir().unwrap();
+        let run = dir.path();
+        std::fs::write(
+            run.join(CONFIGURATIONS_FILE),
+            "id,object,clustering,shading\n\
+             a,sphere,none,smooth\n\
+             a_flat,sphere,none,flat\n\
+             b,sphere,integrated,smooth\n",
+        )
+        .unwrap();
+        std::fs::create_dir_all(run.join(MESHES_DIR)).unwrap();
+        let mesh = uv_sphere(1.0, 9, 5);
+        for id in ["a", "a_flat", "b"] {
+            rmt_mesh::io::save_ply(run.join(MESHES_DIR).join(format!("{id}.ply")), &mesh, true)
+                .unwrap();
+        }
+        let rendered = render_run(run, &tiny_settings(), 3, |_, _, _| {}).unwrap();
+        let bytes = |i: usize| std::fs::read(&rendered[i].path).unwrap();
+        // Same mesh: smooth twice gives the same bytes, flat differs.
+        assert_eq!(bytes(0), bytes(2));
+        assert_ne!(bytes(0), bytes(1));
+        // The flat one is what a flat-shaded render of the same mesh gives.
+        let flat = TurntableSettings {
+            shading: Shading::Flat,
+            ..tiny_settings()
+        };
+        let alone = Renderer::new(flat.clone()).unwrap().render(&mesh).unwrap();
+        let path = run.join("alone.gif");
+        alone.write_gif(&path).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), bytes(1));
+        let key = read_rows(&run.join(KEY_FILE));
+        assert_eq!(key[0], ["name", "id", "object", "clustering", "shading"]);
+        // The run decides the shading: flat settings are refused.
+        let err = render_run(run, &flat, 3, |_, _, _| {}).unwrap_err();
+        assert!(err.to_string().contains("shading"), "{err}");
+        // An unknown shading is named.
+        std::fs::write(
+            run.join(CONFIGURATIONS_FILE),
+            "id,object,shading\na,sphere,toon\n",
+        )
+        .unwrap();
+        let err = render_run(run, &tiny_settings(), 3, |_, _, _| {}).unwrap_err();
+        assert!(err.to_string().contains("toon"), "{err}");
     }
 
     #[test]

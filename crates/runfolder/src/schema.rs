@@ -38,6 +38,10 @@ pub const CONFIGURATIONS: [&str; 12] = [
     "normals",
 ];
 
+/// The column `configurations.csv` appends after [`CONFIGURATIONS`] when some configuration is
+/// drawn with flat shading (`smooth` or `flat`; absent, every configuration is smooth).
+pub const SHADING: &str = "shading";
+
 /// The columns that precede the measurement in `raw.csv`: `run_id`, [`CONFIGURATION`],
 /// `threads`, `repetition`.
 pub const RAW_PREFIX: [&str; 15] =

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use rmt_extract::{Clustering, Lattice, Method};
 
 use super::{
-    base_id, safe_name, Configuration, EditPlan, Manifest, ManifestError, Matrix, Overrides, Plan,
-    SeedOf, SeedRange,
+    base_id, safe_name, shading_suffix, Configuration, EditPlan, Manifest, ManifestError, Matrix, Overrides, Plan,
+    SeedOf, SeedRange, Shading,
 };
 use crate::config::{self, Extraction};
 use crate::objects::{self, Bounds, ObjectKind, ObjectSpec, Resolution};
@@ -60,6 +60,7 @@ struct BaseConfiguration {
     resolution: Option<Resolution>,
     threshold: Option<f32>,
     iso: Option<f32>,
+    shading: Shading,
     key: String,
 }
 
@@ -232,9 +233,12 @@ fn base_configurations(
             Method::Mt => c.lattice.unwrap_or(Lattice::BodyCentred),
         };
         let clustering = c.clustering.unwrap_or(Clustering::None);
+        let shading = c.shading.unwrap_or_default();
         let id = match &c.id {
             Some(id) => id.clone(),
-            None => base_id(&objs[obj].code, method, lattice, clustering),
+            None => {
+                base_id(&objs[obj].code, method, lattice, clustering) + shading_suffix(shading)
+            }
         };
         bases.push(BaseConfiguration {
             obj,
@@ -245,6 +249,7 @@ fn base_configurations(
             resolution: c.resolution.map(|r| r.0),
             threshold: c.collapse_threshold,
             iso: c.iso,
+            shading,
             key,
         });
     }
@@ -273,6 +278,7 @@ fn matrix_configurations(
         ("matrix.methods", matrix.methods.is_empty()),
         ("matrix.lattices", matrix.lattices.is_empty()),
         ("matrix.clustering", matrix.clustering.is_empty()),
+        ("matrix.shading", matrix.shading.is_empty()),
     ] {
         if empty {
             return Err(invalid.at(key, "the list is empty"));
@@ -293,17 +299,21 @@ fn matrix_configurations(
                     .collect(),
             };
             for (lattice, clustering) in combos {
-                bases.push(BaseConfiguration {
-                    obj,
-                    id: base_id(&objs[obj].code, method, lattice, clustering),
-                    method,
-                    lattice,
-                    clustering,
-                    resolution: None,
-                    threshold: None,
-                    iso: None,
-                    key: "matrix".into(),
-                });
+                for &shading in &matrix.shading {
+                    bases.push(BaseConfiguration {
+                        obj,
+                        id: base_id(&objs[obj].code, method, lattice, clustering)
+                            + shading_suffix(shading),
+                        method,
+                        lattice,
+                        clustering,
+                        resolution: None,
+                        threshold: None,
+                        iso: None,
+                        shading,
+                        key: "matrix".into(),
+                    });
+                }
             }
         }
     }
@@ -431,6 +441,7 @@ fn expand(
                     object: o.name.clone(),
                     extraction,
                     seed_of: None,
+                    shading: b.shading,
                 };
                 let seeded = o.spec.kind.accepted().contains(&"seed");
                 match m.seeds {
@@ -473,6 +484,7 @@ fn plan_seeds(
                 base_id: c.id.clone(),
                 seed,
             }),
+            shading: c.shading,
         });
     }
     Ok(())
