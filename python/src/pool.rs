@@ -50,8 +50,16 @@ pub fn take() -> Extractor {
         .unwrap_or_default()
 }
 
+/// Extractors whose sample array is larger than this are dropped after their call instead of
+/// kept (16 MiB: about 160^3 points): a notebook that meshed one large volume should get its
+/// memory back, while repeated calls on smaller volumes reuse the buffers.
+const KEEP_BYTES: usize = 16 << 20;
+
 /// Returns an extractor taken with [`take`].
 pub fn give_back(ex: Extractor) {
+    if ex.samples().bytes() > KEEP_BYTES {
+        return;
+    }
     if let Ok(mut idle) = IDLE.lock() {
         if idle.len() < KEEP {
             idle.push(ex);

@@ -409,3 +409,16 @@ def test_no_leak_over_a_thousand_calls():
     grown = rss_bytes() - before
     # One 24^3 mesh is about 150 KB; 1000 leaked meshes would be 150 MB.
     assert grown < 8 << 20, f"RSS grew by {grown / 2**20:.1f} MiB over 1000 calls"
+
+
+@pytest.mark.skipif(not Path("/proc/self/statm").exists(), reason="needs /proc (Linux)")
+def test_memory_of_a_large_extraction_is_given_back():
+    volume = random_volume(np.random.default_rng(2), (257, 257, 257))  # 68 MB of float32
+    rmt_terrain.extract(sphere_volume(16))
+    before = rss_bytes()
+    mesh = rmt_terrain.extract(volume, 0.0, clustering="none", normals="none")
+    assert len(mesh.faces) > 0
+    del mesh
+    grown = rss_bytes() - before
+    # The extraction's sample array alone is 68 MB; kept extractors would hold it and more.
+    assert grown < 32 << 20, f"RSS grew by {grown / 2**20:.1f} MiB after the call"
