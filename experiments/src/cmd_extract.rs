@@ -1,7 +1,9 @@
 //! `experiments extract`: one extraction of one object (options parsed and checked by
-//! [`crate::extract_args`]), printed as a summary or as one JSON object (the [`Measurement`]
-//! keys, preceded by the configuration keys `object`, `lattice`, `clustering`, `method`,
-//! `resolution`, `bounds`, `collapse_threshold`, `iso`, `normals`, `threads`), optionally saved as PLY, OBJ or binary glTF (by the extension of `--out`).
+//! [`crate::extract_args`]) and its finish steps (`--simplify`, `--vertex-cache`), printed as a
+//! summary or as one JSON object (the keys of [`Measured`]: measurement, finish steps, rendering
+//! cost; preceded by the configuration keys `object`, `lattice`, `clustering`, `method`,
+//! `resolution`, `bounds`, `collapse_threshold`, `iso`, `normals`, `simplify`, `vertex_cache`,
+//! `threads`), optionally saved as PLY, OBJ or binary glTF (by the extension of `--out`).
 //!
 //! ```text
 //! experiments extract --object sphere --radius 1.0 --resolution 50 --lattice bcdl \
@@ -13,8 +15,10 @@ use rmt_extract::{BufferPolicy, Extractor, Measurement};
 use rmt_mesh::Mesh;
 use serde_json::Value;
 
-use crate::config::{self, config_json, measurement_json, Extraction};
+use crate::config::{self, config_json, Extraction};
 use crate::extract_args::{extraction, Args};
+use crate::finish::{FinishRecord, Finisher};
+use crate::measured::{self, Measured};
 
 /// Runs `extract`.
 pub fn run(args: Args) -> Result<()> {
@@ -22,6 +26,12 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.out {
         // Refuse an unknown format before the (possibly long) extraction.
         config::check_mesh_path(out)?;
+    }
+    if args.chunks.is_some() && (e.simplify.is_some() || e.vertex_cache) {
+        anyhow::bail!(
+            "--chunks cannot be combined with --simplify or --vertex-cache (the finish steps work \
+             on one whole mesh, not on chunks)"
+        );
     }
     let field = e
         .object
@@ -34,14 +44,19 @@ pub fn run(args: Args) -> Result<()> {
     let settings = e.settings(threads);
     let mut mesh = Mesh::default();
     let mut chunked = None;
+    let mut finish = FinishRecord::default();
     let stats = match args.chunks {
         None => {
             // One extraction: nothing to keep for a next call, so the lowest peak memory.
             let mut extractor = Extractor::new();
             extractor.set_buffer_policy(BufferPolicy::Lean);
-            extractor
+            let mut stats = extractor
                 .extract(field.as_ref(), &settings, &mut mesh)
-                .with_context(|| format!("extracting {}", e.object.kind))?
+                .with_context(|| format!("extracting {}", e.object.kind))?;
+            finish = Finisher::new(&e, field.as_ref(), threads)
+                .run(&mut mesh, &mut stats)
+                .with_context(|| format!("finishing {}", e.object.kind))?;
+            stats
         }
         Some(c) => {
             let (_, mut result) = crate::edit::extract_chunked(field.as_ref(), &e, c, threads)
@@ -57,7 +72,15 @@ pub fn run(args: Args) -> Result<()> {
             stats
         }
     };
-    let m = rmt_extract::measure(&mesh, &stats, Some(field.as_ref()), &settings);
+    let measured = measured::measure(
+        &mesh,
+        &stats,
+        &finish,
+        Some(field.as_ref()),
+        &settings,
+        &mut rmt_render::cost::RenderCostMeter::new(),
+    )?;
+    let m = &measured.measurement;
     if let Some(out) = &args.out {
         rmt_mesh::io::save_mesh(out, &mesh, args.ascii)
             .with_context(|| format!("saving the mesh to {}", out.display()))?;
@@ -68,7 +91,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     if args.json {
         let mut map = config_json(&e, threads);
-        map.extend(measurement_json(&m)?);
+        map.extend(measured.json()?);
         if let Some((c, r)) = &chunked {
             map.insert("chunk_size".into(), (*c).into());
             map.insert("chunks".into(), r.chunks.into());
@@ -79,7 +102,8 @@ pub fn run(args: Args) -> Result<()> {
         }
         println!("{}", serde_json::to_string_pretty(&Value::Object(map))?);
     } else {
-        print!("{}", summary(&e, threads, &m));
+        print!("{}", summary(&e, threads, m));
+        print!("{}", finish_summary(&e, &measured));
         if let Some((c, r)) = &chunked {
             println!(
                 "  chunks:   {} chunks of {c}^3 cells in {:.3} ms; the whole volume at once {:.3} ms, \
@@ -163,6 +187,47 @@ pub fn summary(e: &Extraction, threads: usize, m: &Measurement) -> String {
     );
     if let (Some(mean), Some(max)) = (m.fidelity_mean_h, m.fidelity_max_h) {
         out += &format!("  fidelity: mean {mean:.4} h, max {max:.4} h from the true surface\n");
+    }
+    out
+}
+
+/// The finish steps and rendering cost of [`summary`]'s extraction, in readable lines.
+pub fn finish_summary(e: &Extraction, m: &Measured) -> String {
+    let f = &m.finish;
+    let mut out = String::new();
+    if let (Some(s), Some(target), Some(before), Some(err)) = (
+        &e.simplify,
+        f.simplify_target,
+        f.simplify_triangles_before,
+        f.simplify_error_h,
+    ) {
+        out += &format!(
+            "  simplify: {} from {before} to {} triangles (target {target}), error {err:.4} h, \
+             {:.3} ms\n",
+            s.name(),
+            m.measurement.stats.triangles,
+            f.t_simplify_s * 1e3
+        );
+    }
+    if e.vertex_cache {
+        out += &format!(
+            "  vertex cache: reordered in {:.3} ms\n",
+            f.t_vertex_cache_s * 1e3
+        );
+    }
+    if let Some(c) = &m.cost {
+        out += &format!(
+            "  render:   quad occupancy {:.3} / {:.3} / {:.3} / {:.3} at 1080 / 540 / 270 / 135 px, \
+             ACMR {:.3} (cache 16), overdraw {:.3}, {} bytes as .glb ({:.0} ms to measure)\n",
+            c.quad_occupancy_1080,
+            c.quad_occupancy_540,
+            c.quad_occupancy_270,
+            c.quad_occupancy_135,
+            c.acmr_16,
+            c.overdraw,
+            c.glb_bytes,
+            m.t_cost_s * 1e3
+        );
     }
     out
 }

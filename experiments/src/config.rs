@@ -8,6 +8,7 @@ use rmt_extract::{Clustering, ExtractSettings, Grid, Lattice, Measurement, Metho
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
+use crate::finish::{simplify_name, Simplify};
 use crate::objects::{Bounds, ObjectSpec, Resolution};
 
 /// How normals are computed, with the names used on the command line and in manifests
@@ -174,6 +175,10 @@ pub struct Extraction {
     pub iso: f32,
     /// Normals.
     pub normals: Normals,
+    /// meshoptimizer's simplifier down to a budget after extraction ([`crate::finish`]).
+    pub simplify: Option<Simplify>,
+    /// meshoptimizer's vertex-cache order after extraction (and simplification).
+    pub vertex_cache: bool,
 }
 
 /// Threads to use when not told: every core the process may use.
@@ -202,6 +207,11 @@ pub fn config_json(e: &Extraction, threads: usize) -> Map<String, Value> {
     );
     m.insert("iso".into(), serde_json::json!(e.iso));
     m.insert("normals".into(), e.normals.name().into());
+    m.insert(
+        "simplify".into(),
+        simplify_name(e.simplify.as_ref()).into(),
+    );
+    m.insert("vertex_cache".into(), e.vertex_cache.into());
     m.insert("threads".into(), threads.into());
     m
 }

@@ -237,6 +237,8 @@ mod tests {
             collapse_threshold: 0.5,
             iso: 0.0,
             normals: Normals::Area,
+            simplify: None,
+            vertex_cache: false,
         }
     }
 

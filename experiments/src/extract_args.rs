@@ -46,6 +46,15 @@ pub struct Args {
     /// Normals: one of [`config::NORMALS`].
     #[arg(long, default_value = "area", value_parser = config::parse_normals, help = normals_help())]
     pub normals: Normals,
+    /// Simplify after extraction with meshoptimizer: none, meshopt:<target> or
+    /// meshopt-locked:<target> (borders locked); the target is rmt (RMT's triangle count on the
+    /// same object and resolution), a ratio in (0, 1) or a triangle count.
+    #[arg(long, default_value = "none", value_parser = crate::finish::SimplifyChoice::parse)]
+    pub simplify: crate::finish::SimplifyChoice,
+    /// Reorder the triangles for the vertex cache (meshoptimizer), as an engine does before
+    /// upload.
+    #[arg(long)]
+    pub vertex_cache: bool,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -131,6 +140,8 @@ pub fn extraction(args: &Args) -> Result<(Extraction, usize)> {
             .unwrap_or_else(config::default_collapse_threshold),
         iso: args.iso,
         normals: args.normals,
+        simplify: args.simplify.0,
+        vertex_cache: args.vertex_cache,
     };
     e.check(threads).map_err(anyhow::Error::msg)?;
     Ok((e, threads))

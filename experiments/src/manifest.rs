@@ -22,11 +22,17 @@
 //! bounds = [-1, -1, -1, 1, 1, 1]   # default [-1, 1]^3
 //! radius = 1.0              # the kind's parameters (see `objects`)
 //!
-//! [matrix]                  # objects x methods x lattices x clustering
+//! [matrix]                  # objects x methods x lattices x clustering x simplify x
+//!                           # vertex_cache x shading; several: [[matrix]] tables, each crossed
+//!                           # on its own
 //! objects = ["sphere"]      # default: every object, in order
-//! methods = ["mt"]          # mt | mc (default mt); mc gives one configuration (clustering none)
+//! methods = ["mt"]          # mt | mc | surface-nets (default mt); mc and surface-nets give one
+//!                           # configuration per object (simple lattice, clustering none)
 //! lattices = ["bcdl", "simple"]
 //! clustering = ["none", "integrated", "postprocessed"]
+//! simplify = ["none", { method = "meshopt", target = "rmt" }]   # default ["none"]; target
+//!                           # "rmt" | ratio | count, lock_border = true|false (crate::finish)
+//! vertex_cache = [false, true]   # meshopt's vertex-cache order after extraction (default [false])
 //! shading = ["smooth", "flat"]   # how `render` draws them (default smooth only)
 //!
 //! [[configurations]]        # and/or an explicit list
@@ -38,6 +44,8 @@
 //! resolution = 64           # overrides the object's (optional)
 //! collapse_threshold = 0.3  # optional
 //! shading = "flat"          # default smooth
+//! simplify = "meshopt:rmt"  # or the table form (default none)
+//! vertex_cache = true       # default false
 //!
 //! [sweep]                   # every configuration for each value (cross product)
 //! resolution = [16, 32, 64]
@@ -59,7 +67,9 @@
 //!
 //! **Naming rule** (reproduces the dissertation's ids): object code, `_`, lattice letter (`b`
 //! body-centred, `s` simple, `m` marching cubes), clustering letter (`u` none, `i` integrated,
-//! `c` integrated-unchecked, `p` postprocessed, `q` meshopt); each sweep appends `_r<cells>`
+//! `c` integrated-unchecked, `p` postprocessed, `q` meshopt); a simplification appends
+//! `_m<target>` (`_ml<target>` with locked borders: `_mrmt`, `_m0.25`) and the vertex-cache
+//! order `_vc` ([`finish_suffix`]); each sweep appends `_r<cells>`
 //! (`_r64`, `_r75x40x56`) or `_t<threshold>` (`_t0.3`), and flat shading `_flat` (smooth, the
 //! default, appends nothing). So `as_bi` is the asteroid on the body-centred lattice with
 //! integrated clustering, and `as_bi_flat` the same mesh drawn with flat shading.
@@ -80,6 +90,7 @@ use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
 use crate::config::{Extraction, Normals};
+use crate::finish::{Simplify, SimplifyChoice};
 pub use rmt_render::shade::Shading;
 use crate::objects::{Bounds, ObjectKind, ObjectParams, Resolution};
 
@@ -222,9 +233,9 @@ pub struct Manifest {
     /// The objects.
     #[serde(default)]
     pub objects: Vec<ObjectEntry>,
-    /// A matrix of configurations.
-    #[serde(default)]
-    pub matrix: Option<Matrix>,
+    /// Matrices of configurations: `[matrix]`, or several as `[[matrix]]`.
+    #[serde(default, deserialize_with = "one_or_many")]
+    pub matrix: Vec<Matrix>,
     /// Explicit configurations.
     #[serde(default)]
     pub configurations: Vec<ConfigEntry>,
@@ -412,8 +423,38 @@ pub struct Matrix {
     /// Shadings `render` draws each configuration with (default smooth only).
     #[serde(default = "default_shadings")]
     pub shading: Vec<Shading>,
+    /// Simplifications after extraction (default `["none"]`; see [`crate::finish`]).
+    #[serde(default = "default_simplify")]
+    pub simplify: Vec<SimplifyChoice>,
+    /// Vertex-cache order after extraction, off and/or on (default `[false]`).
+    #[serde(default = "default_vertex_cache")]
+    pub vertex_cache: Vec<bool>,
 }
 
+/// `[matrix]` (one table) or `[[matrix]]` (several), as a list.
+fn one_or_many<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Matrix>, D::Error> {
+    struct V;
+    impl<'de> Visitor<'de> for V {
+        type Value = Vec<Matrix>;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a [matrix] table or [[matrix]] tables")
+        }
+        fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<Vec<Matrix>, A::Error> {
+            Matrix::deserialize(de::value::MapAccessDeserializer::new(map)).map(|m| vec![m])
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Vec<Matrix>, A::Error> {
+            Vec::<Matrix>::deserialize(de::value::SeqAccessDeserializer::new(seq))
+        }
+    }
+    d.deserialize_any(V)
+}
+
+fn default_simplify() -> Vec<SimplifyChoice> {
+    vec![SimplifyChoice(None)]
+}
+fn default_vertex_cache() -> Vec<bool> {
+    vec![false]
+}
 fn default_shadings() -> Vec<Shading> {
     vec![Shading::Smooth]
 }
@@ -448,6 +489,12 @@ pub struct ConfigEntry {
     /// How `render` draws it (default smooth).
     #[serde(default)]
     pub shading: Option<Shading>,
+    /// Simplification after extraction (default none; see [`crate::finish`]).
+    #[serde(default)]
+    pub simplify: Option<SimplifyChoice>,
+    /// Vertex-cache order after extraction (default false).
+    #[serde(default)]
+    pub vertex_cache: Option<bool>,
 }
 
 /// `[sweep]`: lists of values, each configuration repeated for every combination.
@@ -616,6 +663,16 @@ pub fn base_id(code: &str, method: Method, lattice: Lattice, clustering: Cluster
         lattice_letter(method, lattice),
         clustering_letter(clustering)
     )
+}
+
+/// The id suffix of the finish steps: `_m<target>` or `_ml<target>` for a simplification, then
+/// `_vc` for the vertex-cache order (empty without either).
+pub fn finish_suffix(simplify: Option<&Simplify>, vertex_cache: bool) -> String {
+    let mut s = simplify.map(Simplify::id_suffix).unwrap_or_default();
+    if vertex_cache {
+        s += "_vc";
+    }
+    s
 }
 
 fn safe_name(s: &str) -> bool {

@@ -1,24 +1,24 @@
 //! The rows the runner writes: `raw.csv` (one row per timed repetition: the columns of
-//! [`RAW_PREFIX`], then every key of `extract --json`'s measurement) and `configurations.csv`
+//! [`RAW_PREFIX`], then every key of `extract --json`'s measurement, [`Measured::keys`]) and `configurations.csv`
 //! (the columns of [`schema::CONFIGURATIONS`]). The column lists live in
 //! [`rmt_runfolder::schema`].
 
 use std::collections::HashMap;
 
 use anyhow::Result;
-use rmt_extract::{Measurement, Stats};
+use rmt_extract::Stats;
 use rmt_runfolder::csv_bytes;
 use rmt_runfolder::schema::{self, RAW_PREFIX};
 use serde_json::Value;
 
-use crate::config::{self, measurement_json};
+use crate::config;
+use crate::finish::FinishRecord;
 use crate::manifest::{Configuration, Plan};
+use crate::measured::Measured;
 
 /// The header of `raw.csv`: [`RAW_PREFIX`] then the measurement keys.
 pub fn raw_header() -> Vec<String> {
-    let keys = measurement_json(&Measurement::default())
-        .map(|m| m.keys().cloned().collect::<Vec<_>>())
-        .unwrap_or_default();
+    let keys = Measured::keys();
     RAW_PREFIX
         .iter()
         .map(|s| s.to_string())
@@ -40,6 +40,11 @@ fn config_values(c: &Configuration) -> HashMap<&'static str, String> {
             config::lattice_name(e.method, e.lattice).to_string(),
         ),
         ("clustering", e.clustering.name().to_string()),
+        (
+            "simplify",
+            crate::finish::simplify_name(e.simplify.as_ref()),
+        ),
+        ("vertex_cache", e.vertex_cache.to_string()),
         ("rx", rx.to_string()),
         ("ry", ry.to_string()),
         ("rz", rz.to_string()),
@@ -59,15 +64,16 @@ fn json_cell(v: &Value) -> String {
 }
 
 /// The raw rows of one configuration: one per repetition, each with that repetition's stats and
-/// the shared mesh metrics.
+/// finish steps and the shared mesh metrics.
 pub fn raw_rows(
     run_id: &str,
     c: &Configuration,
     threads: usize,
     stats: &[Stats],
-    measured: &Measurement,
+    finish: &[FinishRecord],
+    measured: &Measured,
 ) -> Result<Vec<Vec<String>>> {
-    raw_rows_from(run_id, c, threads, 1, stats, measured)
+    raw_rows_from(run_id, c, threads, 1, stats, finish, measured)
 }
 
 /// Like [`raw_rows`], numbering the repetitions from `first` (a block of a sharded run).
@@ -77,23 +83,27 @@ pub fn raw_rows_from(
     threads: usize,
     first: usize,
     stats: &[Stats],
-    measured: &Measurement,
+    finish: &[FinishRecord],
+    measured: &Measured,
 ) -> Result<Vec<Vec<String>>> {
+    anyhow::ensure!(
+        finish.len() == stats.len(),
+        "{} repetitions with {} finish records",
+        stats.len(),
+        finish.len()
+    );
     let mut values = config_values(c);
     values.insert("run_id", run_id.to_string());
     values.insert("threads", threads.to_string());
     let mut rows = Vec::with_capacity(stats.len());
-    for (i, s) in stats.iter().enumerate() {
+    for (i, (s, f)) in stats.iter().zip(finish).enumerate() {
         values.insert("repetition", (first + i).to_string());
-        let m = Measurement {
-            stats: s.clone(),
-            ..measured.clone()
-        };
+        let m = measured.repetition(s, f);
         let mut row: Vec<String> = RAW_PREFIX
             .iter()
             .map(|k| values.get(k).cloned().unwrap_or_default())
             .collect();
-        row.extend(measurement_json(&m)?.values().map(json_cell));
+        row.extend(m.json()?.values().map(json_cell));
         rows.push(row);
     }
     Ok(rows)

@@ -15,7 +15,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use rmt_runfolder::schema::{
-    is_time_column, RAW_PREFIX, SUMMARY_DERIVED, SUMMARY_PREFIX, SUMMARY_REPETITIONS,
+    is_time_column, NOT_STAGES, RAW_PREFIX, SUMMARY_DERIVED, SUMMARY_PREFIX, SUMMARY_REPETITIONS,
     TIME_STATISTICS,
 };
 use rmt_runfolder::Table;
@@ -90,7 +90,7 @@ fn summary_header(measures: &[String]) -> (Vec<String>, Vec<String>) {
     }
     let stages: Vec<String> = measures
         .iter()
-        .filter(|m| is_time_column(m) && *m != "t_total_s")
+        .filter(|m| is_time_column(m) && !NOT_STAGES.contains(&m.as_str()))
         .cloned()
         .collect();
     header.extend(SUMMARY_DERIVED.map(String::from));
@@ -217,8 +217,8 @@ struct Derived<'a> {
 }
 
 impl Derived<'_> {
-    /// The key that finds a row's unclustered baseline: object, method, lattice, resolution,
-    /// isovalue, normals, threads (and the collapse threshold when `with_threshold`), and the
+    /// The key that finds a row's unclustered (and unsimplified) baseline: object, method,
+    /// lattice, resolution, isovalue, normals, threads (and the collapse threshold when `with_threshold`), and the
     /// seed in a seed study.
     fn key(&self, row: &[String], with_threshold: bool) -> Vec<String> {
         let mut cols = vec![
@@ -250,9 +250,13 @@ impl Derived<'_> {
             .iter()
             .position(|h| h == "clustering")
             .unwrap_or(0);
+        // A simplified mesh's baseline is its method's unsimplified one.
+        let simplify_col = self.header.iter().position(|h| h == "simplify");
+        let unsimplified =
+            |row: &[String]| simplify_col.is_none_or(|c| matches!(row[c].as_str(), "" | "none"));
         let mut baselines: HashMap<(Vec<String>, bool), usize> = HashMap::new();
         for (i, row) in rows.iter().enumerate() {
-            if row[clustering_col] == "none" {
+            if row[clustering_col] == "none" && unsimplified(row) {
                 for with in [true, false] {
                     baselines.entry((self.key(row, with), with)).or_insert(i);
                 }

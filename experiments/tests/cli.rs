@@ -327,6 +327,8 @@ fn repeated_extractions_give_identical_meshes() {
             collapse_threshold: 0.5,
             iso: 0.0,
             normals: Normals::Area,
+            simplify: None,
+            vertex_cache: false,
         };
         let field = e.object.build(&e.bounds, &[]).unwrap();
         for threads in [1, 2] {

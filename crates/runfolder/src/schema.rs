@@ -7,13 +7,15 @@
 
 /// The columns that describe a configuration, in the order `raw.csv`, `summary.csv`,
 /// `seeds.csv` and `topology.csv` give them.
-pub const CONFIGURATION: [&str; 12] = [
+pub const CONFIGURATION: [&str; 14] = [
     "id",
     "object",
     "kind",
     "method",
     "lattice",
     "clustering",
+    "simplify",
+    "vertex_cache",
     "rx",
     "ry",
     "rz",
@@ -44,12 +46,12 @@ pub const SHADING: &str = "shading";
 
 /// The columns that precede the measurement in `raw.csv`: `run_id`, [`CONFIGURATION`],
 /// `threads`, `repetition`.
-pub const RAW_PREFIX: [&str; 15] =
-    concat::<13, 2, 15>(concat(["run_id"], CONFIGURATION), ["threads", "repetition"]);
+pub const RAW_PREFIX: [&str; 17] =
+    concat::<15, 2, 17>(concat(["run_id"], CONFIGURATION), ["threads", "repetition"]);
 
 /// The columns that precede the measurement statistics in `summary.csv`: [`CONFIGURATION`],
 /// `threads`.
-pub const SUMMARY_PREFIX: [&str; 13] = concat(CONFIGURATION, ["threads"]);
+pub const SUMMARY_PREFIX: [&str; 15] = concat(CONFIGURATION, ["threads"]);
 
 /// The summary's column after [`SUMMARY_PREFIX`]: timed repetitions of the configuration.
 pub const SUMMARY_REPETITIONS: &str = "repetitions";
@@ -65,7 +67,7 @@ pub const SUMMARY_DERIVED: [&str; 3] = ["triangle_reduction", "discard_share", "
 pub const PAPER_COMPARISON: [&str; 5] = ["id", "metric", "ours", "theirs", "ratio"];
 
 /// The configuration columns of `seeds.csv` ([`CONFIGURATION`] through `collapse_threshold`).
-pub const SEEDS_PREFIX: [&str; 10] = prefix(CONFIGURATION);
+pub const SEEDS_PREFIX: [&str; 12] = prefix(CONFIGURATION);
 
 /// The columns of `seeds.csv` after [`SEEDS_PREFIX`]: seeds run, first and last seed.
 pub const SEEDS_COUNTS: [&str; 3] = ["seeds", "seed_from", "seed_to"];
@@ -74,7 +76,7 @@ pub const SEEDS_COUNTS: [&str; 3] = ["seeds", "seed_from", "seed_to"];
 pub const SEED_STATISTICS: [&str; 6] = ["mean", "sd", "ci_low", "ci_high", "min", "max"];
 
 /// The configuration columns of `topology.csv` ([`CONFIGURATION`] through `rz`).
-pub const TOPOLOGY_PREFIX: [&str; 9] = prefix(CONFIGURATION);
+pub const TOPOLOGY_PREFIX: [&str; 11] = prefix(CONFIGURATION);
 
 /// The columns of `topology.csv` after [`TOPOLOGY_PREFIX`] (then one count per check, then
 /// `failed_fields`).
@@ -136,6 +138,11 @@ pub const EDIT_SUMMARY: [&str; 25] = [
     "chunked_equals_whole",
     "seams",
 ];
+
+/// Time columns that are not stages of the extraction, so get no `share_<stage>` column in
+/// `summary.csv`: the extraction's total, the total with the finish steps, and the time the
+/// rendering-cost measures took.
+pub const NOT_STAGES: [&str; 3] = ["t_total_s", "t_pipeline_s", "t_cost_s"];
 
 /// Whether a measurement column is a time (summarised by [`TIME_STATISTICS`]).
 pub fn is_time_column(name: &str) -> bool {

@@ -10,10 +10,11 @@ use std::path::{Path, PathBuf};
 use rmt_extract::{Clustering, Lattice, Method};
 
 use super::{
-    base_id, safe_name, shading_suffix, Configuration, EditPlan, Manifest, ManifestError, Matrix, Overrides, Plan,
+    base_id, finish_suffix, safe_name, shading_suffix, Configuration, EditPlan, Manifest, ManifestError, Matrix, Overrides, Plan,
     SeedOf, SeedRange, Shading,
 };
 use crate::config::{self, Extraction};
+use crate::finish::Simplify;
 use crate::objects::{self, Bounds, ObjectKind, ObjectSpec, Resolution};
 
 /// Builds the errors of one manifest.
@@ -61,6 +62,8 @@ struct BaseConfiguration {
     threshold: Option<f32>,
     iso: Option<f32>,
     shading: Shading,
+    simplify: Option<Simplify>,
+    vertex_cache: bool,
     key: String,
 }
 
@@ -220,10 +223,15 @@ fn base_configurations(
     objs: &[PlannedObject],
     invalid: &Invalid,
 ) -> Result<Vec<BaseConfiguration>, ManifestError> {
-    let mut bases = match &m.matrix {
-        Some(matrix) => matrix_configurations(matrix, objs, invalid)?,
-        None => Vec::new(),
-    };
+    let mut bases = Vec::new();
+    for (i, matrix) in m.matrix.iter().enumerate() {
+        let key = if m.matrix.len() == 1 {
+            "matrix".to_string()
+        } else {
+            format!("matrix[{i}]")
+        };
+        bases.extend(matrix_configurations(matrix, objs, &key, invalid)?);
+    }
     for (i, c) in m.configurations.iter().enumerate() {
         let key = format!("configurations[{i}]");
         let obj = find_object(objs, &c.object, &key, invalid)?;
@@ -234,10 +242,14 @@ fn base_configurations(
         };
         let clustering = c.clustering.unwrap_or(Clustering::None);
         let shading = c.shading.unwrap_or_default();
+        let simplify = c.simplify.and_then(|s| s.0);
+        let vertex_cache = c.vertex_cache.unwrap_or(false);
         let id = match &c.id {
             Some(id) => id.clone(),
             None => {
-                base_id(&objs[obj].code, method, lattice, clustering) + shading_suffix(shading)
+                base_id(&objs[obj].code, method, lattice, clustering)
+                    + &finish_suffix(simplify.as_ref(), vertex_cache)
+                    + shading_suffix(shading)
             }
         };
         bases.push(BaseConfiguration {
@@ -250,6 +262,8 @@ fn base_configurations(
             threshold: c.collapse_threshold,
             iso: c.iso,
             shading,
+            simplify,
+            vertex_cache,
             key,
         });
     }
@@ -267,6 +281,7 @@ fn base_configurations(
 fn matrix_configurations(
     matrix: &Matrix,
     objs: &[PlannedObject],
+    at: &str,
     invalid: &Invalid,
 ) -> Result<Vec<BaseConfiguration>, ManifestError> {
     let names: Vec<String> = match &matrix.objects {
@@ -274,19 +289,27 @@ fn matrix_configurations(
         None => objs.iter().map(|o| o.name.clone()).collect(),
     };
     for (key, empty) in [
-        ("matrix.objects", names.is_empty()),
-        ("matrix.methods", matrix.methods.is_empty()),
-        ("matrix.lattices", matrix.lattices.is_empty()),
-        ("matrix.clustering", matrix.clustering.is_empty()),
-        ("matrix.shading", matrix.shading.is_empty()),
+        ("objects", names.is_empty()),
+        ("methods", matrix.methods.is_empty()),
+        ("lattices", matrix.lattices.is_empty()),
+        ("clustering", matrix.clustering.is_empty()),
+        ("shading", matrix.shading.is_empty()),
+        ("simplify", matrix.simplify.is_empty()),
+        ("vertex_cache", matrix.vertex_cache.is_empty()),
     ] {
         if empty {
-            return Err(invalid.at(key, "the list is empty"));
+            return Err(invalid.at(&format!("{at}.{key}"), "the list is empty"));
         }
     }
+    // Finish steps, crossed: every simplification with every vertex-cache setting.
+    let finishes: Vec<(Option<Simplify>, bool)> = matrix
+        .simplify
+        .iter()
+        .flat_map(|s| matrix.vertex_cache.iter().map(move |&v| (s.0, v)))
+        .collect();
     let mut bases = Vec::new();
     for name in &names {
-        let obj = find_object(objs, name, "matrix.objects", invalid)?;
+        let obj = find_object(objs, name, &format!("{at}.objects"), invalid)?;
         for &method in &matrix.methods {
             // Marching cubes and surface nets have no lattice choice and no clustering: one
             // configuration.
@@ -299,20 +322,25 @@ fn matrix_configurations(
                     .collect(),
             };
             for (lattice, clustering) in combos {
-                for &shading in &matrix.shading {
-                    bases.push(BaseConfiguration {
-                        obj,
-                        id: base_id(&objs[obj].code, method, lattice, clustering)
-                            + shading_suffix(shading),
-                        method,
-                        lattice,
-                        clustering,
-                        resolution: None,
-                        threshold: None,
-                        iso: None,
-                        shading,
-                        key: "matrix".into(),
-                    });
+                for &(simplify, vertex_cache) in &finishes {
+                    for &shading in &matrix.shading {
+                        bases.push(BaseConfiguration {
+                            obj,
+                            id: base_id(&objs[obj].code, method, lattice, clustering)
+                                + &finish_suffix(simplify.as_ref(), vertex_cache)
+                                + shading_suffix(shading),
+                            method,
+                            lattice,
+                            clustering,
+                            resolution: None,
+                            threshold: None,
+                            iso: None,
+                            shading,
+                            simplify,
+                            vertex_cache,
+                            key: at.into(),
+                        });
+                    }
                 }
             }
         }
@@ -432,6 +460,8 @@ fn expand(
                     collapse_threshold: t.or(b.threshold).unwrap_or(options.collapse_default),
                     iso: b.iso.or(m.iso).unwrap_or(0.0),
                     normals: m.normals.unwrap_or_default(),
+                    simplify: b.simplify,
+                    vertex_cache: b.vertex_cache,
                 };
                 extraction
                     .check(options.threads)
@@ -524,6 +554,16 @@ fn plan_edits(
                 return Err(invalid.at(
                     "edit.radius",
                     format!("must be finite and > 0 (cells), got {}", plan.radius),
+                ));
+            }
+            if let Some(c) = configurations
+                .iter()
+                .find(|c| c.extraction.simplify.is_some() || c.extraction.vertex_cache)
+            {
+                return Err(invalid.at(
+                    &format!("configuration {}", c.id),
+                    "the edit workload cannot simplify or reorder after extraction (the finish \
+                     steps work on one whole mesh, not on chunks)",
                 ));
             }
             if let Some(c) = configurations.iter().find(|c| {

@@ -335,6 +335,7 @@ fn execute(
     );
     let mut ran = 0;
     let mut status = Status::Finished;
+    let mut meter = rmt_render::cost::RenderCostMeter::new();
     let mut checkpoints = Checkpoints {
         folder,
         progress,
@@ -350,7 +351,15 @@ fn execute(
         let field = fields
             .get(&c.field_key())
             .with_context(|| format!("no field built for object {}", c.field_key()))?;
-        let result = match run_repetitions(c, field, plan, unit.first, unit.last, &bar) {
+        let result = match run_repetitions(
+            c,
+            field,
+            plan,
+            unit.first,
+            unit.last,
+            &mut meter,
+            &bar,
+        ) {
             Ok(r) => r,
             Err(e) => {
                 checkpoints.now()?;
@@ -368,7 +377,8 @@ fn execute(
             plan.threads,
             unit.first,
             &result.stats,
-            &result.measurement,
+            &result.finish,
+            &result.measured,
         )?;
         let rows = csv_bytes(&rows)?;
         if plan.save_meshes {

@@ -1,20 +1,27 @@
 //! The timed extractions of one configuration: warm-up, then timed repetitions with one reused
-//! extractor, every repetition's mesh checked identical to the first by its fingerprint.
+//! extractor, each followed by the configuration's finish steps ([`crate::finish`]), every
+//! repetition's finished mesh checked identical to the first by its fingerprint; then the mesh
+//! measured once ([`crate::measured`]), its rendering cost included.
 
 use anyhow::{bail, Result};
 use indicatif::ProgressBar;
-use rmt_extract::{Extractor, Measurement, Stats};
+use rmt_extract::{Extractor, Stats};
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
+use rmt_render::cost::RenderCostMeter;
 
+use crate::finish::{FinishRecord, Finisher};
 use crate::manifest::{Configuration, Plan};
+use crate::measured::{self, Measured};
 
 /// What one configuration produced.
 pub struct ConfigResult {
-    /// Stats of every timed repetition.
+    /// Stats of every timed repetition (vertex and triangle counts of the finished mesh).
     pub stats: Vec<Stats>,
+    /// The finish steps of every timed repetition.
+    pub finish: Vec<FinishRecord>,
     /// Measurement of the last repetition's mesh.
-    pub measurement: Measurement,
+    pub measured: Measured,
     /// The last repetition's mesh.
     pub mesh: Mesh,
 }
@@ -25,9 +32,10 @@ pub fn run_configuration(
     c: &Configuration,
     field: &dyn ScalarField,
     plan: &Plan,
+    meter: &mut RenderCostMeter,
     bar: &ProgressBar,
 ) -> Result<ConfigResult> {
-    run_repetitions(c, field, plan, 1, plan.repetitions, bar)
+    run_repetitions(c, field, plan, 1, plan.repetitions, meter, bar)
 }
 
 /// Runs timed repetitions `first..=last` of one configuration (a work unit of a shard), after
@@ -39,19 +47,26 @@ pub fn run_repetitions(
     plan: &Plan,
     first: usize,
     last: usize,
+    meter: &mut RenderCostMeter,
     bar: &ProgressBar,
 ) -> Result<ConfigResult> {
     let settings = c.extraction.settings(plan.threads);
     let mut extractor = Extractor::new();
+    let mut finisher = Finisher::new(&c.extraction, field, plan.threads);
     let mut mesh = Mesh::default();
     for _ in 0..plan.warmup {
-        extractor.extract(field, &settings, &mut mesh)?;
+        let mut s = extractor.extract(field, &settings, &mut mesh)?;
+        finisher.run(&mut mesh, &mut s)?;
         bar.inc(1);
     }
-    let mut stats = Vec::with_capacity(last + 1 - first.min(last + 1));
+    let n = last + 1 - first.min(last + 1);
+    let mut stats = Vec::with_capacity(n);
+    let mut finish = Vec::with_capacity(n);
     let mut first_print = None;
     for rep in first..=last {
-        stats.push(extractor.extract(field, &settings, &mut mesh)?);
+        let mut s = extractor.extract(field, &settings, &mut mesh)?;
+        finish.push(finisher.run(&mut mesh, &mut s)?);
+        stats.push(s);
         let print = mesh_fingerprint(&mesh);
         match first_print {
             None => first_print = Some(print),
@@ -65,10 +80,20 @@ pub fn run_repetitions(
         bar.inc(1);
     }
     let last = stats.last().cloned().unwrap_or_default();
-    let measurement = rmt_extract::measure(&mesh, &last, Some(field), &settings);
+    let last_finish = finish.last().cloned().unwrap_or_default();
+    let measured = measured::measure(
+        &mesh,
+        &last,
+        &last_finish,
+        Some(field),
+        &settings,
+        meter,
+    )
+    .map_err(|e| e.context(format!("measuring configuration {}", c.id)))?;
     Ok(ConfigResult {
         stats,
-        measurement,
+        finish,
+        measured,
         mesh,
     })
 }

@@ -40,7 +40,7 @@ pub const CACHE_SIZES: [u32; 2] = [16, 32];
 /// 270, 135), pooled over the default views of [`OccupancySettings`] (8 azimuths at the
 /// turntable's elevation and distance); they are NaN when the mesh covers no pixel (or, for the
 /// shares, shows no front face). See [`occupancy`] for what is counted.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RenderCost {
     /// Quad occupancy at 1080 px: covered pixels / (4 x quads launched per triangle).
     pub quad_occupancy_1080: f64,
