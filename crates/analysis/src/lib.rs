@@ -16,7 +16,11 @@
 //! - [`analysis`]: all of it together with the seeded bootstrap;
 //! - [`effects`]: what survey-server data adds (position effect from swaps and controls, order
 //!   effect on ties and times, participants needed for 80% power);
-//! - [`tables`], [`charts`], [`output`]: CSV, Markdown, PNG and SVG, byte-deterministic.
+//! - [`tables`], [`charts`], [`output`]: CSV, Markdown, PNG and SVG, byte-deterministic;
+//! - [`study`] (over [`bradley_terry_position`]: Davidson's model with a left-side parameter,
+//!   Newton-fitted with Wald intervals): a study of methods under shadings, its balanced
+//!   subsets of pairs, its analysis (strengths per shading, the method x shading interaction
+//!   test, position and order effects), its power table, and simulated participants.
 //!
 //! ```no_run
 //! use std::path::Path;
@@ -36,6 +40,7 @@
 
 pub mod analysis;
 pub mod bradley_terry;
+pub mod bradley_terry_position;
 pub mod charts;
 pub mod data;
 pub mod design;
@@ -45,6 +50,7 @@ pub mod input;
 pub mod method;
 pub mod output;
 pub mod stats;
+pub mod study;
 pub mod tables;
 
 pub use analysis::{analyse, analyse_dataset, Analysis, Options};
