@@ -281,8 +281,7 @@ fn sample<'py>(
     pool::check_memory(&settings)?;
     let samples = py.detach(|| -> Result<rmt_extract::Samples, errors::Error> {
         let field = spec.build(&grid)?;
-        let pool = rmt_extract::thread_pool(options.threads, rmt_extract::ThreadPlacement::Os)
-            .map_err(|e| errors::Error::Library(e.to_string()))?;
+        let pool = pool::workers(options.threads)?;
         let mut samples = rmt_extract::Samples::default();
         let mut stats = Stats::default();
         samples
@@ -322,13 +321,16 @@ fn extract_field<'py>(
     let settings = options.settings(grid);
     settings.check().map_err(extract_error)?;
     pool::check_memory(&settings)?;
+    let workers = pool::workers(options.threads)?;
     let mut ex = pool::take();
-    let sampled = field::sample(f, &settings, ex.samples_mut(), batch.max(1));
-    if let Err(e) = sampled {
-        pool::give_back(ex);
-        return Err(e);
-    }
-    let t_sampling = sampled.unwrap_or_default();
+    ex.set_pool(workers);
+    let t_sampling = match field::sample(f, &settings, ex.samples_mut(), batch.max(1)) {
+        Ok(t) => t,
+        Err(e) => {
+            pool::give_back(ex);
+            return Err(e);
+        }
+    };
     let result = py.detach(|| {
         let mut mesh = Mesh::default();
         ex.extract_presampled(&settings, &mut mesh)
