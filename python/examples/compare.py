@@ -4,6 +4,8 @@ Samples the asteroid (the dissertation's noisy sphere) on a 64^3 grid, extracts 
 scikit-image's ``marching_cubes``, our marching cubes, plain marching tetrahedra and RMT
 (integrated clustering), and prints triangle counts, radius ratios (circumradius over twice
 the inradius: 1 for an equilateral triangle) and times. Saves a matplotlib figure.
+scikit-image and matplotlib are not dependencies of rmt_terrain: without them the script
+prints our rows only and says what to install.
 
     python python/examples/compare.py [--resolution 64] [--object asteroid] [--out compare.png]
 """
@@ -58,7 +60,8 @@ def main() -> None:
         verts = verts[:, ::-1] + np.array(s.origin[::-1])
         rows.append(("scikit-image marching_cubes", verts, faces, t))
     except ImportError:
-        print("scikit-image is not installed (pip install scikit-image): its row is left out")
+        print("scikit-image is not installed (pip install scikit-image matplotlib): its row is "
+              "left out")
     for label, kw in [
         ("rmt_terrain marching cubes", {"method": "mc"}),
         ("rmt_terrain plain MT (simple)", {"clustering": "none"}),
@@ -78,8 +81,11 @@ def main() -> None:
         rmt = len(rows[-1][2]) / len(rows[0][2])
         print(f"RMT has {100 * (1 - rmt):.1f}% fewer triangles than scikit-image's marching cubes")
 
-    import matplotlib
-
+    try:
+        import matplotlib
+    except ImportError:
+        print("matplotlib is not installed (pip install matplotlib): no figure saved")
+        return
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
