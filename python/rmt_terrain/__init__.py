@@ -69,7 +69,9 @@ class Mesh:
         Counters and stage times of the extraction (the command line's ``--json`` keys:
         ``vertices``, ``triangles``, ``crossings``, ``clusters_committed``, ``t_total_s``,
         ``t_sampling_s``, ``t_vertex_s``, ``t_geometry_s``, ``t_normals_s``, ...).
-        ``t_total_s`` is the Rust extraction; ``t_input_s`` the copy and check of the input.
+        ``t_total_s`` is the Rust extraction (with gradient normals), ``t_input_s`` the copy
+        and check of the input before it, ``t_call_s`` the whole compiled call (input, extraction
+        and conversion of the result; the rest of a call's time is the Python wrapper).
     """
 
     __slots__ = ("vertices", "faces", "normals", "stats", "_box")
