@@ -422,3 +422,21 @@ def test_memory_of_a_large_extraction_is_given_back():
     grown = rss_bytes() - before
     # The extraction's sample array alone is 68 MB; kept extractors would hold it and more.
     assert grown < 32 << 20, f"RSS grew by {grown / 2**20:.1f} MiB after the call"
+
+
+def test_concurrent_calls_from_python_threads_give_the_serial_meshes():
+    volumes = [random_volume(np.random.default_rng(s), (33, 30, 27)) for s in range(4)]
+    serial = [rmt_terrain.extract(v, 0.0) for v in volumes]
+    results = [None] * len(volumes)
+
+    def run(i):
+        results[i] = rmt_terrain.extract(volumes[i], 0.0)
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(len(volumes))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for a, b in zip(serial, results):
+        np.testing.assert_array_equal(a.vertices, b.vertices)
+        np.testing.assert_array_equal(a.faces, b.faces)
