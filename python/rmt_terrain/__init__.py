@@ -282,7 +282,7 @@ def extract_field(f: Callable[[np.ndarray, np.ndarray, np.ndarray], Any],
     dtype, converted to float32). It is called once per batch, never once per point: a 64^3
     body-centred grid (561,345 points) is 9 calls of 65,536 points. The overhead beyond ``f``'s
     own numpy work (listing the points, the coordinate arrays, the conversion and copy of the
-    answers) was 25-45 ns per point on a busy 2-vCPU VM (``python/examples/overhead.py``),
+    answers) was 14-45 ns per point on a busy 2-vCPU VM (``python/examples/overhead.py``),
     about as much as ``np.sqrt(x*x + y*y + z*z)`` itself; batches much larger than the default
     cost more (fresh memory for every batch). Sampling runs on the calling thread, with the
     GIL; the extraction after it runs on ``threads`` workers without the GIL. Gradient normals
