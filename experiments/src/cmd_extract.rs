@@ -78,7 +78,7 @@ pub fn run(args: Args) -> Result<()> {
         &finish,
         Some(field.as_ref()),
         &settings,
-        &mut rmt_render::cost::RenderCostMeter::new(),
+        Some(&mut rmt_render::cost::RenderCostMeter::new()),
     )?;
     let m = &measured.measurement;
     if let Some(out) = &args.out {

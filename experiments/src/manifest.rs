@@ -9,6 +9,7 @@
 //! seed = 7                  # noise seed of objects that do not set their own
 //! output = "results"        # parent folder of run folders (default "results")
 //! save_meshes = true        # mesh of the last repetition as <run>/meshes/<id>.ply
+//! render_cost = true        # quad occupancy, vertex cache, buffer sizes of every mesh (default)
 //! paper_benchmark = "data/paper/benchmark.csv"   # compare with the dissertation (optional)
 //! collapse_threshold = 0.5  # defaults for every configuration (optional)
 //! iso = 0.0
@@ -211,6 +212,11 @@ pub struct Manifest {
     /// Save the last repetition's mesh of each configuration.
     #[serde(default = "yes")]
     pub save_meshes: bool,
+    /// Measure every mesh's rendering cost (quad occupancy, meshoptimizer's analyzers, buffer
+    /// sizes; about 0.3 s per 20,000-triangle mesh); large sweeps that only count topology turn
+    /// it off.
+    #[serde(default = "yes")]
+    pub render_cost: bool,
     /// What to run per configuration: `extract` (default: repeated extractions) or `edit` (a
     /// chunked terrain session of random brush strokes, see [`crate::edit`]).
     #[serde(default)]
@@ -582,6 +588,8 @@ pub struct Plan {
     pub threads: usize,
     /// Save the last repetition's mesh.
     pub save_meshes: bool,
+    /// Measure each mesh's rendering cost.
+    pub render_cost: bool,
     /// Parent folder of run folders.
     pub output: PathBuf,
     /// The resolved benchmark table to compare with, if any.

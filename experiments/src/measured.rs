@@ -83,25 +83,25 @@ impl Measured {
 }
 
 /// Measures a finished `mesh`: validation, quality and fidelity (`field`, when it knows its
-/// distance) by [`rmt_extract::measure`], then the rendering cost with `meter`.
+/// distance) by [`rmt_extract::measure`], then the rendering cost with `meter` (none without a
+/// meter).
 pub fn measure(
     mesh: &Mesh,
     stats: &Stats,
     finish: &FinishRecord,
     field: Option<&dyn ScalarField>,
     settings: &ExtractSettings,
-    meter: &mut RenderCostMeter,
+    meter: Option<&mut RenderCostMeter>,
 ) -> Result<Measured> {
     let measurement = rmt_extract::measure(mesh, stats, field, settings);
     let t = Instant::now();
-    let cost = if mesh.triangle_count() == 0 {
-        None
-    } else {
-        Some(
+    let cost = match meter {
+        Some(meter) if mesh.triangle_count() > 0 => Some(
             meter
                 .measure(mesh)
                 .context("measuring the rendering cost")?,
-        )
+        ),
+        _ => None,
     };
     Ok(Measured {
         measurement,
@@ -146,7 +146,7 @@ mod tests {
             &FinishRecord::default(),
             None,
             &settings,
-            &mut RenderCostMeter::new(),
+            Some(&mut RenderCostMeter::new()),
         )
         .unwrap();
         let json = m.json().unwrap();

@@ -189,6 +189,12 @@ impl TriangleSetup {
         })
     }
 
+    /// The inclusive sample box `[x0, x1, y0, y1]` clipped to the frame, `None` when empty.
+    #[inline]
+    pub(crate) fn sample_box(&self) -> Option<[i64; 4]> {
+        (self.x0 <= self.x1 && self.y0 <= self.y1).then_some([self.x0, self.x1, self.y0, self.y1])
+    }
+
     /// Twice the triangle's area in units of (1/[`SUBSAMPLE`] sample)^2, exact; positive.
     #[inline]
     pub(crate) fn twice_area_fixed(&self) -> i64 {

@@ -97,6 +97,7 @@ impl Manifest {
             warmup: options.warmup,
             threads: options.threads,
             save_meshes: overrides.save_meshes.unwrap_or(self.save_meshes),
+            render_cost: self.render_cost,
             output: self
                 .output
                 .clone()

@@ -357,7 +357,7 @@ fn execute(
             plan,
             unit.first,
             unit.last,
-            &mut meter,
+            plan.render_cost.then_some(&mut meter),
             &bar,
         ) {
             Ok(r) => r,

@@ -32,7 +32,7 @@ pub fn run_configuration(
     c: &Configuration,
     field: &dyn ScalarField,
     plan: &Plan,
-    meter: &mut RenderCostMeter,
+    meter: Option<&mut RenderCostMeter>,
     bar: &ProgressBar,
 ) -> Result<ConfigResult> {
     run_repetitions(c, field, plan, 1, plan.repetitions, meter, bar)
@@ -47,7 +47,7 @@ pub fn run_repetitions(
     plan: &Plan,
     first: usize,
     last: usize,
-    meter: &mut RenderCostMeter,
+    meter: Option<&mut RenderCostMeter>,
     bar: &ProgressBar,
 ) -> Result<ConfigResult> {
     let settings = c.extraction.settings(plan.threads);

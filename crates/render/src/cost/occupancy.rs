@@ -142,6 +142,9 @@ pub struct QuadRaster {
     seen: Vec<u32>,
     /// The current pass's stamp in `seen`.
     pass: u32,
+    /// The range of `inv_w` and `owner` the last pass may have written (everything outside it
+    /// is clear), as `start..end` indices.
+    dirty: std::ops::Range<usize>,
 }
 
 impl QuadRaster {
@@ -165,12 +168,14 @@ impl QuadRaster {
         let n = width as usize * height as usize;
         self.width = width;
         self.height = height;
+        // Clear what the last pass wrote; the rest is clear already.
+        let dirty = self.dirty.clone();
+        self.inv_w[dirty.clone()].fill(0.0);
+        self.owner[dirty].fill(NO_TRIANGLE);
         if self.inv_w.len() < n {
             self.inv_w.resize(n, 0.0);
             self.owner.resize(n, NO_TRIANGLE);
         }
-        self.inv_w[..n].fill(0.0);
-        self.owner[..n].fill(NO_TRIANGLE);
         let triangles = indices.len() / 3;
         if self.seen.len() < triangles {
             self.seen.resize(triangles, 0);
@@ -185,11 +190,21 @@ impl QuadRaster {
         let mut counts = QuadCounts::default();
         let (w, h) = (i64::from(width), i64::from(height));
         let (inv_w, owner) = (&mut self.inv_w[..n], &mut self.owner[..n]);
+        // The box of every sample a triangle may have written: [x0, x1, y0, y1].
+        let mut drawn = [i64::MAX, i64::MIN, i64::MAX, i64::MIN];
         for (t, tri) in indices.chunks_exact(3).enumerate() {
             let v = [tri[0], tri[1], tri[2]].map(|i| vertices[i as usize]);
             let Some(setup) = TriangleSetup::new(v, w, h) else {
                 continue;
             };
+            if let Some([x0, x1, y0, y1]) = setup.sample_box() {
+                drawn = [
+                    drawn[0].min(x0),
+                    drawn[1].max(x1),
+                    drawn[2].min(y0),
+                    drawn[3].max(y1),
+                ];
+            }
             counts.front_triangles += 1;
             let twice_area = setup.twice_area_fixed();
             counts.below_pixel += u64::from(twice_area < TWICE_PIXEL_AREA);
@@ -202,29 +217,61 @@ impl QuadRaster {
             });
         }
 
-        // Quads: the distinct owners of each 2x2 block of the even grid.
+        // Quads: the distinct owners of each 2x2 block of the even grid, inside the drawn box
+        // (outside it every pixel is clear). A quad owned whole by one triangle, the common case,
+        // takes one comparison chain.
+        if drawn[0] > drawn[1] {
+            self.dirty = 0..0;
+            return counts;
+        }
         let (wu, hu) = (width as usize, height as usize);
-        for qy in (0..hu).step_by(2) {
-            for qx in (0..wu).step_by(2) {
+        let [x0, x1, y0, y1] = drawn.map(|v| v as usize);
+        self.dirty = y0 * wu..(y1 + 1) * wu;
+        let (seen, pass) = (&mut self.seen, self.pass);
+        let mut visit = |t: u32, counts: &mut QuadCounts| {
+            let s = &mut seen[t as usize];
+            if *s != pass {
+                *s = pass;
+                counts.visible_triangles += 1;
+            }
+        };
+        for qy in (y0 & !1..=y1).step_by(2) {
+            let (row0, row1) = (qy * wu, (qy + 1) * wu);
+            let lower = qy + 1 < hu;
+            for qx in (x0 & !1..=x1).step_by(2) {
+                let right = qx + 1 < wu;
+                let quad = [
+                    owner[row0 + qx],
+                    if right { owner[row0 + qx + 1] } else { NO_TRIANGLE },
+                    if lower { owner[row1 + qx] } else { NO_TRIANGLE },
+                    if lower && right {
+                        owner[row1 + qx + 1]
+                    } else {
+                        NO_TRIANGLE
+                    },
+                ];
+                let t = quad[0];
+                if quad[1] == t && quad[2] == t && quad[3] == t {
+                    if t != NO_TRIANGLE {
+                        counts.covered_pixels += 4;
+                        counts.quads += 1;
+                        counts.merged_quads += 1;
+                        visit(t, &mut counts);
+                    }
+                    continue;
+                }
                 let mut ids = [NO_TRIANGLE; 4];
                 let mut distinct = 0;
-                for y in qy..(qy + 2).min(hu) {
-                    for x in qx..(qx + 2).min(wu) {
-                        let t = owner[y * wu + x];
-                        if t == NO_TRIANGLE {
-                            continue;
-                        }
-                        counts.covered_pixels += 1;
-                        if !ids[..distinct].contains(&t) {
-                            ids[distinct] = t;
-                            distinct += 1;
-                        }
-                        let seen = &mut self.seen[t as usize];
-                        if *seen != self.pass {
-                            *seen = self.pass;
-                            counts.visible_triangles += 1;
-                        }
+                for t in quad {
+                    if t == NO_TRIANGLE {
+                        continue;
                     }
+                    counts.covered_pixels += 1;
+                    if !ids[..distinct].contains(&t) {
+                        ids[distinct] = t;
+                        distinct += 1;
+                    }
+                    visit(t, &mut counts);
                 }
                 counts.quads += distinct as u64;
                 counts.merged_quads += u64::from(distinct > 0);
