@@ -6,8 +6,12 @@
 //!   random) built from names and parameters, shared by `extract` and manifests;
 //! - [`config`]: one extraction's full description, the names of its settings (each list of
 //!   choices once), and its record as JSON;
+//! - [`finish`]: the steps any method's mesh may take after extraction (meshoptimizer's
+//!   simplifier to a budget, vertex-cache order), named and timed;
 //! - [`extract_args`]: the options of one extraction parsed and checked (the `extract` command
 //!   line and the studio);
+//! - [`measured`]: one mesh's full record (measurement, finish steps, rendering cost), the
+//!   columns of `raw.csv` and the keys of `extract --json`;
 //! - [`manifest`]: experiment manifests (TOML) expanded into configurations;
 //! - [`runner`]: runs a manifest's configurations N times into raw and summary CSV files,
 //!   crash-safe and resumable; the run folder's files and columns are `rmt_runfolder`'s;
@@ -23,7 +27,10 @@
 //!   [`topology`]: their topology tallies;
 //! - [`edit`]: chunked terrain (`rmt-terrain`): `extract --chunks` and the `edit` workload;
 //! - [`studio`]: the studio's backend (page parameters parsed and checked as `extract` options);
-//! - [`bench`](mod@bench): extraction speed against peer crates on pre-sampled values.
+//! - [`bench`](mod@bench): extraction speed against peer crates on pre-sampled values;
+//! - [`study`]: perception studies of methods under shadings (design file, simulated
+//!   participants, the texts of `study plan`, `analyse` and `coverage`; the statistics are
+//!   `rmt_analysis::study`'s), run by [`cmd_study`].
 //!
 //! Subcommands: [`cmd_extract`] (one extraction, printed as a summary or JSON), [`cmd_run`],
 //! [`cmd_cluster`] (`merge`, `slurm`), [`cmd_render`] and [`cmd_questionnaire`] (turntable GIFs
@@ -41,11 +48,14 @@ pub mod cmd_render;
 pub mod cmd_report;
 pub mod cmd_run;
 pub mod cmd_studio;
+pub mod cmd_study;
 pub mod cmd_survey;
 pub mod config;
 pub mod edit;
 pub mod extract_args;
+pub mod finish;
 pub mod manifest;
+pub mod measured;
 pub mod merge;
 pub mod objects;
 pub mod paper;
@@ -58,5 +68,6 @@ pub mod seeds;
 pub mod shard;
 pub mod slurm;
 pub mod studio;
+pub mod study;
 pub mod summary;
 pub mod topology;

@@ -37,6 +37,8 @@ enum Command {
     /// Write (and with --submit, submit) a Slurm job array running a manifest in N shards, and a
     /// merge job that depends on it.
     Slurm(experiments::cmd_cluster::SlurmArgs),
+    /// A perception study of methods under shadings: plan, simulate, analyse, coverage.
+    Study(experiments::cmd_study::Args),
     /// Rebuild reports/ (figures, tables, README) from a run folder and the questionnaire data.
     Report(experiments::cmd_report::Args),
 }
@@ -53,6 +55,7 @@ fn main() -> Result<()> {
         Command::Report(args) => experiments::cmd_report::run(args),
         Command::Survey(args) => experiments::cmd_survey::run(args),
         Command::Studio(args) => experiments::cmd_studio::run(args),
+        Command::Study(args) => experiments::cmd_study::run(args),
         Command::Merge(args) => experiments::cmd_cluster::merge(args),
         Command::Slurm(args) => experiments::cmd_cluster::slurm(args),
     }

@@ -7,11 +7,12 @@
 //! rate taking answers away). Each participant answers `q` of the `P` pairs, so a given pair
 //! question is answered by the share `q / P` of participants. The comparison "reference
 //! against peer in one shading" is asked on every object: pooled over the `O` objects it needs
-//! `ceil(n / (O q / P))` participants; on each object alone `ceil(n / (q / P))`. The exact
-//! power of the sign test on the pooled answers at the pooled figure is given beside it.
+//! `ceil(n / (O q / P))` participants by the normal approximation, then as many more as the
+//! exact sign test on the pooled answers needs to reach 80% (its exact power is given beside
+//! it); on each object alone `ceil(n / (q / P))` (normal approximation).
 
 use super::design::{PairKind, StudyItems, StudyPair};
-use crate::effects::{participants_needed, sign_test_power};
+use crate::effects::{participants_needed, sign_test_power, TARGET_POWER};
 
 /// One row: the reference against one peer in one shading.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,7 +25,7 @@ pub struct PowerRow {
     pub questions: usize,
     /// Answers one question needs.
     pub answers_needed: Option<u64>,
-    /// Participants needed, answers pooled over objects.
+    /// Participants needed, answers pooled over objects (exact sign test).
     pub pooled: Option<u64>,
     /// Participants needed for each object alone.
     pub per_object: Option<u64>,
@@ -93,18 +94,29 @@ pub fn power_table(
                 let n = answers_needed? as f64;
                 (per > 0.0).then(|| (n / per).ceil() as u64)
             };
-            let pooled = need(share * questions as f64);
+            let approximate = need(share * questions as f64);
             let per_object = if questions > 0 { need(share) } else { None };
-            let exact_power = match pooled {
-                Some(n) => {
-                    let answers = (n as f64 * share * questions as f64).round() as u64;
-                    if answers <= 20_000 {
-                        sign_test_power(answers, effect, tie_rate, alpha)
-                    } else {
-                        f64::NAN
-                    }
+            // The exact sign test on the pooled answers: from the normal approximation's
+            // figure, add participants until the exact power reaches the target.
+            let exact = |n: u64| {
+                let answers = (n as f64 * share * questions as f64).round() as u64;
+                if answers <= 20_000 {
+                    sign_test_power(answers, effect, tie_rate, alpha)
+                } else {
+                    f64::NAN
                 }
-                None => f64::NAN,
+            };
+            let (pooled, exact_power) = match approximate {
+                Some(start) => {
+                    let mut n = start;
+                    let mut p = exact(n);
+                    while p < TARGET_POWER && n < 2 * start {
+                        n += 1;
+                        p = exact(n);
+                    }
+                    (Some(n), p)
+                }
+                None => (None, f64::NAN),
             };
             rows.push(PowerRow {
                 peer,
@@ -150,14 +162,18 @@ mod tests {
             assert_eq!(r.questions, 3);
             // Half of the participants see a pair; three objects pooled.
             assert_eq!(r.per_object, Some(486));
-            assert_eq!(r.pooled, Some(162));
+            // 162 by the normal approximation (243 / 1.5); the exact test needs a few more.
+            let n = r.pooled.unwrap();
+            assert!((162..=175).contains(&n), "{n}");
             assert!(
-                r.exact_power > 0.75 && r.exact_power < 0.9,
+                r.exact_power >= 0.8 && r.exact_power < 0.85,
                 "{}",
                 r.exact_power
             );
+            let fewer = (((n - 1) as f64) * 1.5).round() as u64;
+            assert!(sign_test_power(fewer, 0.6, 0.2, 0.05) < 0.8);
         }
-        assert_eq!(t.participants(), Some(162));
+        assert_eq!(t.participants(), t.rows[0].pooled);
         // A comparison that is never asked has no figure.
         let only = study_pairs(&items, Some(&[(0, 1)]), false);
         let t = power_table(&items, &only, 6, 0, 0.6, 0.2, 0.05);

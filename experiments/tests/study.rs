@@ -1,0 +1,239 @@
+//! `experiments study`: plan, simulate, analyse and coverage through the command line, on the
+//! bundled peers study and model; and a manifest crossed with shading rendered end to end.
+
+use std::process::{Command, Output};
+
+fn experiments(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_experiments"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const STUDY: &str = "studies/peers.toml";
+const MODEL: &str = "studies/peers-model.toml";
+
+#[test]
+fn plan_prints_questions_minutes_and_the_power_table() {
+    let o = experiments(&["study", "plan", STUDY]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("questions per participant: 26 (24 pairs + 2 controls)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("expected minutes per participant: 5.2"),
+        "{text}"
+    );
+    assert!(
+        text.contains("participants the power table asks for: **170**"),
+        "{text}"
+    );
+    // One row per peer and shading.
+    assert_eq!(text.matches("| 3 | 243 | 170 | 486 |").count(), 6, "{text}");
+}
+
+#[test]
+fn simulate_then_analyse_recovers_the_planted_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let o = experiments(&[
+        "study",
+        "simulate",
+        STUDY,
+        "--participants",
+        "200",
+        "--model",
+        MODEL,
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "responses.csv",
+        "controls.csv",
+        "questions.csv",
+        "configurations.csv",
+        "participants.csv",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let responses = std::fs::read_to_string(out.join("responses.csv")).unwrap();
+    assert!(responses.starts_with("participant,question,response,order,swapped,seconds\n"));
+    assert_eq!(responses.lines().count(), 1 + 200 * 24);
+    // The same seed writes the same bytes.
+    let again = dir.path().join("again");
+    let o = experiments(&[
+        "study",
+        "simulate",
+        STUDY,
+        "--participants",
+        "200",
+        "--model",
+        MODEL,
+        "--seed",
+        "3",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(again.join("responses.csv")).unwrap(),
+        responses.as_bytes()
+    );
+    let report = dir.path().join("analysis.md");
+    let o = experiments(&[
+        "study",
+        "analyse",
+        STUDY,
+        "--answers",
+        out.to_str().unwrap(),
+        "--title",
+        "Simulated participants",
+        "--out",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&report).unwrap();
+    assert_eq!(text, stdout(&o));
+    assert!(text.starts_with("# Simulated participants"), "{text}");
+    assert!(text.contains("200 participants, 4800 answers"), "{text}");
+    assert!(
+        text.contains("Does the ranking change with shading?"),
+        "{text}"
+    );
+    // The planted best method (rmt-bcdl, +0.35 smooth, +0.05 flat, centred: the highest in
+    // both shadings) comes out positive in both.
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("| rmt-bcdl |"))
+        .unwrap();
+    assert_eq!(line.matches("| +").count(), 2, "{line}");
+}
+
+#[test]
+fn coverage_runs_a_few_studies_and_bad_inputs_are_named() {
+    let o = experiments(&[
+        "study",
+        "coverage",
+        STUDY,
+        "--model",
+        MODEL,
+        "--studies",
+        "4",
+        "--participants",
+        "120",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("4 simulated studies of 120 participants"),
+        "{text}"
+    );
+    assert!(text.contains("false-positive rate"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "tie_rate = 0.1\n[strengths.smooth]\nrmt-bcdl = 1.0\n").unwrap();
+    let o = experiments(&[
+        "study",
+        "coverage",
+        STUDY,
+        "--model",
+        bad.to_str().unwrap(),
+        "--studies",
+        "1",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("strengths.flat.rmt-bcdl is missing"),
+        "{}",
+        stderr(&o)
+    );
+    let o = experiments(&["study", "plan", "studies/none.toml"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("none.toml"), "{}", stderr(&o));
+}
+
+/// A manifest crossed with shading: `run` writes the shading column, `render` draws the flat
+/// configurations flat (their GIFs differ from the smooth ones of the same mesh), and the
+/// questionnaire pairs configurations within a shading and shadings within a method.
+#[test]
+fn a_manifest_crossed_with_shading_renders_each_configuration_with_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("m.toml");
+    std::fs::write(
+        &manifest,
+        "name = \"shade\"\nrepetitions = 1\nwarmup = 0\nthreads = 1\n\
+         [[objects]]\nname = \"sphere\"\nresolution = 8\nradius = 0.8\n\
+         [matrix]\nmethods = [\"mt\", \"mc\"]\nlattices = [\"bcdl\"]\n\
+         clustering = [\"integrated\"]\nshading = [\"smooth\", \"flat\"]\n",
+    )
+    .unwrap();
+    let run = dir.path().join("run");
+    let o = experiments(&[
+        "run",
+        manifest.to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let configurations = std::fs::read_to_string(run.join("configurations.csv")).unwrap();
+    let header = configurations.lines().next().unwrap();
+    assert!(header.ends_with(",shading"), "{header}");
+    for id in ["ss_bi", "ss_bi_flat", "ss_mu", "ss_mu_flat"] {
+        assert!(
+            configurations.contains(&format!("\n{id},")),
+            "{configurations}"
+        );
+    }
+    let o = experiments(&[
+        "render",
+        run.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--frames",
+        "3",
+        "--supersampling",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let key = std::fs::read_to_string(run.join("key.csv")).unwrap();
+    let name_of = |id: &str| -> String {
+        key.lines()
+            .find(|l| l.split(',').nth(1) == Some(id))
+            .unwrap()
+            .split(',')
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    let gif = |id: &str| std::fs::read(run.join("render").join(format!("{}.gif", name_of(id))));
+    assert_ne!(gif("ss_bi").unwrap(), gif("ss_bi_flat").unwrap());
+    // --flat on a run that sets its own shading is refused.
+    let o = experiments(&["render", run.to_str().unwrap(), "--flat"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("shading"), "{}", stderr(&o));
+    let o = experiments(&["questionnaire", run.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let qkey = std::fs::read_to_string(run.join("questionnaire_key.csv")).unwrap();
+    // mt against mc differs in method, lattice and clustering: no single-variable pair. The
+    // shading pairs are ss_bi/ss_bi_flat and ss_mu/ss_mu_flat.
+    let rows: Vec<&str> = qkey.lines().skip(1).collect();
+    assert_eq!(rows.len(), 2, "{qkey}");
+    assert!(rows.iter().all(|r| r.contains(",shading,")), "{qkey}");
+}
