@@ -172,9 +172,10 @@ pub fn run(args: Args) -> Result<()> {
                 }
             );
             println!(
-                "serve it:   experiments survey serve {} --controls {}",
+                "serve it:   experiments survey serve {} --controls {} --per-participant {}",
                 done.folder.display(),
-                design.controls
+                design.controls,
+                design.questions
             );
             println!(
                 "analyse it: experiments survey export {0}/survey.sqlite --out {0}/survey && \\\n  \

@@ -45,6 +45,10 @@ pub struct ServeArgs {
     /// Seed of question planning (when the run has no questionnaire), controls and swaps.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Real questions per participant: each answers a balanced subset of this many (every
+    /// question answered by the same number of participants, up to one) [default: all].
+    #[arg(long)]
+    pub per_participant: Option<usize>,
 }
 
 /// Arguments of `survey export`.
@@ -70,8 +74,11 @@ fn serve(args: ServeArgs) -> anyhow::Result<()> {
         seed: args.seed,
         controls: args.controls,
     };
-    let study = Study::from_run(&args.run, &options)
+    let mut study = Study::from_run(&args.run, &options)
         .with_context(|| format!("reading the study of {}", args.run.display()))?;
+    if let Some(q) = args.per_participant {
+        study = study.with_subsets(q)?;
+    }
     let db = args
         .db
         .clone()
@@ -80,11 +87,16 @@ fn serve(args: ServeArgs) -> anyhow::Result<()> {
     let counts = store.counts()?;
     let admin = rmt_server::http::random_token().context("drawing the admin token")?;
     println!(
-        "Survey of {}: {} questions + {} controls per session (questions: {}), {} animations",
+        "Survey of {}: {} questions + {} controls per session (questions: {}{}), {} animations",
         args.run.display(),
-        study.real_questions(),
+        study.real_questions_per_participant(),
         study.questions.len() - study.real_questions(),
         study.source,
+        if study.per_participant.is_some() {
+            format!(", a balanced subset of {}", study.real_questions())
+        } else {
+            String::new()
+        },
         study.shown_names().len()
     );
     println!(

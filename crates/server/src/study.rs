@@ -16,6 +16,16 @@
 //!   complement. Every question is therefore shown swapped to half the participants (up to one),
 //!   and every participant sees half of the questions swapped (up to one). Controls are never
 //!   swapped (both sides are the same animation).
+//!
+//! **Balanced subsets** ([`Study::with_subsets`]): with many questions, each participant answers
+//! `q` of the `R` real questions (controls stay in every session). The real questions are put
+//! in one seeded random cycle; the `s`-th participant to arrive takes the `q` that start at
+//! position `(s - 1) q` of the cycle (wrapping), so consecutive participants take consecutive
+//! windows and every question is answered by the same number of participants, up to one. The
+//! `k`-th showing of a question (`k` the laps of the cycle before it) is swapped when
+//! `k + flip(question)` is odd (`flip` a seeded coin per question): each question is shown each
+//! way equally often, up to one. The order is still shuffled by the token. This is the rule of
+//! `rmt_analysis::study::design::assign`, which plans simulated participants.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -111,6 +121,9 @@ pub struct Study {
     pub seed: u64,
     /// Where the questions came from (`questionnaire_key.csv` or `planned`).
     pub source: String,
+    /// Real questions per participant when each answers a balanced subset (`None`: all).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub per_participant: Option<usize>,
 }
 
 /// A participant's plan: question indices in the order shown, and whether each (indexed by
@@ -206,6 +219,7 @@ impl Study {
             questions,
             seed: options.seed,
             source,
+            per_participant: None,
         };
         for name in study.shown_names() {
             let gif = run.join(RENDER_DIR).join(format!("{name}.gif"));
@@ -239,8 +253,30 @@ impl Study {
         self.questions.iter().position(|q| q.id == id)
     }
 
+    /// The same study where every participant answers a balanced subset of `per_participant`
+    /// real questions (see the module documentation); all of them is the same as no subsets.
+    pub fn with_subsets(mut self, per_participant: usize) -> Result<Study, StudyError> {
+        let real = self.real_questions();
+        if !(1..=real).contains(&per_participant) {
+            return Err(StudyError::Missing(format!(
+                "questions per participant must be 1 to the study's {real} questions, got \
+                 {per_participant}"
+            )));
+        }
+        self.per_participant = (per_participant < real).then_some(per_participant);
+        Ok(self)
+    }
+
+    /// Real questions each participant answers.
+    pub fn real_questions_per_participant(&self) -> usize {
+        self.per_participant.unwrap_or_else(|| self.real_questions())
+    }
+
     /// The plan of the participant with this token who arrived `seq`-th (1-based).
     pub fn plan_for(&self, token: &str, seq: u64) -> Plan {
+        if let Some(q) = self.per_participant {
+            return self.subset_plan_for(token, seq, q);
+        }
         let n = self.questions.len();
         let mut order: Vec<usize> = (0..n).collect();
         SplitMix64::for_stream(token_seed(token) ^ self.seed, "survey order").shuffle(&mut order);
@@ -259,6 +295,35 @@ impl Study {
         for (&q, &s) in real.iter().zip(&pattern) {
             swapped[q] = s != second_of_pair;
         }
+        Plan { order, swapped }
+    }
+}
+
+impl Study {
+    /// [`Study::plan_for`] with balanced subsets of `q` real questions.
+    fn subset_plan_for(&self, token: &str, seq: u64, q: usize) -> Plan {
+        let n = self.questions.len();
+        let mut cycle: Vec<usize> = (0..n)
+            .filter(|&k| !self.questions[k].is_control())
+            .collect();
+        let r = cycle.len();
+        let q = q.min(r);
+        let mut rng = SplitMix64::for_stream(self.seed, "survey subsets");
+        rng.shuffle(&mut cycle);
+        let flips: Vec<bool> = (0..r).map(|_| rng.coin()).collect();
+        let mut order = Vec::with_capacity(q);
+        let mut swapped = vec![false; n];
+        // Laps before this participant's window: positions of the unrolled cycle.
+        let start = (seq.saturating_sub(1) as u128) * q as u128;
+        for j in 0..q {
+            let u = start + j as u128;
+            let c = (u % r as u128) as usize;
+            let laps = (u / r as u128) as u64;
+            order.push(cycle[c]);
+            swapped[cycle[c]] = (laps + u64::from(flips[c])) % 2 == 1;
+        }
+        order.extend((0..n).filter(|&k| self.questions[k].is_control()));
+        SplitMix64::for_stream(token_seed(token) ^ self.seed, "survey order").shuffle(&mut order);
         Plan { order, swapped }
     }
 }
@@ -402,7 +467,59 @@ mod tests {
             questions,
             seed: 3,
             source: "planned".into(),
+            per_participant: None,
         }
+    }
+
+    #[test]
+    fn subsets_are_balanced_per_question_and_sides_per_question() {
+        let full = study(2);
+        let real = full.real_questions();
+        assert!(full.clone().with_subsets(0).is_err());
+        assert!(full.clone().with_subsets(real + 1).is_err());
+        assert_eq!(full.clone().with_subsets(real).unwrap(), full);
+        let s = full.with_subsets(4).unwrap();
+        assert_eq!(s.real_questions_per_participant(), 4);
+        let mut seen = vec![0usize; s.questions.len()];
+        let mut swaps = vec![0usize; s.questions.len()];
+        let participants = 23u64;
+        for seq in 1..=participants {
+            let plan = s.plan_for(&format!("{seq:032x}"), seq);
+            assert_eq!(plan.order.len(), 4 + 2);
+            let mut distinct = plan.order.clone();
+            distinct.sort_unstable();
+            distinct.dedup();
+            assert_eq!(distinct.len(), plan.order.len(), "a question twice");
+            for &q in &plan.order {
+                seen[q] += 1;
+                swaps[q] += usize::from(plan.swapped[q]);
+                if s.questions[q].is_control() {
+                    assert!(!plan.swapped[q]);
+                }
+            }
+            // The same participant gets the same plan.
+            assert_eq!(plan, s.plan_for(&format!("{seq:032x}"), seq));
+        }
+        let real_seen: Vec<usize> = (0..s.questions.len())
+            .filter(|&q| !s.questions[q].is_control())
+            .map(|q| seen[q])
+            .collect();
+        let (lo, hi) = (
+            *real_seen.iter().min().unwrap(),
+            *real_seen.iter().max().unwrap(),
+        );
+        assert!(hi - lo <= 1, "seen {lo}..{hi}");
+        assert_eq!(real_seen.iter().sum::<usize>(), 4 * participants as usize);
+        for q in 0..s.questions.len() {
+            if !s.questions[q].is_control() {
+                assert!((2 * swaps[q]).abs_diff(seen[q]) <= 1, "question {q}");
+            }
+        }
+        // Stored as before when there are no subsets; with them the field is kept.
+        let json = serde_json::to_string(&study(2)).unwrap();
+        assert!(!json.contains("per_participant"));
+        let back: Study = serde_json::from_str(&serde_json::to_string(&s).unwrap()).unwrap();
+        assert_eq!(back, s);
     }
 
     #[test]
