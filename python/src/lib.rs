@@ -270,7 +270,7 @@ fn sample<'py>(
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let options = Options::parse(0.0, lattice, "mt", Some("none"), "none", threads)?;
-    let spec = objects::Spec::from_dict(object, params)?;
+    let spec = objects::spec_from_dict(object, params)?;
     let grid = Grid::new(
         resolution,
         Vec3::new(bounds[0], bounds[1], bounds[2]),
@@ -280,7 +280,7 @@ fn sample<'py>(
     settings.check().map_err(extract_error)?;
     pool::check_memory(&settings)?;
     let samples = py.detach(|| -> Result<rmt_extract::Samples, errors::Error> {
-        let field = spec.build(&grid)?;
+        let field = objects::build(&spec, &grid)?;
         let pool = pool::workers(options.threads)?;
         let mut samples = rmt_extract::Samples::default();
         let mut stats = Stats::default();
@@ -413,6 +413,6 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(quality, m)?)?;
     m.add_function(wrap_pyfunction!(write, m)?)?;
-    m.add("OBJECTS", objects::NAMES.to_vec())?;
+    m.add("OBJECTS", objects::names())?;
     Ok(())
 }
