@@ -11,7 +11,7 @@ use rmt_analysis::study::analyse_study;
 use rmt_analysis::study::simulate::{coverage, simulate};
 use rmt_runfolder::write_atomic;
 
-use crate::study::{self, design_file, export, model_file};
+use crate::study::{self, design_file, export, http_participants, model_file};
 
 /// Arguments of `study`.
 #[derive(clap::Args, Debug)]
@@ -71,9 +71,16 @@ pub struct SimulateArgs {
     /// Seed of the answers.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output folder.
+    /// Output folder of the export-shaped files (without --serve).
+    #[arg(long, required_unless_present = "serve")]
+    pub out: Option<PathBuf>,
+    /// Answer through the survey served at this address instead (`survey serve` of a folder
+    /// made by `study run`), as participants' browsers do.
+    #[arg(long, requires = "run", conflicts_with = "out")]
+    pub serve: Option<std::net::SocketAddr>,
+    /// The run folder the survey serves (its key.csv and study_key.csv name the animations).
     #[arg(long)]
-    pub out: PathBuf,
+    pub run: Option<PathBuf>,
 }
 
 /// Arguments of `study analyse`.
@@ -128,14 +135,21 @@ pub fn run(args: Args) -> Result<()> {
             let n = a
                 .participants
                 .unwrap_or_else(|| study::planned_participants(&design, 100));
+            if let (Some(addr), Some(run)) = (a.serve, &a.run) {
+                let names = http_participants::names_to_items(run, &design.items)?;
+                let sent = http_participants::answer_over_http(addr, &names, &model, n, a.seed)?;
+                println!("{n} simulated participants sent {sent} answers to http://{addr}/");
+                return Ok(());
+            }
+            let out = a.out.context("--out is needed without --serve")?;
             let plans = study::participant_plans(&design, n);
             let sim = simulate(&design.pairs, &plans, &model, a.seed);
-            export::write_export(&a.out, &design.items, &design.pairs, &plans, &sim)?;
+            export::write_export(&out, &design.items, &design.pairs, &plans, &sim)?;
             println!(
                 "{n} simulated participants, {} answers and {} control answers in {}",
                 sim.answers.len(),
                 sim.controls.len(),
-                a.out.display()
+                out.display()
             );
             Ok(())
         }

@@ -237,3 +237,131 @@ fn a_manifest_crossed_with_shading_renders_each_configuration_with_its_own() {
     assert_eq!(rows.len(), 2, "{qkey}");
     assert!(rows.iter().all(|r| r.contains(",shading,")), "{qkey}");
 }
+
+/// From a design to a served survey and back: `study run` on a small design, `survey serve
+/// --per-participant`, simulated participants answering through the HTTP API, `survey
+/// export`, `study analyse --key`.
+#[test]
+fn study_run_serves_balanced_subsets_that_simulated_participants_answer_over_http() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("m.toml"),
+        "name = \"tiny\"\nrepetitions = 1\nwarmup = 0\nthreads = 1\n\
+         [[objects]]\nname = \"sphere\"\nresolution = 8\nradius = 0.8\n\
+         [matrix]\nlattices = [\"bcdl\", \"simple\"]\nclustering = [\"integrated\"]\n\
+         shading = [\"smooth\", \"flat\"]\n",
+    )
+    .unwrap();
+    let study = dir.path().join("s.toml");
+    std::fs::write(
+        &study,
+        "name = \"tiny\"\nmanifest = \"m.toml\"\nobjects = [\"sphere\"]\nquestions = 3\n\
+         controls = 1\n[[methods]]\nname = \"rmt-b\"\nmethod = \"mt\"\n\
+         [[methods]]\nname = \"rmt-s\"\nmethod = \"mt\"\nlattice = \"simple\"\n",
+    )
+    .unwrap();
+    let model = dir.path().join("model.toml");
+    std::fs::write(
+        &model,
+        "tie_rate = 0.2\nleft_bias = 1.2\n[strengths.smooth]\nrmt-b = 0.5\nrmt-s = 0.0\n\
+         [strengths.flat]\nrmt-b = 0.2\nrmt-s = -0.3\n",
+    )
+    .unwrap();
+    let run = dir.path().join("run");
+    let o = experiments(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("4 turntables"), "{text}");
+    assert!(text.contains("within the 2 MB"), "{text}");
+    assert!(text.contains("--per-participant 3"), "{text}");
+    let qkey = std::fs::read_to_string(run.join("questionnaire_key.csv")).unwrap();
+    assert_eq!(
+        qkey,
+        "question,left,right,kind,variable\n\
+         Q1,ss_bi,ss_si,pair,method\n\
+         Q2,ss_bi_flat,ss_si_flat,pair,method\n\
+         Q3,ss_bi,ss_bi_flat,pair,shading\n\
+         Q4,ss_si,ss_si_flat,pair,shading\n"
+    );
+
+    let mut server = std::process::Command::new(env!("CARGO_BIN_EXE_experiments"))
+        .args(["survey", "serve"])
+        .arg(&run)
+        .args([
+            "--addr",
+            "127.0.0.1:0",
+            "--controls",
+            "1",
+            "--per-participant",
+            "3",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(server.stdout.take().unwrap()).lines();
+    let addr = loop {
+        let line = lines.next().expect("server exited").unwrap();
+        if let Some(rest) = line.strip_prefix("Listening on http://") {
+            break rest.split('/').next().unwrap().to_string();
+        }
+    };
+    std::thread::spawn(move || for _ in lines {});
+    let o = experiments(&[
+        "study",
+        "simulate",
+        study.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--participants",
+        "20",
+        "--serve",
+        &addr,
+        "--run",
+        run.to_str().unwrap(),
+    ]);
+    server.kill().unwrap();
+    server.wait().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    // 3 pairs and 1 control each.
+    assert!(stdout(&o).contains("sent 80 answers"), "{}", stdout(&o));
+    let export = dir.path().join("export");
+    let o = experiments(&[
+        "survey",
+        "export",
+        run.join("survey.sqlite").to_str().unwrap(),
+        "--out",
+        export.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = experiments(&[
+        "study",
+        "analyse",
+        study.to_str().unwrap(),
+        "--answers",
+        export.to_str().unwrap(),
+        "--key",
+        run.join("study_key.csv").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("20 participants, 60 answers"), "{text}");
+    // Balanced subsets: each of the 4 questions answered 15 times (60 / 4).
+    let responses = std::fs::read_to_string(export.join("responses.csv")).unwrap();
+    for q in ["Q1", "Q2", "Q3", "Q4"] {
+        let n = responses
+            .lines()
+            .filter(|l| l.split(',').nth(1) == Some(q))
+            .count();
+        assert_eq!(n, 15, "{q}");
+    }
+}

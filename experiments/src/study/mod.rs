@@ -7,6 +7,7 @@
 
 pub mod design_file;
 pub mod export;
+pub mod http_participants;
 pub mod model_file;
 pub mod survey_key;
 

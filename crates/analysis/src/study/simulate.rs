@@ -59,11 +59,13 @@ pub struct Simulated {
     pub control_seconds: Vec<f64>,
 }
 
-fn uniform(rng: &mut SplitMix64) -> f64 {
+/// A uniform draw in [0, 1).
+pub fn uniform(rng: &mut SplitMix64) -> f64 {
     (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
 }
 
-fn draw(p: [f64; 3], rng: &mut SplitMix64) -> Answer {
+/// One answer drawn from the probabilities of left, no preference, right.
+pub fn draw(p: [f64; 3], rng: &mut SplitMix64) -> Answer {
     let u = uniform(rng);
     if u < p[0] {
         Answer::Left
