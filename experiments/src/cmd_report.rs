@@ -4,14 +4,18 @@
 //!
 //! ```text
 //! experiments report --run results/paper-20260301-120000 --scaling results/scaling-... \
-//!     --check-cost results/check-cost-... --out reports
+//!     --check-cost results/check-cost-... --peers results/peers-... \
+//!     --peers-seeds results/peers-seeds-... --out reports
 //! experiments report --check        # reports/ against a rebuild from reports/data
 //! ```
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use rmt_report::{build, check, default_check_cost, default_scaling, Questionnaire, ReportInputs};
+use rmt_report::{
+    build, check, default_check_cost, default_peers, default_peers_seeds, default_scaling,
+    Questionnaire, ReportInputs,
+};
 
 /// Arguments of `report`.
 #[derive(clap::Args, Debug)]
@@ -31,6 +35,15 @@ pub struct Args {
     /// Leave out the section on the cost of the exact check.
     #[arg(long)]
     pub no_check_cost: bool,
+    /// Run folder of the peers manifest [default: RUN/peers when it holds a run].
+    #[arg(long, conflicts_with = "no_peers")]
+    pub peers: Option<PathBuf>,
+    /// Run folder of the peers seed study [default: RUN/peers-seeds when it holds one].
+    #[arg(long, conflicts_with = "no_peers")]
+    pub peers_seeds: Option<PathBuf>,
+    /// Leave out the section "Against what game developers use".
+    #[arg(long)]
+    pub no_peers: bool,
     /// Report folder to write (or, with --check, to compare with).
     #[arg(long, default_value = "reports")]
     pub out: PathBuf,
@@ -72,6 +85,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .clone()
             .or_else(|| default_check_cost(&args.run))
     };
+    let (peers, peers_seeds) = if args.no_peers {
+        (None, None)
+    } else {
+        (
+            args.peers.clone().or_else(|| default_peers(&args.run)),
+            args.peers_seeds
+                .clone()
+                .or_else(|| default_peers_seeds(&args.run)),
+        )
+    };
     let questionnaire = (!args.no_questionnaire).then(|| Questionnaire {
         inputs: rmt_analysis::Inputs::in_dir(&args.questionnaire),
         options: rmt_analysis::Options {
@@ -85,6 +108,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         run: args.run.clone(),
         scaling,
         check_cost,
+        peers,
+        peers_seeds,
         questionnaire,
         keep_raw: !args.no_raw,
     };

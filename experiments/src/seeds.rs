@@ -18,9 +18,12 @@ use crate::manifest::Plan;
 use crate::paper::paper_comparison;
 
 /// Summary columns whose distribution over seeds `seeds.csv` gives: triangles, vertices,
-/// triangle reduction, radius ratio (mean per mesh), fidelity (mean and largest vertex distance
-/// in grid spacings) and the mean extraction time.
-pub const SEED_METRICS: [&str; 7] = [
+/// triangle reduction, radius ratio (mean and 95th percentile per mesh), fidelity (mean and
+/// largest vertex distance in grid spacings), the mean extraction time and the mean time with
+/// the finish steps, then the rendering cost (quad occupancy at the four screen sizes, ACMR as
+/// extracted and after meshoptimizer's reordering) and the defects (non-manifold edges, holes).
+/// Columns a run lacks (rendering cost turned off) give empty cells.
+pub const SEED_METRICS: [&str; 17] = [
     "triangles",
     "vertices",
     "triangle_reduction",
@@ -28,6 +31,16 @@ pub const SEED_METRICS: [&str; 7] = [
     "fidelity_mean_h",
     "fidelity_max_h",
     "t_total_s_mean",
+    "ar_p95",
+    "t_pipeline_s_mean",
+    "quad_occupancy_1080",
+    "quad_occupancy_540",
+    "quad_occupancy_270",
+    "quad_occupancy_135",
+    "acmr_16",
+    "acmr_16_optimized",
+    "non_manifold_edges",
+    "boundary_edges_interior",
 ];
 
 /// The 97.5% quantile of Student's t with `df` degrees of freedom (two-sided 95% intervals):

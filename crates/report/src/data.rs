@@ -30,7 +30,7 @@ pub const MANIFEST_TOML: &str = rmt_runfolder::layout::MANIFEST_COPY;
 pub const SEEDS_CSV: &str = "seeds.csv";
 
 /// Where and how a run was made, from `run.json`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunInfo {
     /// The run's id (its folder name).
     pub run_id: String,

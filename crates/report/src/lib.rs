@@ -19,6 +19,8 @@
 //! - [`seeds`]: the section "Across N asteroids" of a seed study (`seeds.csv`);
 //! - [`check_cost`]: the cost of the exact check (plain MT, unchecked and checked integrated
 //!   clustering, with the dissertation's own ratio) and the defects of each mesh;
+//! - [`peers`]: against what game developers use (marching cubes, surface nets, meshoptimizer
+//!   at RMT's count): time, quality, rendering cost and defects per object, over seeds too;
 //! - [`readme`]: the one-page README; [`report`]: building and checking the folder.
 //!
 //! ```no_run
@@ -29,6 +31,8 @@
 //!     run: PathBuf::from("results/paper-20260301-120000"),
 //!     scaling: None,
 //!     check_cost: None,
+//!     peers: None,
+//!     peers_seeds: None,
 //!     questionnaire: None,
 //!     keep_raw: true,
 //! };
@@ -49,6 +53,7 @@ pub mod error;
 pub mod figures;
 pub mod format;
 pub mod output;
+pub mod peers;
 pub mod plot;
 pub mod readme;
 pub mod report;
@@ -58,6 +63,6 @@ pub mod tables;
 
 pub use error::{ReportError, Result};
 pub use report::{
-    build, check, compare, default_check_cost, default_scaling, validate, CheckOutcome,
-    Questionnaire, ReportInputs,
+    build, check, compare, default_check_cost, default_peers, default_peers_seeds, default_scaling,
+    validate, CheckOutcome, Questionnaire, ReportInputs,
 };

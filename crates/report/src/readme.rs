@@ -38,6 +38,8 @@ pub struct ReadmeInput<'a> {
     pub data_files: &'a [String],
     /// The check-cost run, when given.
     pub check_cost: Option<&'a Run>,
+    /// The peers run and its rows, when given.
+    pub peers: Option<(&'a RunInfo, &'a [crate::peers::PeerRow])>,
 }
 
 fn provenance_rows(info: &RunInfo) -> Vec<(String, String)> {
@@ -310,6 +312,8 @@ fn figure_heading(name: &str) -> &str {
         "stage_shares" => "Share of time per stage",
         "aspect_ratio" => "Triangle aspect ratio",
         "fidelity" => "Triangle count against fidelity",
+        "peers_occupancy" => "Quad occupancy against screen size (peers)",
+        "peers_time_triangles" => "Time against triangles, quality as the marker (peers)",
         "scaling" => "Time against resolution",
         "seed_triangles" => "Triangles over the seeds",
         "seed_reduction" => "Triangle reduction over the seeds",
@@ -436,6 +440,58 @@ pub fn readme(input: &ReadmeInput) -> String {
         }
     }
 
+    if let (Some((info, rows)), Some(table)) =
+        (input.peers, input.tables.iter().find(|t| t.name == "peers"))
+    {
+        out.push_str(
+            "## Against what game developers use
+
+",
+        );
+        out.push_str(&format!(
+            "RMT beside marching cubes and surface nets, as they come and simplified by \
+             meshoptimizer to RMT's triangle count (plain and with locked borders), plain MT and \
+             edge collapse, from run `{}` on {} (commit `{}`, {}). Every mesh is validated; the \
+             peers' defects are counted, not failed.\n\n",
+            info.name,
+            info.machine(),
+            info.commit(),
+            info.date
+        ));
+        if let Some(text) = crate::peers::summary_text(rows) {
+            out.push_str(&text);
+            out.push_str("\n\n");
+        }
+        figure(
+            &mut out,
+            input.figures,
+            "peers_occupancy",
+            &crate::peers::occupancy_sentence(rows),
+        );
+        figure(
+            &mut out,
+            input.figures,
+            "peers_time_triangles",
+            &crate::peers::time_sentence(rows),
+        );
+        out.push_str("### Per object\n\n");
+        out.push_str(&table.blocks_markdown());
+        if let Some(link) = table_link(input.tables, "peers") {
+            out.push_str(&format!("Table: {link}.\n\n"));
+        }
+        if let Some(seeds) = input.tables.iter().find(|t| t.name == "peers_seeds") {
+            out.push_str(&format!("### {}\n\n", seeds.title));
+            for note in &seeds.notes {
+                out.push_str(note);
+                out.push_str("\n\n");
+            }
+            out.push_str(&seeds.blocks_markdown());
+            if let Some(link) = table_link(input.tables, "peers_seeds") {
+                out.push_str(&format!("Table: {link}.\n\n"));
+            }
+        }
+    }
+
     if let Some(rows) = &run.seeds {
         out.push_str(&crate::seeds::readme_section(
             rows,
@@ -527,6 +583,10 @@ pub fn readme(input: &ReadmeInput) -> String {
             " (scaling run)"
         } else if file.starts_with("check-cost/") {
             " (check-cost run)"
+        } else if file.starts_with("peers/") {
+            " (peers run)"
+        } else if file.starts_with("peers-seeds/") {
+            " (peers seed study)"
         } else {
             ""
         };
@@ -548,8 +608,11 @@ pub fn readme(input: &ReadmeInput) -> String {
          cargo run --release -p experiments -- run experiments/manifests/paper.toml\n\
          cargo run --release -p experiments -- run experiments/manifests/scaling.toml\n\
          cargo run --release -p experiments -- run experiments/manifests/check-cost.toml\n\
+         cargo run --release -p experiments -- run experiments/manifests/peers.toml\n\
+         cargo run --release -p experiments -- run experiments/manifests/peers-seeds.toml\n\
          cargo run --release -p experiments -- report --run results/<paper run> --scaling \
-         results/<scaling run> --check-cost results/<check-cost run>\n```\n",
+         results/<scaling run> --check-cost results/<check-cost run> --peers results/<peers \
+         run> --peers-seeds results/<peers-seeds run>\n```\n",
     );
     out
 }

@@ -7,20 +7,24 @@
 //!                            raw.csv, paper_comparison.csv (copied; the report's own input)
 //! <out>/data/scaling/        the same files of the scaling run, when given
 //! <out>/data/check-cost/     the same files of the check-cost run, when given
+//! <out>/data/peers/          the peers run (run.json, manifest.toml, configurations.csv,
+//!                            summary.csv), when given
+//! <out>/data/peers-seeds/    the peers seed study (run.json, manifest.toml, seeds.csv)
 //! <out>/figures/NAME.{png,svg}
 //! <out>/tables/NAME.{md,csv}
 //! <out>/questionnaire/       the questionnaire analysis (rmt-analysis: tables and charts)
 //! ```
 //!
-//! `data/` is itself a valid run folder (with `data/scaling/` and `data/check-cost/` found by
-//! default), so a report
+//! `data/` is itself a valid run folder (with `data/scaling/`, `data/check-cost/`,
+//! `data/peers/` and `data/peers-seeds/` found by default), so a report
 //! rebuilds from its own copy: that is what [`check`] does.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
+use crate::csv_file::CsvFile;
 use crate::data::{
-    Run, CONFIGURATIONS_CSV, MANIFEST_TOML, PAPER_CSV, RAW_CSV, RUN_JSON, SUMMARY_CSV,
+    Run, RunInfo, CONFIGURATIONS_CSV, MANIFEST_TOML, PAPER_CSV, RAW_CSV, RUN_JSON, SUMMARY_CSV,
 };
 use crate::error::{io_error, ReportError, Result};
 use crate::figures::{self, AnyFigure};
@@ -60,6 +64,12 @@ pub struct ReportInputs {
     /// The run folder of `experiments/manifests/check-cost.toml`, if any (see
     /// [`default_check_cost`]): plain MT, unchecked and checked integrated clustering.
     pub check_cost: Option<PathBuf>,
+    /// The run folder of `experiments/manifests/peers.toml`, if any (see [`default_peers`]):
+    /// RMT against marching cubes, surface nets and meshoptimizer, with rendering cost.
+    pub peers: Option<PathBuf>,
+    /// The run folder of `experiments/manifests/peers-seeds.toml` (its `seeds.csv`), if any (see
+    /// [`default_peers_seeds`]).
+    pub peers_seeds: Option<PathBuf>,
     /// The questionnaire, if it is part of the report.
     pub questionnaire: Option<Questionnaire>,
     /// Copy `raw.csv` into `data/` (it can be large; `summary.csv` holds what the report uses).
@@ -75,6 +85,25 @@ pub fn default_scaling(run: &Path) -> Option<PathBuf> {
 pub fn default_check_cost(run: &Path) -> Option<PathBuf> {
     sub_run(run, CHECK_COST_DIR)
 }
+
+/// `run/peers` when it holds a run (as a report's `data/` folder does).
+pub fn default_peers(run: &Path) -> Option<PathBuf> {
+    sub_run(run, PEERS_DIR)
+}
+
+/// `run/peers-seeds` when it holds a seed study's `seeds.csv`.
+pub fn default_peers_seeds(run: &Path) -> Option<PathBuf> {
+    let candidate = run.join(PEERS_SEEDS_DIR);
+    candidate
+        .join(crate::seeds::SEEDS_CSV)
+        .is_file()
+        .then_some(candidate)
+}
+
+/// The folder of `data/` that holds the peers run.
+pub const PEERS_DIR: &str = "peers";
+/// The folder of `data/` that holds the peers seed study.
+pub const PEERS_SEEDS_DIR: &str = "peers-seeds";
 
 /// The folder of `data/` that holds the scaling run.
 pub const SCALING_DIR: &str = "scaling";
@@ -160,15 +189,47 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         Some(folder) => Some(Run::read(folder)?),
         None => None,
     };
+    let peers = match &inputs.peers {
+        Some(folder) => Some((
+            RunInfo::read(&folder.join(RUN_JSON))?,
+            crate::peers::read_peers(folder)?,
+        )),
+        None => None,
+    };
+    let peers_seeds = match &inputs.peers_seeds {
+        Some(folder) => Some((
+            RunInfo::read(&folder.join(RUN_JSON))?,
+            CsvFile::read(&folder.join(crate::seeds::SEEDS_CSV))?,
+        )),
+        None => None,
+    };
     // Read every input before writing anything: `out/data` may be the input.
     let data = read_data_files(&inputs.run, inputs.keep_raw)?;
     let sub_data = |folder: &Option<PathBuf>| match folder {
         Some(folder) => read_data_files(folder, inputs.keep_raw).map(Some),
         None => Ok(None),
     };
+    // The peers runs: no raw.csv (summary.csv, or seeds.csv, holds what the report uses).
+    let peers_data = match &inputs.peers {
+        Some(folder) => Some(read_data_files(folder, false)?),
+        None => None,
+    };
+    let peers_seeds_data = match &inputs.peers_seeds {
+        Some(folder) => Some(
+            read_data_files(folder, false)?
+                .into_iter()
+                .filter(|(name, _)| {
+                    [RUN_JSON, MANIFEST_TOML, crate::seeds::SEEDS_CSV].contains(name)
+                })
+                .collect(),
+        ),
+        None => None,
+    };
     let subs = [
         (SCALING_DIR, sub_data(&inputs.scaling)?),
         (CHECK_COST_DIR, sub_data(&inputs.check_cost)?),
+        (PEERS_DIR, peers_data),
+        (PEERS_SEEDS_DIR, peers_seeds_data),
     ];
 
     let mut written: Vec<PathBuf> = Vec::new();
@@ -209,6 +270,14 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         .and_then(crate::check_cost::check_cost_table)
     {
         all_tables.push(table);
+    }
+    if let Some((info, rows)) = &peers {
+        all_tables.push(crate::peers::peers_table(info, rows));
+    }
+    if let Some((info, seeds)) = &peers_seeds {
+        if let Some(table) = crate::peers::seeds_table(&info.run_id, seeds)? {
+            all_tables.push(table);
+        }
     }
     let mut kept = BTreeSet::new();
     for table in &all_tables {
@@ -253,6 +322,14 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
             all_figures.push((name, AnyFigure::Rows(chart)));
         }
     }
+    if let Some((info, rows)) = &peers {
+        if let Some(chart) = crate::peers::occupancy_figure(info, rows) {
+            all_figures.push(("peers_occupancy".into(), AnyFigure::Xy(chart)));
+        }
+        if let Some(chart) = crate::peers::time_figure(info, rows) {
+            all_figures.push(("peers_time_triangles".into(), AnyFigure::Xy(chart)));
+        }
+    }
     let mut kept = BTreeSet::new();
     for (name, figure) in &all_figures {
         for path in figure.write(&figures_dir, name)? {
@@ -290,6 +367,7 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         run: &run,
         scaling: scaling.as_ref().map(|(r, f)| (r, f.as_slice())),
         check_cost: check_cost.as_ref(),
+        peers: peers.as_ref().map(|(info, rows)| (info, rows.as_slice())),
         figures: &figure_names,
         tables: &all_tables,
         questionnaire: questionnaire.as_ref(),

@@ -27,6 +27,8 @@ fn inputs(run: &Path, scaling: Option<&Path>, resamples: Option<usize>) -> Repor
         run: run.to_path_buf(),
         scaling: scaling.map(Path::to_path_buf),
         check_cost: None,
+        peers: None,
+        peers_seeds: None,
         questionnaire: resamples.map(questionnaire),
         keep_raw: true,
     }
@@ -511,4 +513,63 @@ fn the_check_cost_section_compares_unchecked_and_checked_with_the_dissertation()
     }
     let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
     assert!(!readme.contains("The cost of the exact check"));
+}
+
+#[test]
+fn the_peers_section_shows_every_method_per_object_and_the_seed_intervals() {
+    let out = tempfile::tempdir().unwrap();
+    let ci = fixtures().join("ci");
+    let with_peers = ReportInputs {
+        peers: Some(fixtures().join("peers")),
+        peers_seeds: Some(fixtures().join("peers-seeds")),
+        ..inputs(&ci, None, None)
+    };
+    build(&with_peers, out.path()).unwrap();
+    for file in [
+        "data/peers/summary.csv",
+        "data/peers-seeds/seeds.csv",
+        "tables/peers.csv",
+        "tables/peers_seeds.csv",
+        "figures/peers_occupancy.png",
+        "figures/peers_time_triangles.svg",
+    ] {
+        assert!(out.path().join(file).is_file(), "{file} missing");
+    }
+    assert!(!out.path().join("data/peers/raw.csv").exists());
+    // One table row per configuration without the vertex-cache order: 5 objects x 15 methods.
+    let table = std::fs::read_to_string(out.path().join("tables/peers.csv")).unwrap();
+    assert_eq!(table.lines().count(), 1 + 5 * 15, "{table}");
+    for method in [
+        "RMT, body-centred",
+        "marching cubes + meshopt, borders locked",
+        "surface nets",
+        "plain MT + meshopt, body-centred",
+    ] {
+        assert!(table.contains(method), "{method} missing");
+    }
+    let seeds = std::fs::read_to_string(out.path().join("tables/peers_seeds.csv")).unwrap();
+    assert_eq!(seeds.lines().count(), 1 + 15, "{seeds}");
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(readme.contains("## Against what game developers use"));
+    assert!(readme.contains("Where RMT loses") || readme.contains("RMT loses on none"));
+    assert!(readme.contains("(figures/peers_occupancy.png)"));
+    assert!(readme.contains("across asteroids"));
+
+    // The report's own data copy finds both runs again; without them the section goes.
+    let again = ReportInputs {
+        peers: rmt_report::default_peers(&out.path().join("data")),
+        peers_seeds: rmt_report::default_peers_seeds(&out.path().join("data")),
+        ..inputs(&out.path().join("data"), None, None)
+    };
+    assert!(again.peers.is_some() && again.peers_seeds.is_some());
+    assert!(check(&again, out.path()).unwrap().passed());
+    build(&inputs(&ci, None, None), out.path()).unwrap();
+    for gone in [
+        "tables/peers.csv",
+        "figures/peers_occupancy.png",
+        "data/peers/summary.csv",
+        "data/peers-seeds/seeds.csv",
+    ] {
+        assert!(!out.path().join(gone).exists(), "{gone} left behind");
+    }
 }
