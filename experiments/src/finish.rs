@@ -231,7 +231,9 @@ impl<'de> Deserialize<'de> for TargetValue {
             }
             fn visit_i64<E: de::Error>(self, v: i64) -> Result<TargetValue, E> {
                 let n = u64::try_from(v).map_err(|_| {
-                    E::custom(format!("simplify target {v}: a triangle count must be at least 1"))
+                    E::custom(format!(
+                        "simplify target {v}: a triangle count must be at least 1"
+                    ))
                 })?;
                 SimplifyTarget::count(n).map(TargetValue).map_err(E::custom)
             }
@@ -338,7 +340,12 @@ impl<'a> Finisher<'a> {
 /// Runs `e`'s finish steps on `mesh` (just extracted, with `stats`), `target` being the
 /// simplifier's budget when `e` simplifies. Updates the vertex and triangle counts of `stats` to
 /// the finished mesh's and returns the finish columns.
-pub fn apply(e: &Extraction, target: Option<usize>, mesh: &mut Mesh, stats: &mut Stats) -> FinishRecord {
+pub fn apply(
+    e: &Extraction,
+    target: Option<usize>,
+    mesh: &mut Mesh,
+    stats: &mut Stats,
+) -> FinishRecord {
     let mut r = FinishRecord::default();
     if let (Some(s), Some(target)) = (&e.simplify, target) {
         let t = Instant::now();
@@ -385,12 +392,24 @@ mod tests {
 
     #[test]
     fn bad_names_say_what_is_wrong() {
-        assert!(Simplify::parse("qem").unwrap_err().contains("meshopt:<target>"));
-        assert!(Simplify::parse("qem:rmt").unwrap_err().contains("unknown simplifier `qem`"));
-        assert!(Simplify::parse("meshopt:1.5").unwrap_err().contains("between 0 and 1"));
-        assert!(Simplify::parse("meshopt:0").unwrap_err().contains("at least 1"));
-        assert!(Simplify::parse("meshopt:lots").unwrap_err().contains("`lots`"));
-        assert!(Simplify::parse("meshopt:NaN").unwrap_err().contains("between 0 and 1"));
+        assert!(Simplify::parse("qem")
+            .unwrap_err()
+            .contains("meshopt:<target>"));
+        assert!(Simplify::parse("qem:rmt")
+            .unwrap_err()
+            .contains("unknown simplifier `qem`"));
+        assert!(Simplify::parse("meshopt:1.5")
+            .unwrap_err()
+            .contains("between 0 and 1"));
+        assert!(Simplify::parse("meshopt:0")
+            .unwrap_err()
+            .contains("at least 1"));
+        assert!(Simplify::parse("meshopt:lots")
+            .unwrap_err()
+            .contains("`lots`"));
+        assert!(Simplify::parse("meshopt:NaN")
+            .unwrap_err()
+            .contains("between 0 and 1"));
     }
 
     #[derive(Deserialize)]
@@ -418,14 +437,29 @@ mod tests {
             ]
         );
         for (bad, says) in [
-            (r#"s = [{ method = "qem", target = "rmt" }]"#, "unknown simplifier `qem`"),
+            (
+                r#"s = [{ method = "qem", target = "rmt" }]"#,
+                "unknown simplifier `qem`",
+            ),
             (r#"s = [{ method = "meshopt" }]"#, "missing field `target`"),
-            (r#"s = [{ method = "meshopt", target = 2.0 }]"#, "between 0 and 1"),
+            (
+                r#"s = [{ method = "meshopt", target = 2.0 }]"#,
+                "between 0 and 1",
+            ),
             (r#"s = [{ method = "meshopt", target = -3 }]"#, "at least 1"),
-            (r#"s = [{ method = "meshopt", target = "half" }]"#, "only named target is rmt"),
-            (r#"s = [{ method = "meshopt", target = "rmt", lock = true }]"#, "unknown field `lock`"),
+            (
+                r#"s = [{ method = "meshopt", target = "half" }]"#,
+                "only named target is rmt",
+            ),
+            (
+                r#"s = [{ method = "meshopt", target = "rmt", lock = true }]"#,
+                "unknown field `lock`",
+            ),
         ] {
-            let e = toml::from_str::<Doc>(bad).err().map(|e| e.to_string()).unwrap_or_default();
+            let e = toml::from_str::<Doc>(bad)
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default();
             assert!(e.contains(says), "{bad}: {e}");
         }
     }
@@ -437,9 +471,21 @@ mod tests {
             lock_border: false,
         };
         let never = || -> Result<usize> { anyhow::bail!("not asked") };
-        assert_eq!(budget(&s(SimplifyTarget::Ratio(0.25)), 1000, never).unwrap(), 250);
-        assert_eq!(budget(&s(SimplifyTarget::Ratio(0.001)), 10, never).unwrap(), 1);
-        assert_eq!(budget(&s(SimplifyTarget::Count(77)), 1000, never).unwrap(), 77);
-        assert_eq!(budget(&s(SimplifyTarget::Rmt), 1000, || Ok(321)).unwrap(), 321);
+        assert_eq!(
+            budget(&s(SimplifyTarget::Ratio(0.25)), 1000, never).unwrap(),
+            250
+        );
+        assert_eq!(
+            budget(&s(SimplifyTarget::Ratio(0.001)), 10, never).unwrap(),
+            1
+        );
+        assert_eq!(
+            budget(&s(SimplifyTarget::Count(77)), 1000, never).unwrap(),
+            77
+        );
+        assert_eq!(
+            budget(&s(SimplifyTarget::Rmt), 1000, || Ok(321)).unwrap(),
+            321
+        );
     }
 }

@@ -154,6 +154,8 @@ mod tests {
             json["index_bytes"],
             serde_json::json!(12 * mesh.triangle_count())
         );
-        assert!(json["quad_occupancy_1080"].as_f64().is_some_and(|o| o > 0.0 && o <= 1.0));
+        assert!(json["quad_occupancy_1080"]
+            .as_f64()
+            .is_some_and(|o| o > 0.0 && o <= 1.0));
     }
 }

@@ -221,10 +221,14 @@ mod tests {
         assert_eq!(mesh.positions, before.positions);
         assert_eq!(mesh.normals, before.normals);
         assert_eq!(sorted_triangles(&mesh), sorted_triangles(&before));
-        let acmr = |m: &Mesh| {
-            meshopt::analyze_vertex_cache(&m.indices, m.positions.len(), 16, 0, 0).acmr
-        };
-        assert!(acmr(&mesh) < acmr(&before) * 0.8, "{} vs {}", acmr(&mesh), acmr(&before));
+        let acmr =
+            |m: &Mesh| meshopt::analyze_vertex_cache(&m.indices, m.positions.len(), 16, 0, 0).acmr;
+        assert!(
+            acmr(&mesh) < acmr(&before) * 0.8,
+            "{} vs {}",
+            acmr(&mesh),
+            acmr(&before)
+        );
         let mut empty = Mesh::default();
         optimize_vertex_cache(&mut empty);
         assert!(empty.indices.is_empty());

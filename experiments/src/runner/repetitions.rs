@@ -81,15 +81,8 @@ pub fn run_repetitions(
     }
     let last = stats.last().cloned().unwrap_or_default();
     let last_finish = finish.last().cloned().unwrap_or_default();
-    let measured = measured::measure(
-        &mesh,
-        &last,
-        &last_finish,
-        Some(field),
-        &settings,
-        meter,
-    )
-    .map_err(|e| e.context(format!("measuring configuration {}", c.id)))?;
+    let measured = measured::measure(&mesh, &last, &last_finish, Some(field), &settings, meter)
+        .map_err(|e| e.context(format!("measuring configuration {}", c.id)))?;
     Ok(ConfigResult {
         stats,
         finish,

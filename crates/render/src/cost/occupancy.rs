@@ -242,7 +242,11 @@ impl QuadRaster {
                 let right = qx + 1 < wu;
                 let quad = [
                     owner[row0 + qx],
-                    if right { owner[row0 + qx + 1] } else { NO_TRIANGLE },
+                    if right {
+                        owner[row0 + qx + 1]
+                    } else {
+                        NO_TRIANGLE
+                    },
                     if lower { owner[row1 + qx] } else { NO_TRIANGLE },
                     if lower && right {
                         owner[row1 + qx + 1]
