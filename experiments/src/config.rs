@@ -207,10 +207,7 @@ pub fn config_json(e: &Extraction, threads: usize) -> Map<String, Value> {
     );
     m.insert("iso".into(), serde_json::json!(e.iso));
     m.insert("normals".into(), e.normals.name().into());
-    m.insert(
-        "simplify".into(),
-        simplify_name(e.simplify.as_ref()).into(),
-    );
+    m.insert("simplify".into(), simplify_name(e.simplify.as_ref()).into());
     m.insert("vertex_cache".into(), e.vertex_cache.into());
     m.insert("threads".into(), threads.into());
     m

@@ -92,8 +92,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::{Extraction, Normals};
 use crate::finish::{Simplify, SimplifyChoice};
-pub use rmt_render::shade::Shading;
 use crate::objects::{Bounds, ObjectKind, ObjectParams, Resolution};
+pub use rmt_render::shade::Shading;
 
 /// Why a manifest cannot be run. Every message names the file; semantic errors name the key.
 #[derive(Debug, thiserror::Error)]
@@ -899,9 +899,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("matrix.shading"), "{err}");
-        let err = plan("name = \"t\"\n[[objects]]\nname = \"sphere\"\n[matrix]\nshading = [\"toon\"]\n")
-            .unwrap_err()
-            .to_string();
+        let err =
+            plan("name = \"t\"\n[[objects]]\nname = \"sphere\"\n[matrix]\nshading = [\"toon\"]\n")
+                .unwrap_err()
+                .to_string();
         assert!(err.contains("toon"), "{err}");
     }
 

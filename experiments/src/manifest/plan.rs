@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use rmt_extract::{Clustering, Lattice, Method};
 
 use super::{
-    base_id, finish_suffix, safe_name, shading_suffix, Configuration, EditPlan, Manifest, ManifestError, Matrix, Overrides, Plan,
-    SeedOf, SeedRange, Shading,
+    base_id, finish_suffix, safe_name, shading_suffix, Configuration, EditPlan, Manifest,
+    ManifestError, Matrix, Overrides, Plan, SeedOf, SeedRange, Shading,
 };
 use crate::config::{self, Extraction};
 use crate::finish::Simplify;
