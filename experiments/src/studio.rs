@@ -25,7 +25,7 @@ use crate::extract_args::{self, Args};
 use crate::objects::{ObjectError, ObjectKind};
 
 /// `extract` options the page may set (object parameters come from [`ObjectKind::accepted`]).
-pub const PAGE_OPTIONS: [&str; 8] = [
+pub const PAGE_OPTIONS: [&str; 9] = [
     "resolution",
     "bounds",
     "lattice",
@@ -34,6 +34,7 @@ pub const PAGE_OPTIONS: [&str; 8] = [
     "collapse_threshold",
     "iso",
     "normals",
+    "simplify",
 ];
 
 /// Object parameters the page may not set (they name files).
@@ -209,16 +210,28 @@ impl StudioBackend {
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .push(extractor);
-        let stats = stats.map_err(|err| {
+        let mut stats = stats.map_err(|err| {
             let message = format!("extracting {}: {err}", e.object.kind);
             match err {
                 rmt_extract::ExtractError::ThreadPool { .. } => BackendError::Failed(message),
                 _ => BackendError::Invalid(message),
             }
         })?;
-        let m = rmt_extract::measure(&mesh, &stats, Some(field.as_ref()), &settings);
+        // The finish steps (a simplification to a budget), as `extract` runs them; no
+        // rendering cost (it would take longer than most extractions).
+        let finish = crate::finish::Finisher::new(e, field.as_ref(), self.threads)
+            .run(&mut mesh, &mut stats)
+            .map_err(|err| BackendError::Failed(format!("{err:#}")))?;
+        let measured =
+            crate::measured::measure(&mesh, &stats, &finish, Some(field.as_ref()), &settings, None)
+                .map_err(|err| BackendError::Failed(format!("{err:#}")))?;
+        let m = &measured.measurement;
         let mut out: Map<String, Value> = config::config_json(e, self.threads);
-        out.extend(config::measurement_json(&m).map_err(|e| BackendError::Failed(e.to_string()))?);
+        out.extend(
+            measured
+                .json()
+                .map_err(|e| BackendError::Failed(e.to_string()))?,
+        );
         let (s, v, q) = (&m.stats, &m.validation, &m.quality);
         let ms = |t: f64| t * 1e3;
         out.insert(
@@ -232,6 +245,7 @@ impl StudioBackend {
                     "vertex": ms(s.t_vertex_s),
                     "geometry": ms(s.t_geometry_s),
                     "normals": ms(s.t_normals_s),
+                    "simplify": ms(measured.finish.t_simplify_s),
                 },
                 "ar_mean": q.ar_mean,
                 "ar_p95": q.ar_p95,
