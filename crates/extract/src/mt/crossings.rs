@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use super::clustering::proposal::{self, Candidate, PointEdges, ProposalCounts, Rules};
 use super::layout::{add, owns, Layout};
 use crate::lattice::FULL;
-use crate::util::{bits_at, for_each_bit};
+use crate::util::{bits_at, for_each_bit, inside_word};
 use crate::{ExtractError, Lattice, Stats};
 
 /// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
@@ -213,28 +213,6 @@ impl CrossedIndex {
 /// a zero word of padding, so that 64 bits can be read from any slot of the plane.
 pub(crate) fn plane_words(plane: usize) -> usize {
     plane.div_ceil(64) + 1
-}
-
-/// Bit k set where `values[k] < iso` (at most 64 values). A full word is built a byte at a time,
-/// which the compiler turns into wide comparisons (about 40% faster than bit by bit).
-#[inline(always)]
-pub(crate) fn inside_word(values: &[f32], iso: f32) -> u64 {
-    match <&[f32; 64]>::try_from(values) {
-        Ok(v) => {
-            let mut bytes = [0u8; 8];
-            for (b, c) in bytes.iter_mut().zip(v.as_chunks::<8>().0) {
-                *b = c
-                    .iter()
-                    .enumerate()
-                    .fold(0u8, |b, (k, &f)| b | (u8::from(f < iso) << k));
-            }
-            u64::from_le_bytes(bytes)
-        }
-        Err(_) => values
-            .iter()
-            .enumerate()
-            .fold(0u64, |x, (k, &f)| x | (u64::from(f < iso) << k)),
-    }
 }
 
 /// Which of the `len` (<= 64) points from slot `i` on have a crossed edge: the inside bits of the
