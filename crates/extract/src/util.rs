@@ -56,6 +56,25 @@ pub(crate) fn inside_word(values: &[f32], iso: f32) -> u64 {
     }
 }
 
+/// [`bits_at`] from any position, before or past `words` too: bits outside `words` read as 0.
+#[inline]
+pub(crate) fn bits_at_signed(words: &[u64], pos: isize) -> u64 {
+    let (w, s) = (pos.div_euclid(64), pos.rem_euclid(64) as u32);
+    let word = |i: isize| {
+        usize::try_from(i)
+            .ok()
+            .and_then(|i| words.get(i))
+            .copied()
+            .unwrap_or(0)
+    };
+    let lo = word(w) >> s;
+    if s == 0 {
+        lo
+    } else {
+        lo | (word(w + 1) << (64 - s))
+    }
+}
+
 /// Sets `v` to length `n` for a pass that then writes every element: elements kept from an
 /// earlier extraction are not cleared (a reused buffer costs no memset), new ones are zeroed in
 /// parallel (first touches of fresh memory included).

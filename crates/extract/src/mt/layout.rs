@@ -50,6 +50,7 @@ pub(crate) const CASES: [[u8; 4]; 16] = {
 /// `val`: the corner values; `dir[i][j]`: neighbour index of corner j from corner i; `id(o, d)`:
 /// the id of the crossing owned by corner `o` on its edge to neighbour `d`.
 #[inline(always)]
+#[cfg(test)]
 pub(crate) fn tet_triangles(
     val: [f32; 4],
     iso: f32,
@@ -62,6 +63,27 @@ pub(crate) fn tet_triangles(
         | ((val[1] < iso) as usize) << 1
         | ((val[2] < iso) as usize) << 2
         | ((val[3] < iso) as usize) << 3;
+    let edge = |a: usize, b: usize| {
+        if owns(val[a], val[b], iso) {
+            id(a, dir[a][b])
+        } else {
+            id(b, dir[b][a])
+        }
+    };
+    case_triangles_of(case, edge, positions, out)
+}
+
+/// The triangles of a tetrahedron in `case` (bit i: corner i inside), as [`tet_triangles`]
+/// writes them, with `edge(a, b)` the id of the crossing on the edge from corner a to corner b
+/// (whichever end owns it): what the geometry pass calls when it knows the case and the owners
+/// from the vertex pass's tables rather than from the values.
+#[inline(always)]
+pub(crate) fn case_triangles_of(
+    case: usize,
+    edge: impl Fn(usize, usize) -> u32,
+    positions: &[[f32; 3]],
+    out: &mut [[u32; 3]; 2],
+) -> usize {
     if case == 0 || case == 15 {
         return 0;
     }
@@ -70,12 +92,7 @@ pub(crate) fn tet_triangles(
     let mut ids = [0u32; 4];
     for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
         let (a, b) = TET_EDGES[e as usize];
-        let (o, d) = if owns(val[a], val[b], iso) {
-            (a, dir[a][b])
-        } else {
-            (b, dir[b][a])
-        };
-        *slot = id(o, d);
+        *slot = edge(a, b);
     }
     if n == 3 {
         out[0] = [ids[0], ids[1], ids[2]];
@@ -128,6 +145,11 @@ pub(crate) struct TetGroup {
     /// when bit i says "point i is on the other side from the anchor", i.e. the anchor's
     /// crossed edges: no sample value needs reading.
     pub(crate) triangles: Vec<u8>,
+    /// Per index (as in `triangles`) and tetrahedron of the group (template order), the
+    /// tetrahedron's case (bit i: its corner i inside) when the anchor is outside: entry
+    /// `code * tets + j`. With the anchor inside every bit flips. The geometry pass reads a
+    /// tetrahedron's case off the anchor's side and crossed edges with it.
+    pub(crate) cases: Vec<u8>,
 }
 
 impl TetGroup {
@@ -157,6 +179,13 @@ impl TetGroup {
             }
             corners.push(c);
         }
+        group.cases = (0..1usize << group.len)
+            .flat_map(|code| {
+                corners.iter().map(move |c| {
+                    (0..4).fold(0u8, |case, i| case | (((code >> c[i]) & 1) << i) as u8)
+                })
+            })
+            .collect();
         group.triangles = (0..1usize << group.len)
             .map(|code| {
                 corners
@@ -250,6 +279,8 @@ pub(crate) fn boundary_class(c: i32, max: i32) -> usize {
 pub(crate) struct BorderCache {
     key: Option<(Lattice, [usize; 3])>,
     table: Vec<u32>,
+    /// The lattice edges of the grid (`Stats::edges`), once an extraction counted them.
+    pub(crate) edges: Option<usize>,
 }
 
 impl<'a> Layout<'a> {
@@ -269,6 +300,7 @@ impl<'a> Layout<'a> {
         if cache.key != key {
             cache.table = layout.build_border_table();
             cache.key = key;
+            cache.edges = None;
         }
         layout.border_table.clone_from(&cache.table);
         layout
