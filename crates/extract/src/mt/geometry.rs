@@ -150,12 +150,7 @@ pub(crate) fn count_layer(
     let mut n = 0;
     for_each_group(l, k, keep, crossed, |_, rank, g, _| {
         let group = &l.groups[g];
-        let mask = usize::from(crossed.points[rank].crossed);
-        let mut code = 0;
-        for (i, &d) in group.dirs[1..group.len].iter().enumerate() {
-            code |= ((mask >> d) & 1) << (i + 1);
-        }
-        n += usize::from(group.triangles[code]);
+        n += usize::from(group.triangles[group.code(crossed.points[rank].crossed)]);
     });
     n
 }
@@ -339,11 +334,7 @@ pub(crate) fn geometry_in_window(
         };
         // The group's points on the other side from the anchor, as in [`count_layer`].
         let group = &l.groups[g];
-        let mask = usize::from(window[anchor - z0 * plane].crossed);
-        let mut code = 0;
-        for (i, &d) in group.dirs[1..group.len].iter().enumerate() {
-            code |= ((mask >> d) & 1) << (i + 1);
-        }
+        let code = group.code(window[anchor - z0 * plane].crossed);
         if group.triangles[code] == 0 {
             return;
         }

@@ -45,10 +45,11 @@ pub(crate) const CASES: [[u8; 4]; 16] = {
 };
 
 /// The triangles of one tetrahedron (none, one, or two from a quad split along its shorter
-/// diagonal) as crossing ids, oriented by the case table: the one definition that the emission
-/// and the quotient test share, so that the test sees exactly the triangles that are written.
-/// `val`: the corner values; `dir[i][j]`: neighbour index of corner j from corner i; `id(o, d)`:
-/// the id of the crossing owned by corner `o` on its edge to neighbour `d`.
+/// diagonal) as crossing ids, oriented by the case table, read from the corner values: the
+/// tests' reference for [`case_triangles_of`], the one definition that the emission and the
+/// listing for the quotient test share. `val`: the corner values; `dir[i][j]`: neighbour index
+/// of corner j from corner i; `id(o, d)`: the id of the crossing owned by corner `o` on its
+/// edge to neighbour `d`.
 #[inline(always)]
 #[cfg(test)]
 pub(crate) fn tet_triangles(
@@ -132,7 +133,7 @@ pub(crate) struct TetTemplate {
 /// distinct points; a cube's 6, with 8 corners) and the number of triangles they give for each
 /// inside/outside pattern of those points, derived from the case table: the geometry pass counts
 /// a layer's triangles from the anchors' crossed edges before it writes them.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct TetGroup {
     /// Storage deltas of its distinct points from the anchor (point 0, in every tetrahedron of
     /// the group).
@@ -150,15 +151,31 @@ pub(crate) struct TetGroup {
     /// `code * tets + j`. With the anchor inside every bit flips. The geometry pass reads a
     /// tetrahedron's case off the anchor's side and crossed edges with it.
     pub(crate) cases: Vec<u8>,
+    /// The index into `triangles` and `cases` from the anchor's crossed edges, by their low 7
+    /// and high 7 neighbour bits (or'ed): bit i set when point i's edge is crossed.
+    code_parts: [[u8; 128]; 2],
 }
 
 impl TetGroup {
+    /// The index into `triangles` and `cases` for an anchor with crossed edges `crossed` (by
+    /// neighbour bit): bit i set when point i lies on the other side from the anchor.
+    #[inline(always)]
+    pub(crate) fn code(&self, crossed: u16) -> usize {
+        usize::from(
+            self.code_parts[0][usize::from(crossed & 127)]
+                | self.code_parts[1][usize::from((crossed >> 7) & 127)],
+        )
+    }
+
     /// The group of templates `tets` (corners given by their storage deltas).
     pub(crate) fn new(tets: &[TetTemplate]) -> Self {
         let mut group = Self {
-            len: 1,
+            points: [0; 8],
             dirs: [u8::MAX; 8],
-            ..Self::default()
+            len: 1,
+            triangles: Vec::new(),
+            cases: Vec::new(),
+            code_parts: [[0; 128]; 2],
         };
         let mut corners = Vec::with_capacity(tets.len());
         for tpl in tets {
@@ -178,6 +195,13 @@ impl TetGroup {
                 };
             }
             corners.push(c);
+        }
+        for (half, part) in group.code_parts.iter_mut().enumerate() {
+            for (bits, code) in part.iter_mut().enumerate() {
+                let mask = bits << (7 * half);
+                *code =
+                    (1..group.len).fold(0u8, |c, i| c | (((mask >> group.dirs[i]) & 1) << i) as u8);
+            }
         }
         group.cases = (0..1usize << group.len)
             .flat_map(|code| {
@@ -747,6 +771,59 @@ pub(crate) fn add(a: Offset, b: Offset) -> Offset {
 mod tests {
     use super::*;
     use crate::mt::testing::{lcg, plain_mt, test_pool};
+
+    #[test]
+    fn group_codes_and_cases_follow_the_crossed_edges_of_the_anchor() {
+        // Every neighbour mask of the anchor: the code has bit i exactly when point i's edge
+        // is crossed, and each tetrahedron's case (anchor outside) has bit j exactly when its
+        // corner j is on the other side from the anchor.
+        let samples = Samples {
+            lattice: None,
+            cells: [4, 4, 4],
+            min: glam::Vec3::ZERO,
+            spacing: glam::Vec3::ONE,
+            dims: [6, 6, 11],
+            values: vec![0.0; 6 * 6 * 11],
+        };
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            let mut s = samples.clone();
+            if lattice == Lattice::Simple {
+                s.dims = [5, 5, 5];
+                s.values = vec![0.0; 125];
+            }
+            let l = Layout::new(&s, lattice);
+            for (g, group) in l.groups.iter().enumerate() {
+                let tets = group.cases.len() >> group.len;
+                assert!(tets == 4 || tets == 6, "{lattice:?} group {g}: {tets}");
+                for mask in 0..1u16 << 14 {
+                    let code = group.code(mask);
+                    for i in 1..group.len {
+                        let crossed = mask >> group.dirs[i] & 1 == 1;
+                        assert_eq!(code >> i & 1 == 1, crossed, "{lattice:?} {g} {mask:#x} {i}");
+                    }
+                    assert_eq!(code & 1, 0, "the anchor is never on the other side");
+                }
+                let first = if lattice == Lattice::BodyCentred {
+                    4 * g
+                } else {
+                    0
+                };
+                for code in 0..1usize << group.len {
+                    for j in 0..tets {
+                        let tpl = &l.tets[first + j];
+                        let want = (0..4).fold(0u8, |case, i| {
+                            let k = group.points[..group.len]
+                                .iter()
+                                .position(|&p| p == tpl.delta[i])
+                                .expect("every corner is a point of the group");
+                            case | (((code >> k) & 1) as u8) << i
+                        });
+                        assert_eq!(group.cases[code * tets + j], want, "{lattice:?} {g} {code}");
+                    }
+                }
+            }
+        }
+    }
     use crate::{Clustering, ExtractSettings};
 
     #[test]
