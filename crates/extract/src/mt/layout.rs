@@ -259,7 +259,14 @@ pub(crate) struct Layout<'a> {
     /// corners: an anchor at least this far inside the box on every axis has all its
     /// tetrahedra's corners in the box (none is a ghost).
     pub(crate) reach: Offset,
+    /// Per axis, the offset from the box's lower corner of lattice coordinate `c` at index
+    /// `c + COORD_PAD` (ghosts clamped onto the box face), exactly as [`Samples::bcdl_position`]
+    /// and [`Samples::simple_position`] compute it: [`Layout::position`] adds the corner.
+    coords: [Vec<f32>; 3],
 }
+
+/// Lattice coordinates below 0 that [`Layout::coords`] covers.
+const COORD_PAD: i32 = 2;
 
 /// One of the tetrahedra around a lattice point (which edges of the point have all their
 /// tetrahedra: [`Layout::inner_dirs`]): corners in the positive orientation of the lattice's
@@ -408,6 +415,23 @@ impl<'a> Layout<'a> {
                 .max()
                 .unwrap_or(0)
         });
+        // Per axis, as the samples compute positions (the same f32 operations, so the same
+        // bits): body-centred in half cubes, ghosts clamped; simple in cubes.
+        let coords = [0, 1, 2].map(|a| {
+            let max = match lattice {
+                Lattice::BodyCentred => 2 * s.cells[a] as i32,
+                Lattice::Simple => s.cells[a] as i32,
+            };
+            (-COORD_PAD..=max + COORD_PAD)
+                .map(|c| match lattice {
+                    Lattice::BodyCentred => {
+                        let h = s.spacing * 0.5;
+                        c.clamp(0, max) as f32 * h[a]
+                    }
+                    Lattice::Simple => c as f32 * s.spacing[a],
+                })
+                .collect()
+        });
         Self {
             s,
             lattice,
@@ -419,6 +443,7 @@ impl<'a> Layout<'a> {
             border_table: Vec::new(),
             around,
             grad_coef,
+            coords,
         }
     }
 
@@ -568,13 +593,16 @@ impl<'a> Layout<'a> {
         }
     }
 
+    /// World position of lattice point `p` (body-centred ghosts on the box face), bit for bit
+    /// [`Samples::bcdl_position`] or [`Samples::simple_position`], from the per-axis tables.
+    #[inline]
     pub(crate) fn position(&self, p: Offset) -> glam::Vec3 {
-        match self.lattice {
-            Lattice::BodyCentred => self.s.bcdl_position(p),
-            Lattice::Simple => self
-                .s
-                .simple_position(p[0] as usize, p[1] as usize, p[2] as usize),
-        }
+        let c = |a: usize| {
+            let i = (p[a] + COORD_PAD) as usize;
+            debug_assert!(i < self.coords[a].len(), "coordinate {} on axis {a}", p[a]);
+            self.coords[a][i]
+        };
+        self.s.min + glam::Vec3::new(c(0), c(1), c(2))
     }
 
     /// The storage planes geometry layer `k` reads (inclusive): body-centred faces perpendicular
@@ -771,6 +799,49 @@ pub(crate) fn add(a: Offset, b: Offset) -> Offset {
 mod tests {
     use super::*;
     use crate::mt::testing::{lcg, plain_mt, test_pool};
+
+    #[test]
+    fn positions_from_the_axis_tables_are_the_samples_positions_bit_for_bit() {
+        let pool = test_pool(1);
+        let field = crate::mt::testing::wavy();
+        let mut checked = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[3, 7, 5], [10, 9, 11]] {
+                let (_, mut samples, _, _) = plain_mt(&field, lattice, cells, &pool);
+                // An odd box and spacing, so that rounding would show.
+                samples.min = glam::Vec3::new(-0.73, 0.311, 1.9);
+                samples.spacing = glam::Vec3::new(0.0371, 0.113, 0.0667);
+                let l = Layout::new(&samples, lattice);
+                let max = |a: usize| l.max_coord(a);
+                let lo = if lattice == Lattice::BodyCentred {
+                    -1
+                } else {
+                    0
+                };
+                for x in lo..=max(0) + (-lo) {
+                    for y in lo..=max(1) + (-lo) {
+                        for z in lo..=max(2) + (-lo) {
+                            let p = [x, y, z];
+                            let want = match lattice {
+                                Lattice::BodyCentred => samples.bcdl_position(p),
+                                Lattice::Simple => {
+                                    samples.simple_position(x as usize, y as usize, z as usize)
+                                }
+                            };
+                            let got = l.position(p);
+                            assert_eq!(
+                                got.to_array().map(f32::to_bits),
+                                want.to_array().map(f32::to_bits),
+                                "{lattice:?} {cells:?} {p:?}"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 5000, "only {checked} points");
+    }
 
     #[test]
     fn group_codes_and_cases_follow_the_crossed_edges_of_the_anchor() {
