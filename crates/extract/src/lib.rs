@@ -123,6 +123,7 @@ pub struct Extractor {
     pub(crate) mt: mt::MtBuffers,
     pub(crate) merge: post::MergeBuffers,
     pub(crate) surface_nets: surface_nets::SurfaceNetsBuffers,
+    pub(crate) mc: mc::McBuffers,
     /// Thread pools by worker count; `true` marks a pool given by [`Extractor::set_pool`] (the
     /// caller's: kept when the placement changes).
     pub(crate) pools: Vec<(usize, std::sync::Arc<rayon::ThreadPool>, bool)>,
@@ -351,7 +352,10 @@ impl Extractor {
                         settings.clustering.name()
                     )));
                 }
-                mc::extract(&self.samples, settings, &pool, mesh, stats);
+                mc::extract(&self.samples, settings, &pool, &mut self.mc, mesh, stats);
+                if self.mt.lean {
+                    self.mc = mc::McBuffers::default();
+                }
             }
             settings::Method::SurfaceNets => {
                 if settings.clustering != Clustering::None {

@@ -41,9 +41,17 @@
 //!     0 ----0-----1         |/___ x
 //! ```
 //!
-//! Work is split into z-slabs on the extractor's thread pool; vertices are numbered in grid-edge
-//! order (edge `3 * corner + axis`) and triangles emitted slab by slab, so the output is the same
-//! for any number of threads.
+//! The passes follow Flying Edges (Schroeder, Maynard and Geveci 2015; VTK's
+//! `vtkFlyingEdges3D`): classify, count per row, prefix-sum, write in place. The inside bits of
+//! every storage row come first; then per row word (64 points) the crossed grid edges along each
+//! axis, a few word operations, and their count; a prefix sum over the planes gives every word
+//! the id of its first crossing, so the positions are written straight into the mesh and a
+//! vertex id is that first id plus a popcount (no edge-to-vertex map). Triangles visit only the
+//! cubes whose corners differ: 64 cubes of a row are tested per word operation on the four rows
+//! of points around them, which trims every row to its crossings (and skips the uncrossed cubes
+//! between them). Every pass is parallel over z-planes or z-slabs on the extractor's thread
+//! pool; vertices are numbered in grid-edge order (edge `3 * corner + axis`) and triangles
+//! emitted slab by slab, so the output is the same for any number of threads.
 
 use std::sync::OnceLock;
 
@@ -53,15 +61,124 @@ use rmt_mesh::Mesh;
 
 use crate::{ExtractSettings, Samples, Stats};
 
+/// Marching cubes' working tables, kept between extractions by the [`crate::Extractor`] (each
+/// pass overwrites what it reads, so nothing is cleared between calls).
+#[derive(Default)]
+pub(crate) struct McBuffers {
+    /// Inside bits per storage row of points (`f < iso`), [`Rows::words`] words per row, rows
+    /// in storage order (y, then z); bits past the row's last point are zero.
+    inside: Vec<u64>,
+    /// Per row and word: the crossed edges leaving its points along x, y and z, and the id of
+    /// the word's first crossing ([`RowWord`]).
+    crossed: Vec<RowWord>,
+}
+
+impl McBuffers {
+    /// Bytes held.
+    pub(crate) fn bytes(&self) -> usize {
+        self.inside.capacity() * 8 + self.crossed.capacity() * std::mem::size_of::<RowWord>()
+    }
+}
+
+/// 64 points of one storage row: which of their grid edges are crossed, per axis (bit k: the
+/// edge from point `64 w + k` to its + neighbour), and the vertex id of the first of those
+/// crossings in edge order (point by point, x, y, z at each point).
+#[derive(Clone, Copy, Default)]
+struct RowWord {
+    x: u64,
+    y: u64,
+    z: u64,
+    first: u32,
+}
+
+impl RowWord {
+    /// The vertex id of the crossing on the edge leaving point `64 w + s` along `axis` (the
+    /// edge must be crossed): the word's first id plus the crossings before it in edge order.
+    #[inline(always)]
+    fn id(&self, s: usize, axis: usize) -> u32 {
+        let below = (1u64 << s) - 1;
+        let through = below | (1u64 << s);
+        let (mx, my) = match axis {
+            0 => (below, below),
+            1 => (through, below),
+            _ => (through, through),
+        };
+        self.first
+            + (self.x & mx).count_ones()
+            + (self.y & my).count_ones()
+            + (self.z & below).count_ones()
+    }
+
+    /// Crossings of the word.
+    #[inline(always)]
+    fn count(&self) -> u32 {
+        self.x.count_ones() + self.y.count_ones() + self.z.count_ones()
+    }
+}
+
+/// The storage rows of the simple lattice as bit rows.
+#[derive(Clone, Copy)]
+struct Rows {
+    /// Points per row (`nx + 1`).
+    points: usize,
+    /// Words per row.
+    words: usize,
+    /// Rows per plane (`ny + 1`).
+    per_plane: usize,
+    /// Planes (`nz + 1`).
+    planes: usize,
+}
+
+impl Rows {
+    fn new(samples: &Samples) -> Self {
+        let [nx, ny, nz] = samples.cells;
+        Self {
+            points: nx + 1,
+            words: (nx + 1).div_ceil(64),
+            per_plane: ny + 1,
+            planes: nz + 1,
+        }
+    }
+
+    /// Words of one plane.
+    fn plane_words(&self) -> usize {
+        self.words * self.per_plane
+    }
+}
+
+/// Each cube edge (Bourke's numbering) as the row of the cube's four rows of points that holds
+/// its lower end (0: (y, z), 1: (y + 1, z), 2: (y, z + 1), 3: (y + 1, z + 1)), that end's x
+/// offset (0 or 1) and the edge's axis.
+const EDGE_IN_ROWS: [(u8, u8, u8); 12] = {
+    let mut out = [(0u8, 0u8, 0u8); 12];
+    let mut e = 0;
+    while e < 12 {
+        let (corner, axis) = EDGE_ON_GRID[e];
+        let [cx, cy, cz] = CORNERS[corner as usize];
+        out[e] = (cy + 2 * cz, cx, axis);
+        e += 1;
+    }
+    out
+};
+
 /// Extracts the `settings.iso` level set of the simple-lattice `samples` into `mesh` (appending
 /// to it; the caller clears it) with marching cubes, on `pool`'s threads, and fills the counters
 /// and timings of `stats`: `tetrahedra_total = 0`, `tetrahedra_processed` = cubes with a crossing,
 /// `edges` = grid edges, `crossings` = vertices on grid edges (all vertices but the rare loop
-/// centres), `bytes_edges` = the edge-to-vertex map, `t_vertex_s`, `t_geometry_s`.
+/// centres), `bytes_edges` = the bit rows and their crossing words, `t_vertex_s`,
+/// `t_geometry_s`.
+///
+/// The passes, each parallel over planes (Flying Edges' order: classify, count, prefix-sum,
+/// write in place): the inside bits of every row; per row word the crossed edges along each
+/// axis and their count; a prefix sum over planes then rows gives every word its first vertex
+/// id, and the positions are written straight into `mesh`; the triangles of each slab of cubes
+/// visit only the cubes whose corners differ (64 cubes of a row tested per word operation), and
+/// read a vertex id as its word's first id plus a popcount.
 pub fn extract(
     samples: &Samples,
     settings: &ExtractSettings,
     pool: &rayon::ThreadPool,
+    buf: &mut McBuffers,
     mesh: &mut Mesh,
     stats: &mut Stats,
 ) {
@@ -76,45 +193,74 @@ pub fn extract(
         // Not laid out for these settings (the extractor checks this first); nothing to mesh.
         return;
     }
+    let rows = Rows::new(samples);
+    let pw = rows.plane_words();
 
-    // Vertex pass: one vertex per crossed grid edge, numbered plane by plane in edge order.
+    // Vertex pass, step 1: the inside bits of every row.
     let t = std::time::Instant::now();
-    let mut edge_vertex = vec![NO_VERTEX; 3 * plane * dims[2]];
-    let plane_positions: Vec<Vec<[f32; 3]>> = pool.install(|| {
-        edge_vertex
-            .par_chunks_mut(3 * plane)
-            .enumerate()
-            .map(|(z, ids)| plane_crossings(samples, iso, z, ids))
-            .collect()
-    });
-    let mut offsets = Vec::with_capacity(plane_positions.len());
-    let mut total = mesh.positions.len();
-    for p in &plane_positions {
-        offsets.push(total as u32);
-        total += p.len();
-    }
+    crate::util::overwritten(&mut buf.inside, pw * rows.planes, 0, pool);
+    crate::util::overwritten(&mut buf.crossed, pw * rows.planes, RowWord::default(), pool);
+    let values = &samples.values;
     pool.install(|| {
-        edge_vertex
-            .par_chunks_mut(3 * plane)
-            .zip(&offsets)
-            .for_each(|(ids, &offset)| {
-                for id in ids.iter_mut().filter(|id| **id != NO_VERTEX) {
-                    *id += offset;
+        buf.inside
+            .par_chunks_mut(pw)
+            .enumerate()
+            .for_each(|(z, bits)| {
+                for (y, row) in bits.chunks_exact_mut(rows.words).enumerate() {
+                    let start = samples.simple_index(0, y, z);
+                    let row_values = &values[start..start + rows.points];
+                    for (word, chunk) in row.iter_mut().zip(row_values.chunks(64)) {
+                        *word = crate::util::inside_word(chunk, iso);
+                    }
                 }
             })
     });
+
+    // Step 2: crossed edges per row word, counted; ids first within the plane.
+    let inside = &buf.inside;
+    let plane_counts: Vec<u32> = pool.install(|| {
+        buf.crossed
+            .par_chunks_mut(pw)
+            .enumerate()
+            .map(|(z, words)| crossed_plane(inside, rows, z, words))
+            .collect()
+    });
+    let mut plane_first = Vec::with_capacity(plane_counts.len());
     let first_vertex = mesh.positions.len();
-    mesh.positions.reserve(total - first_vertex);
-    for p in &plane_positions {
-        mesh.positions.extend_from_slice(p);
+    let mut total = first_vertex;
+    for &c in &plane_counts {
+        plane_first.push(total as u32);
+        total += c as usize;
     }
-    stats.crossings = mesh.positions.len() - first_vertex;
-    stats.bytes_edges = edge_vertex.len() * std::mem::size_of::<u32>();
+
+    // Step 3: global ids, and the positions written in place, plane by plane.
+    mesh.positions.resize(total, [0.0; 3]);
+    {
+        let mut rest = &mut mesh.positions[first_vertex..];
+        let mut parts = Vec::with_capacity(plane_counts.len());
+        for &c in &plane_counts {
+            let (head, tail) = rest.split_at_mut(c as usize);
+            parts.push(head);
+            rest = tail;
+        }
+        pool.install(|| {
+            buf.crossed
+                .par_chunks_mut(pw)
+                .zip(parts)
+                .enumerate()
+                .for_each(|(z, (words, out))| {
+                    place_plane(samples, rows, iso, z, plane_first[z], words, out)
+                })
+        });
+    }
+    stats.crossings = total - first_vertex;
+    stats.bytes_edges = buf.bytes();
     stats.t_vertex_s = t.elapsed().as_secs_f64();
 
     // Geometry pass: triangles per z-slab of cubes.
     let t = std::time::Instant::now();
     let positions = &mesh.positions;
+    let crossed = &buf.crossed;
     let slabs: Vec<Slab> = pool.install(|| {
         (0..nz)
             .into_par_iter()
@@ -122,10 +268,12 @@ pub fn extract(
                 slab_triangles(
                     samples,
                     tables,
+                    rows,
                     iso,
                     settings.keep_cells,
                     z,
-                    &edge_vertex,
+                    inside,
+                    crossed,
                     positions,
                 )
             })
@@ -136,23 +284,24 @@ pub fn extract(
     let mut processed = 0;
     for slab in &slabs {
         // Loop centres (rare) are numbered after all edge vertices, slab by slab.
-        let first_centre = mesh.positions.len() as u32;
-        mesh.indices.extend(slab.indices.iter().map(|&i| {
-            if i & CENTRE_FLAG != 0 {
-                first_centre + (i & !CENTRE_FLAG)
-            } else {
-                i
-            }
-        }));
-        mesh.positions.extend_from_slice(&slab.centres);
+        if slab.centres.is_empty() {
+            mesh.indices.extend_from_slice(&slab.indices);
+        } else {
+            let first_centre = mesh.positions.len() as u32;
+            mesh.indices.extend(slab.indices.iter().map(|&i| {
+                if i & CENTRE_FLAG != 0 {
+                    first_centre + (i & !CENTRE_FLAG)
+                } else {
+                    i
+                }
+            }));
+            mesh.positions.extend_from_slice(&slab.centres);
+        }
         processed += slab.crossed_cubes;
     }
     stats.tetrahedra_processed = processed;
     stats.t_geometry_s = t.elapsed().as_secs_f64();
 }
-
-/// Marks a grid edge without a crossing in the edge-to-vertex map.
-const NO_VERTEX: u32 = u32::MAX;
 
 /// Marks a slab-local loop-centre number in a slab's indices (renumbered when slabs are joined).
 const CENTRE_FLAG: u32 = 1 << 31;
@@ -167,101 +316,229 @@ struct Slab {
     crossed_cubes: usize,
 }
 
-/// Crossings of the grid edges that start at the corners of plane `z` (x and y edges in the plane,
-/// z edges up to the next): positions in edge order; `ids[3 * k + axis]` gets the local number of
-/// the vertex on the edge leaving corner `k` of the plane along `axis`.
-fn plane_crossings(samples: &Samples, iso: f32, z: usize, ids: &mut [u32]) -> Vec<[f32; 3]> {
-    let [nx, ny, nz] = samples.cells;
+/// The bits below bit `k` (all 64 from `k = 64` on).
+#[inline(always)]
+fn low_bits(k: usize) -> u64 {
+    if k >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << k) - 1
+    }
+}
+
+/// Crossed edges of the rows of plane `z` (`words`, the plane's row words; `first` set to the
+/// id of the word's first crossing counted from the plane's first); returns the plane's
+/// crossings.
+fn crossed_plane(inside: &[u64], rows: Rows, z: usize, words: &mut [RowWord]) -> u32 {
+    let pw = rows.plane_words();
+    let nw = rows.words;
+    // Valid x-edge bits of the last word: points 0..nx start an x-edge.
+    let x_edges = rows.points - 1;
+    let last_x_mask = {
+        let k = x_edges - 64 * (nw - 1);
+        if k >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << k) - 1
+        }
+    };
+    let mut count = 0u32;
+    for y in 0..rows.per_plane {
+        let at = z * pw + y * nw;
+        let own = &inside[at..at + nw];
+        let up = (y + 1 < rows.per_plane).then(|| &inside[at + nw..at + 2 * nw]);
+        let above = (z + 1 < rows.planes).then(|| &inside[at + pw..at + pw + nw]);
+        for w in 0..nw {
+            let b = own[w];
+            let next = if w + 1 < nw { own[w + 1] << 63 } else { 0 };
+            let mut x = b ^ ((b >> 1) | next);
+            if w + 1 == nw {
+                x &= last_x_mask;
+            }
+            let word = RowWord {
+                x,
+                y: up.map_or(0, |u| b ^ u[w]),
+                z: above.map_or(0, |a| b ^ a[w]),
+                first: count,
+            };
+            count += word.count();
+            words[y * nw + w] = word;
+        }
+    }
+    count
+}
+
+/// Adds `first` (the plane's first vertex id) to the ids of plane `z`'s row words and writes
+/// the positions of its crossings (`out`, in edge order), interpolated from the lower end of
+/// each edge.
+fn place_plane(
+    samples: &Samples,
+    rows: Rows,
+    iso: f32,
+    z: usize,
+    first: u32,
+    words: &mut [RowWord],
+    out: &mut [[f32; 3]],
+) {
     let values = &samples.values;
-    let mut positions = Vec::new();
-    for y in 0..=ny {
-        for x in 0..=nx {
-            let i = samples.simple_index(x, y, z);
-            let v0 = values[i];
-            let neighbours = [
-                (x < nx).then(|| i + 1),
-                (y < ny).then(|| samples.simple_index(x, y + 1, z)),
-                (z < nz).then(|| samples.simple_index(x, y, z + 1)),
-            ];
-            let k = 3 * (x + (nx + 1) * y);
-            for (axis, j) in neighbours.into_iter().enumerate() {
-                let Some(j) = j else { continue };
-                let v1 = values[j];
-                if (v0 < iso) == (v1 < iso) {
-                    continue;
+    let step = [1, samples.dims[0], samples.dims[0] * samples.dims[1]];
+    let mut k = 0;
+    for (y, row) in words.chunks_exact_mut(rows.words).enumerate() {
+        let start = samples.simple_index(0, y, z);
+        for (w, word) in row.iter_mut().enumerate() {
+            word.first += first;
+            let axes = [word.x, word.y, word.z];
+            let mut any = word.x | word.y | word.z;
+            while any != 0 {
+                let s = any.trailing_zeros() as usize;
+                any &= any - 1;
+                let x = 64 * w + s;
+                let i = start + x;
+                let v0 = values[i];
+                for (axis, bits) in axes.iter().enumerate() {
+                    if bits >> s & 1 == 0 {
+                        continue;
+                    }
+                    let v1 = values[i + step[axis]];
+                    // From the lower corner always, so the position never depends on the cube.
+                    let t = (iso - v0) / (v1 - v0);
+                    let mut p = samples.simple_position(x, y, z);
+                    p[axis] += t * samples.spacing[axis];
+                    out[k] = p.to_array();
+                    k += 1;
                 }
-                // From the lower corner always, so the position never depends on the cube.
-                let t = (iso - v0) / (v1 - v0);
-                let mut p = samples.simple_position(x, y, z);
-                p[axis] += t * samples.spacing[axis];
-                ids[k + axis] = positions.len() as u32;
-                positions.push(p.to_array());
             }
         }
     }
-    positions
+    debug_assert_eq!(
+        k,
+        out.len(),
+        "plane {z}: crossings counted and placed differ"
+    );
 }
 
 /// Triangles of the cubes in slab `z`: indices into `positions` (the edge vertices) or to the
-/// slab's own loop centres.
+/// slab's own loop centres. Only cubes whose eight corners are not all on one side are visited:
+/// per word of the slab's four rows of points, the bits where some corner differs.
+#[allow(clippy::too_many_arguments)]
 fn slab_triangles(
     samples: &Samples,
     tables: &CaseTables,
+    rows: Rows,
     iso: f32,
     keep: Option<crate::CellRange>,
     z: usize,
-    edge_vertex: &[u32],
+    inside: &[u64],
+    crossed: &[RowWord],
     positions: &[[f32; 3]],
 ) -> Slab {
     let [nx, ny, _] = samples.cells;
     let values = &samples.values;
+    let (nw, pw) = (rows.words, rows.plane_words());
     let mut indices = Vec::new();
     let mut centres: Vec<[f32; 3]> = Vec::new();
-    let mut crossed = 0;
-    for y in 0..ny {
-        for x in 0..nx {
-            if keep.is_some_and(|r| !r.contains([x, y, z])) {
-                continue;
+    let mut crossed_cubes = 0;
+    // Cubes x in [x_lo, x_hi) of each row are kept.
+    let (x_lo, x_hi) = match keep {
+        Some(r) => {
+            if z < r.lo[2] || z >= r.hi[2] {
+                return Slab {
+                    indices,
+                    centres,
+                    crossed_cubes,
+                };
             }
-            let corner_index = |c: usize| {
-                let [ox, oy, oz] = CORNERS[c];
-                samples.simple_index(x + ox as usize, y + oy as usize, z + oz as usize)
+            (r.lo[0], r.hi[0].min(nx))
+        }
+        None => (0, nx),
+    };
+    let (y_lo, y_hi) = keep.map_or((0, ny), |r| (r.lo[1], r.hi[1].min(ny)));
+    for y in y_lo..y_hi {
+        // The four rows of points around the row of cubes: (y, z), (y + 1, z), (y, z + 1),
+        // (y + 1, z + 1).
+        let at = [
+            z * pw + y * nw,
+            z * pw + (y + 1) * nw,
+            (z + 1) * pw + y * nw,
+            (z + 1) * pw + (y + 1) * nw,
+        ];
+        for w in 0..nw {
+            let lo = 64 * w;
+            if lo >= x_hi {
+                break;
+            }
+            let word = |r: usize| {
+                let b = inside[at[r] + w];
+                // Bit k: point 64 w + k + 1 (the cube's upper x corners).
+                let next = if w + 1 < nw {
+                    inside[at[r] + w + 1] << 63
+                } else {
+                    0
+                };
+                (b, (b >> 1) | next)
             };
-            let mut w = [0.0f32; 8];
-            let mut case = 0usize;
-            for (c, wc) in w.iter_mut().enumerate() {
-                *wc = values[corner_index(c)] - iso;
-                case |= usize::from(*wc < 0.0) << c;
-            }
-            if EDGE_TABLE[case] == 0 {
-                continue;
-            }
-            crossed += 1;
-            let ambiguous = tables.ambiguous_faces[case];
-            let entry = if ambiguous == 0 {
-                &tables.classic[case]
-            } else {
-                &tables.resolved[case * 64 + usize::from(face_resolution(&w, ambiguous))]
-            };
-            let vertex = |e: u8| {
-                let (corner, axis) = EDGE_ON_GRID[e as usize];
-                edge_vertex[3 * corner_index(corner as usize) + axis as usize]
-            };
-            let first_centre = centres.len() as u32;
-            for polygon in &entry.centres {
-                let sum = polygon.iter().fold(Vec3::ZERO, |acc, &e| {
-                    acc + Vec3::from(positions[vertex(e) as usize])
-                });
-                centres.push((sum / polygon.len() as f32).to_array());
-            }
-            for t in &entry.triangles {
-                for &e in t {
-                    if e >= 12 {
-                        indices.push(CENTRE_FLAG | (first_centre + u32::from(e - 12)));
-                    } else {
-                        let id = vertex(e);
-                        debug_assert_ne!(id, NO_VERTEX, "case {case} uses uncrossed edge {e}");
-                        indices.push(id);
+            let (a0, a1) = word(0);
+            let (b0, b1) = word(1);
+            let (c0, c1) = word(2);
+            let (d0, d1) = word(3);
+            let any = a0 | a1 | b0 | b1 | c0 | c1 | d0 | d1;
+            let all = a0 & a1 & b0 & b1 & c0 & c1 & d0 & d1;
+            // Only cubes x_lo <= x < x_hi.
+            let mut mixed = any & !all & low_bits(x_hi - lo) & !low_bits(x_lo.saturating_sub(lo));
+            while mixed != 0 {
+                let s = mixed.trailing_zeros() as usize;
+                mixed &= mixed - 1;
+                let x = lo + s;
+                crossed_cubes += 1;
+                let case = (a0 >> s & 1
+                    | (a1 >> s & 1) << 1
+                    | (b1 >> s & 1) << 2
+                    | (b0 >> s & 1) << 3
+                    | (c0 >> s & 1) << 4
+                    | (c1 >> s & 1) << 5
+                    | (d1 >> s & 1) << 6
+                    | (d0 >> s & 1) << 7) as usize;
+                debug_assert_ne!(EDGE_TABLE[case], 0, "cube {x} {y} {z} is not crossed");
+                let ambiguous = tables.ambiguous_faces[case];
+                let entry = if ambiguous == 0 {
+                    &tables.classic[case]
+                } else {
+                    let mut w8 = [0.0f32; 8];
+                    for (c, wc) in w8.iter_mut().enumerate() {
+                        let [ox, oy, oz] = CORNERS[c];
+                        *wc = values[samples.simple_index(
+                            x + ox as usize,
+                            y + oy as usize,
+                            z + oz as usize,
+                        )] - iso;
+                    }
+                    &tables.resolved[case * 64 + usize::from(face_resolution(&w8, ambiguous))]
+                };
+                let vertex = |e: u8| {
+                    let (r, dx, axis) = EDGE_IN_ROWS[e as usize];
+                    let p = x + dx as usize;
+                    let word = &crossed[at[r as usize] + (p >> 6)];
+                    debug_assert_eq!(
+                        [word.x, word.y, word.z][axis as usize] >> (p & 63) & 1,
+                        1,
+                        "case {case} uses uncrossed edge {e}"
+                    );
+                    word.id(p & 63, axis as usize)
+                };
+                let first_centre = centres.len() as u32;
+                for polygon in &entry.centres {
+                    let sum = polygon.iter().fold(Vec3::ZERO, |acc, &e| {
+                        acc + Vec3::from(positions[vertex(e) as usize])
+                    });
+                    centres.push((sum / polygon.len() as f32).to_array());
+                }
+                for t in &entry.triangles {
+                    for &e in t {
+                        if e >= 12 {
+                            indices.push(CENTRE_FLAG | (first_centre + u32::from(e - 12)));
+                        } else {
+                            indices.push(vertex(e));
+                        }
                     }
                 }
             }
@@ -270,7 +547,7 @@ fn slab_triangles(
     Slab {
         indices,
         centres,
-        crossed_cubes: crossed,
+        crossed_cubes,
     }
 }
 

@@ -8,11 +8,16 @@
 //!   layer k:  count (anchors' crossed edges -> triangles)  ->  slice k of the output
 //!             write (tetrahedra of each anchor, case table) ->  [ layer 0 | layer 1 | ... ]
 //! ```
+//!
+//! The writing reads no sample value beyond the anchor's own: a group whose table gives no
+//! triangle is skipped, each tetrahedron's case comes from the anchor's side and its crossed
+//! edges (`TetGroup::cases`), and the crossing on an edge belongs to the end whose owned bit
+//! the vertex pass set (it decided that from the same two values).
 
 use rayon::prelude::*;
 
 use super::crossings::{CrossedIndex, CrossedPoint};
-use super::layout::{tet_triangles, Layout, TetTemplate};
+use super::layout::{case_triangles_of, Layout, TetTemplate};
 use crate::lattice::Offset;
 use crate::util::for_each_bit;
 use crate::{CellRange, Lattice};
@@ -145,12 +150,7 @@ pub(crate) fn count_layer(
     let mut n = 0;
     for_each_group(l, k, keep, crossed, |_, rank, g, _| {
         let group = &l.groups[g];
-        let mask = usize::from(crossed.points[rank].crossed);
-        let mut code = 0;
-        for (i, &d) in group.dirs[1..group.len].iter().enumerate() {
-            code |= ((mask >> d) & 1) << (i + 1);
-        }
-        n += usize::from(group.triangles[code]);
+        n += usize::from(group.triangles[group.code(crossed.points[rank].crossed)]);
     });
     n
 }
@@ -240,57 +240,83 @@ pub(crate) fn geometry_in_window(
         .and_then(|list| list.kept.as_ref().map(|k| k.0));
     let cells_wanted = cells.is_some();
     let [nx, ny, _] = l.s.cells;
-    let mut tet =
-        |anchor: usize, ti: usize, tpl: &TetTemplate, inner: bool, kept: bool, cell: u32| {
-            let idx = tpl.delta.map(|d| (anchor as isize + d) as usize);
-            let val = idx.map(|i| v[i]);
-            let mut tris = [[0u32; 3]; 2];
-            // The window starts at slot 0 of plane z0.
-            let id = |o: usize, d: u8| {
-                let entry = window[idx[o] - z0 * plane];
-                debug_assert_eq!(entry, crossed.get(idx[o]));
-                entry.id(d)
-            };
-            let n = tet_triangles(val, iso, &tpl.dir, id, positions, &mut tris);
-            processed += usize::from(n > 0 && kept);
-            match map {
-                None => {
-                    // The gradient of the tetrahedron, for the quotient test's (c).
-                    let g = if n > 0 && list.is_some() {
-                        l.gradient(anchor, ti, inner)
-                    } else {
-                        [0.0; 3]
-                    };
-                    for t in &tris[..n] {
-                        if let Some(list) = list.as_mut() {
-                            list.grad[w / 3] = g;
-                            if let Some((_, flags)) = list.kept.as_mut() {
-                                flags[w / 3] = u8::from(kept);
-                            }
+    // One tetrahedron in `case` (bit i: corner i inside, known from the anchor's side and its
+    // crossed edges): no sample value is read; the owner of a crossing is the end whose owned
+    // bit is set (the vertex pass decided it from the same values as [`tet_triangles`] would).
+    let mut tet = |anchor: usize,
+                   ti: usize,
+                   tpl: &TetTemplate,
+                   case: usize,
+                   inner: bool,
+                   kept: bool,
+                   cell: u32| {
+        if case == 0 || case == 15 {
+            return;
+        }
+        let mut tris = [[0u32; 3]; 2];
+        // The window starts at slot 0 of plane z0.
+        let entry = |o: usize| {
+            let slot = (anchor as isize + tpl.delta[o]) as usize;
+            let entry = window[slot - z0 * plane];
+            debug_assert_eq!(entry, crossed.get(slot));
+            entry
+        };
+        let edge = |a: usize, b: usize| {
+            let (ea, d) = (entry(a), tpl.dir[a][b]);
+            debug_assert_ne!(ea.crossed >> d & 1, 0, "edge {a}-{b} not crossed");
+            if ea.owned >> d & 1 != 0 {
+                ea.id(d)
+            } else {
+                entry(b).id(tpl.dir[b][a])
+            }
+        };
+        let n = case_triangles_of(case, edge, positions, &mut tris);
+        debug_assert_eq!(
+            case,
+            (0..4).fold(0, |c, i| c | usize::from(
+                v[(anchor as isize + tpl.delta[i]) as usize] < iso
+            ) << i),
+            "case of tetrahedron {ti}"
+        );
+        processed += usize::from(n > 0 && kept);
+        match map {
+            None => {
+                // The gradient of the tetrahedron, for the quotient test's (c).
+                let g = if n > 0 && list.is_some() {
+                    l.gradient(anchor, ti, inner)
+                } else {
+                    [0.0; 3]
+                };
+                for t in &tris[..n] {
+                    if let Some(list) = list.as_mut() {
+                        list.grad[w / 3] = g;
+                        if let Some((_, flags)) = list.kept.as_mut() {
+                            flags[w / 3] = u8::from(kept);
                         }
+                    }
+                    if let Some(cells) = cells.as_deref_mut() {
+                        cells[w / 3] = cell;
+                    }
+                    out[w..w + 3].copy_from_slice(t);
+                    w += 3;
+                }
+            }
+            Some(map) => {
+                // Clustered: the vertices of the groups' quotient; a triangle with two corners
+                // in one group collapsed and is dropped.
+                for t in &tris[..n] {
+                    let q = t.map(|i| map[i as usize]);
+                    if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
                         if let Some(cells) = cells.as_deref_mut() {
                             cells[w / 3] = cell;
                         }
-                        out[w..w + 3].copy_from_slice(t);
+                        out[w..w + 3].copy_from_slice(&q);
                         w += 3;
                     }
                 }
-                Some(map) => {
-                    // Clustered: the vertices of the groups' quotient; a triangle with two corners
-                    // in one group collapsed and is dropped.
-                    for t in &tris[..n] {
-                        let q = t.map(|i| map[i as usize]);
-                        if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
-                            if let Some(cells) = cells.as_deref_mut() {
-                                cells[w / 3] = cell;
-                            }
-                            out[w..w + 3].copy_from_slice(&q);
-                            w += 3;
-                        }
-                    }
-                }
             }
-        };
+        }
+    };
     for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
         // Only the listing reads these: whether no corner is a ghost (for the gradient), and in
         // a chunk whether the anchor's cell is kept.
@@ -306,12 +332,28 @@ pub(crate) fn geometry_in_window(
             Lattice::BodyCentred => 4 * g,
             Lattice::Simple => 0,
         };
-        let count = match l.lattice {
-            Lattice::BodyCentred => 4,
-            Lattice::Simple => l.tets.len(),
-        };
-        for ti in first..first + count {
-            tet(anchor, ti, &l.tets[ti], inner, kept, cell);
+        // The group's points on the other side from the anchor, as in [`count_layer`].
+        let group = &l.groups[g];
+        let code = group.code(window[anchor - z0 * plane].crossed);
+        if group.triangles[code] == 0 {
+            return;
+        }
+        let flip = if v[anchor] < iso { 15 } else { 0 };
+        let tets = group.cases.len() >> group.len;
+        for (j, &rel) in group.cases[code * tets..(code + 1) * tets]
+            .iter()
+            .enumerate()
+        {
+            let ti = first + j;
+            tet(
+                anchor,
+                ti,
+                &l.tets[ti],
+                usize::from(rel) ^ flip,
+                inner,
+                kept,
+                cell,
+            );
         }
     });
     debug_assert!(

@@ -45,11 +45,13 @@ pub(crate) const CASES: [[u8; 4]; 16] = {
 };
 
 /// The triangles of one tetrahedron (none, one, or two from a quad split along its shorter
-/// diagonal) as crossing ids, oriented by the case table: the one definition that the emission
-/// and the quotient test share, so that the test sees exactly the triangles that are written.
-/// `val`: the corner values; `dir[i][j]`: neighbour index of corner j from corner i; `id(o, d)`:
-/// the id of the crossing owned by corner `o` on its edge to neighbour `d`.
+/// diagonal) as crossing ids, oriented by the case table, read from the corner values: the
+/// tests' reference for [`case_triangles_of`], the one definition that the emission and the
+/// listing for the quotient test share. `val`: the corner values; `dir[i][j]`: neighbour index
+/// of corner j from corner i; `id(o, d)`: the id of the crossing owned by corner `o` on its
+/// edge to neighbour `d`.
 #[inline(always)]
+#[cfg(test)]
 pub(crate) fn tet_triangles(
     val: [f32; 4],
     iso: f32,
@@ -62,6 +64,27 @@ pub(crate) fn tet_triangles(
         | ((val[1] < iso) as usize) << 1
         | ((val[2] < iso) as usize) << 2
         | ((val[3] < iso) as usize) << 3;
+    let edge = |a: usize, b: usize| {
+        if owns(val[a], val[b], iso) {
+            id(a, dir[a][b])
+        } else {
+            id(b, dir[b][a])
+        }
+    };
+    case_triangles_of(case, edge, positions, out)
+}
+
+/// The triangles of a tetrahedron in `case` (bit i: corner i inside), as [`tet_triangles`]
+/// writes them, with `edge(a, b)` the id of the crossing on the edge from corner a to corner b
+/// (whichever end owns it): what the geometry pass calls when it knows the case and the owners
+/// from the vertex pass's tables rather than from the values.
+#[inline(always)]
+pub(crate) fn case_triangles_of(
+    case: usize,
+    edge: impl Fn(usize, usize) -> u32,
+    positions: &[[f32; 3]],
+    out: &mut [[u32; 3]; 2],
+) -> usize {
     if case == 0 || case == 15 {
         return 0;
     }
@@ -70,12 +93,7 @@ pub(crate) fn tet_triangles(
     let mut ids = [0u32; 4];
     for (slot, &e) in ids.iter_mut().zip(cycle.iter()).take(n) {
         let (a, b) = TET_EDGES[e as usize];
-        let (o, d) = if owns(val[a], val[b], iso) {
-            (a, dir[a][b])
-        } else {
-            (b, dir[b][a])
-        };
-        *slot = id(o, d);
+        *slot = edge(a, b);
     }
     if n == 3 {
         out[0] = [ids[0], ids[1], ids[2]];
@@ -115,7 +133,7 @@ pub(crate) struct TetTemplate {
 /// distinct points; a cube's 6, with 8 corners) and the number of triangles they give for each
 /// inside/outside pattern of those points, derived from the case table: the geometry pass counts
 /// a layer's triangles from the anchors' crossed edges before it writes them.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct TetGroup {
     /// Storage deltas of its distinct points from the anchor (point 0, in every tetrahedron of
     /// the group).
@@ -128,15 +146,36 @@ pub(crate) struct TetGroup {
     /// when bit i says "point i is on the other side from the anchor", i.e. the anchor's
     /// crossed edges: no sample value needs reading.
     pub(crate) triangles: Vec<u8>,
+    /// Per index (as in `triangles`) and tetrahedron of the group (template order), the
+    /// tetrahedron's case (bit i: its corner i inside) when the anchor is outside: entry
+    /// `code * tets + j`. With the anchor inside every bit flips. The geometry pass reads a
+    /// tetrahedron's case off the anchor's side and crossed edges with it.
+    pub(crate) cases: Vec<u8>,
+    /// The index into `triangles` and `cases` from the anchor's crossed edges, by their low 7
+    /// and high 7 neighbour bits (or'ed): bit i set when point i's edge is crossed.
+    code_parts: [[u8; 128]; 2],
 }
 
 impl TetGroup {
+    /// The index into `triangles` and `cases` for an anchor with crossed edges `crossed` (by
+    /// neighbour bit): bit i set when point i lies on the other side from the anchor.
+    #[inline(always)]
+    pub(crate) fn code(&self, crossed: u16) -> usize {
+        usize::from(
+            self.code_parts[0][usize::from(crossed & 127)]
+                | self.code_parts[1][usize::from((crossed >> 7) & 127)],
+        )
+    }
+
     /// The group of templates `tets` (corners given by their storage deltas).
     pub(crate) fn new(tets: &[TetTemplate]) -> Self {
         let mut group = Self {
-            len: 1,
+            points: [0; 8],
             dirs: [u8::MAX; 8],
-            ..Self::default()
+            len: 1,
+            triangles: Vec::new(),
+            cases: Vec::new(),
+            code_parts: [[0; 128]; 2],
         };
         let mut corners = Vec::with_capacity(tets.len());
         for tpl in tets {
@@ -157,6 +196,20 @@ impl TetGroup {
             }
             corners.push(c);
         }
+        for (half, part) in group.code_parts.iter_mut().enumerate() {
+            for (bits, code) in part.iter_mut().enumerate() {
+                let mask = bits << (7 * half);
+                *code =
+                    (1..group.len).fold(0u8, |c, i| c | (((mask >> group.dirs[i]) & 1) << i) as u8);
+            }
+        }
+        group.cases = (0..1usize << group.len)
+            .flat_map(|code| {
+                corners.iter().map(move |c| {
+                    (0..4).fold(0u8, |case, i| case | (((code >> c[i]) & 1) << i) as u8)
+                })
+            })
+            .collect();
         group.triangles = (0..1usize << group.len)
             .map(|code| {
                 corners
@@ -206,7 +259,14 @@ pub(crate) struct Layout<'a> {
     /// corners: an anchor at least this far inside the box on every axis has all its
     /// tetrahedra's corners in the box (none is a ghost).
     pub(crate) reach: Offset,
+    /// Per axis, the offset from the box's lower corner of lattice coordinate `c` at index
+    /// `c + COORD_PAD` (ghosts clamped onto the box face), exactly as [`Samples::bcdl_position`]
+    /// and [`Samples::simple_position`] compute it: [`Layout::position`] adds the corner.
+    coords: [Vec<f32>; 3],
 }
+
+/// Lattice coordinates below 0 that [`Layout::coords`] covers.
+const COORD_PAD: i32 = 2;
 
 /// One of the tetrahedra around a lattice point (which edges of the point have all their
 /// tetrahedra: [`Layout::inner_dirs`]): corners in the positive orientation of the lattice's
@@ -250,6 +310,8 @@ pub(crate) fn boundary_class(c: i32, max: i32) -> usize {
 pub(crate) struct BorderCache {
     key: Option<(Lattice, [usize; 3])>,
     table: Vec<u32>,
+    /// The lattice edges of the grid (`Stats::edges`), once an extraction counted them.
+    pub(crate) edges: Option<usize>,
 }
 
 impl<'a> Layout<'a> {
@@ -269,6 +331,7 @@ impl<'a> Layout<'a> {
         if cache.key != key {
             cache.table = layout.build_border_table();
             cache.key = key;
+            cache.edges = None;
         }
         layout.border_table.clone_from(&cache.table);
         layout
@@ -352,6 +415,23 @@ impl<'a> Layout<'a> {
                 .max()
                 .unwrap_or(0)
         });
+        // Per axis, as the samples compute positions (the same f32 operations, so the same
+        // bits): body-centred in half cubes, ghosts clamped; simple in cubes.
+        let coords = [0, 1, 2].map(|a| {
+            let max = match lattice {
+                Lattice::BodyCentred => 2 * s.cells[a] as i32,
+                Lattice::Simple => s.cells[a] as i32,
+            };
+            (-COORD_PAD..=max + COORD_PAD)
+                .map(|c| match lattice {
+                    Lattice::BodyCentred => {
+                        let h = s.spacing * 0.5;
+                        c.clamp(0, max) as f32 * h[a]
+                    }
+                    Lattice::Simple => c as f32 * s.spacing[a],
+                })
+                .collect()
+        });
         Self {
             s,
             lattice,
@@ -363,6 +443,7 @@ impl<'a> Layout<'a> {
             border_table: Vec::new(),
             around,
             grad_coef,
+            coords,
         }
     }
 
@@ -512,13 +593,16 @@ impl<'a> Layout<'a> {
         }
     }
 
+    /// World position of lattice point `p` (body-centred ghosts on the box face), bit for bit
+    /// [`Samples::bcdl_position`] or [`Samples::simple_position`], from the per-axis tables.
+    #[inline]
     pub(crate) fn position(&self, p: Offset) -> glam::Vec3 {
-        match self.lattice {
-            Lattice::BodyCentred => self.s.bcdl_position(p),
-            Lattice::Simple => self
-                .s
-                .simple_position(p[0] as usize, p[1] as usize, p[2] as usize),
-        }
+        let c = |a: usize| {
+            let i = (p[a] + COORD_PAD) as usize;
+            debug_assert!(i < self.coords[a].len(), "coordinate {} on axis {a}", p[a]);
+            self.coords[a][i]
+        };
+        self.s.min + glam::Vec3::new(c(0), c(1), c(2))
     }
 
     /// The storage planes geometry layer `k` reads (inclusive): body-centred faces perpendicular
@@ -715,6 +799,102 @@ pub(crate) fn add(a: Offset, b: Offset) -> Offset {
 mod tests {
     use super::*;
     use crate::mt::testing::{lcg, plain_mt, test_pool};
+
+    #[test]
+    fn positions_from_the_axis_tables_are_the_samples_positions_bit_for_bit() {
+        let pool = test_pool(1);
+        let field = crate::mt::testing::wavy();
+        let mut checked = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            for cells in [[3, 7, 5], [10, 9, 11]] {
+                let (_, mut samples, _, _) = plain_mt(&field, lattice, cells, &pool);
+                // An odd box and spacing, so that rounding would show.
+                samples.min = glam::Vec3::new(-0.73, 0.311, 1.9);
+                samples.spacing = glam::Vec3::new(0.0371, 0.113, 0.0667);
+                let l = Layout::new(&samples, lattice);
+                let max = |a: usize| l.max_coord(a);
+                let lo = if lattice == Lattice::BodyCentred {
+                    -1
+                } else {
+                    0
+                };
+                for x in lo..=max(0) + (-lo) {
+                    for y in lo..=max(1) + (-lo) {
+                        for z in lo..=max(2) + (-lo) {
+                            let p = [x, y, z];
+                            let want = match lattice {
+                                Lattice::BodyCentred => samples.bcdl_position(p),
+                                Lattice::Simple => {
+                                    samples.simple_position(x as usize, y as usize, z as usize)
+                                }
+                            };
+                            let got = l.position(p);
+                            assert_eq!(
+                                got.to_array().map(f32::to_bits),
+                                want.to_array().map(f32::to_bits),
+                                "{lattice:?} {cells:?} {p:?}"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 5000, "only {checked} points");
+    }
+
+    #[test]
+    fn group_codes_and_cases_follow_the_crossed_edges_of_the_anchor() {
+        // Every neighbour mask of the anchor: the code has bit i exactly when point i's edge
+        // is crossed, and each tetrahedron's case (anchor outside) has bit j exactly when its
+        // corner j is on the other side from the anchor.
+        let samples = Samples {
+            lattice: None,
+            cells: [4, 4, 4],
+            min: glam::Vec3::ZERO,
+            spacing: glam::Vec3::ONE,
+            dims: [6, 6, 11],
+            values: vec![0.0; 6 * 6 * 11],
+        };
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            let mut s = samples.clone();
+            if lattice == Lattice::Simple {
+                s.dims = [5, 5, 5];
+                s.values = vec![0.0; 125];
+            }
+            let l = Layout::new(&s, lattice);
+            for (g, group) in l.groups.iter().enumerate() {
+                let tets = group.cases.len() >> group.len;
+                assert!(tets == 4 || tets == 6, "{lattice:?} group {g}: {tets}");
+                for mask in 0..1u16 << 14 {
+                    let code = group.code(mask);
+                    for i in 1..group.len {
+                        let crossed = mask >> group.dirs[i] & 1 == 1;
+                        assert_eq!(code >> i & 1 == 1, crossed, "{lattice:?} {g} {mask:#x} {i}");
+                    }
+                    assert_eq!(code & 1, 0, "the anchor is never on the other side");
+                }
+                let first = if lattice == Lattice::BodyCentred {
+                    4 * g
+                } else {
+                    0
+                };
+                for code in 0..1usize << group.len {
+                    for j in 0..tets {
+                        let tpl = &l.tets[first + j];
+                        let want = (0..4).fold(0u8, |case, i| {
+                            let k = group.points[..group.len]
+                                .iter()
+                                .position(|&p| p == tpl.delta[i])
+                                .expect("every corner is a point of the group");
+                            case | (((code >> k) & 1) as u8) << i
+                        });
+                        assert_eq!(group.cases[code * tets + j], want, "{lattice:?} {g} {code}");
+                    }
+                }
+            }
+        }
+    }
     use crate::{Clustering, ExtractSettings};
 
     #[test]

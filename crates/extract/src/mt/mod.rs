@@ -44,7 +44,7 @@ pub(crate) use crossings::WELD;
 
 use clustering::proposal::{Candidate, Rules};
 use clustering::ClusterBuffers;
-use crossings::{vertex_pass, CrossedIndex, VertexOut, VertexTables};
+use crossings::{vertex_pass, CrossedIndex, VertexOut, VertexTables, VertexWork};
 use emission::{emit, Clustered, EmitBuffers, EmitIn};
 use geometry::{Surface, LAYER_WINDOW};
 use layout::{BorderCache, Layout};
@@ -116,12 +116,16 @@ pub(crate) fn extract(
     let near_points = vertex_pass(
         &layout,
         settings.iso,
-        propose.then_some(rules),
+        VertexWork {
+            propose: propose.then_some(rules),
+            known_edges: buf.border.edges,
+        },
         pool,
         &mut buf.vertices,
         out,
         stats,
     )?;
+    buf.border.edges = Some(stats.edges);
     let mut keys: Vec<u64> = Vec::new();
     tile_keys(samples, settings, &buf.vertices.crossed, &mut keys);
     let surface = Surface {

@@ -622,6 +622,125 @@ mod tests {
     use crate::mt::testing::{extracted, settings_on, test_pool, wavy};
     use crate::Lattice;
 
+    /// Of the vertex pass's proposals on `field` (body-centred, integrated clustering, `n`
+    /// cells in [-1, 1]^3): how many there are, and how many have 0, 1, ..., 7 or more other
+    /// proposals with a crossing in their star (the plain MT triangles touching their
+    /// crossings). With none, tests (a) and (b) of a group depend on its own neighbourhood's
+    /// signs alone (issue 41, part 1: what a table could decide).
+    fn isolated_proposals(field: &impl rmt_fields::ScalarField, n: usize) -> (usize, [usize; 8]) {
+        let pool = test_pool(1);
+        let settings = settings_on([n; 3], Lattice::BodyCentred, crate::Clustering::Integrated);
+        let (samples, buf, _, _) = extracted(field, &settings, &pool);
+        // The proposals again, from the vertex pass alone (the extraction appended additions).
+        let layout = Layout::new(&samples, Lattice::BodyCentred);
+        let mut tables = crate::mt::crossings::VertexTables::default();
+        tables.allocate(&samples);
+        let (mut proposals, mut positions) = (Vec::new(), Vec::new());
+        let work = crate::mt::crossings::VertexWork {
+            propose: Some(proposal::Rules::Islands),
+            known_edges: None,
+        };
+        let out = crate::mt::crossings::VertexOut {
+            proposals: &mut proposals,
+            positions: &mut positions,
+        };
+        let mut stats = Stats::default();
+        crate::mt::crossings::vertex_pass(
+            &layout,
+            settings.iso,
+            work,
+            &pool,
+            &mut tables,
+            out,
+            &mut stats,
+        )
+        .expect("vertex pass");
+        assert_eq!(
+            positions, buf.clustering.cpos,
+            "the same crossings as the extraction"
+        );
+        let mut owner = vec![u32::MAX; positions.len()];
+        for (gi, c) in proposals.iter().enumerate() {
+            for r in 0..16 {
+                if c.members >> r & 1 != 0 {
+                    assert_eq!(owner[(c.first + r) as usize], u32::MAX, "proposals overlap");
+                    owner[(c.first + r) as usize] = gi as u32;
+                }
+            }
+        }
+        let (plain, inc) = (&buf.clustering.plain.tris, &buf.clustering.plain.inc);
+        // Per proposal, the other proposals with a crossing in its star: a histogram of 0, 1,
+        // 2, ..., 7 and more.
+        let mut others = [0usize; 8];
+        let mut seen = Vec::new();
+        for (gi, c) in proposals.iter().enumerate() {
+            seen.clear();
+            for r in (0..16u32).filter(|r| c.members >> r & 1 != 0) {
+                let x = (c.first + r) as usize;
+                for &t in &inc.inc[inc.start[x] as usize..inc.start[x + 1] as usize] {
+                    for k in 0..3 {
+                        let o = owner[plain[3 * t as usize + k] as usize];
+                        if o != u32::MAX && o != gi as u32 && !seen.contains(&o) {
+                            seen.push(o);
+                        }
+                    }
+                }
+            }
+            others[seen.len().min(7)] += 1;
+        }
+        (proposals.len(), others)
+    }
+
+    #[test]
+    fn share_of_proposals_with_no_other_proposal_in_their_star() {
+        // A measurement (printed with --nocapture) for the table of issue 41; it asserts that
+        // the histogram covers every proposal, and that the sphere and asteroid have proposals.
+        use rmt_fields::{Asteroid, AsteroidParams, CaveParams, CaveTerrain, RandomField, Sphere};
+        let mut rows = Vec::new();
+        let n = 48;
+        rows.push((
+            "sphere",
+            isolated_proposals(&Sphere::new(glam::Vec3::ZERO, 0.8), n),
+        ));
+        rows.push((
+            "asteroid",
+            isolated_proposals(
+                &Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default()),
+                n,
+            ),
+        ));
+        rows.push((
+            "caves",
+            isolated_proposals(&CaveTerrain::new(CaveParams::default()), n),
+        ));
+        rows.push(("wavy", isolated_proposals(&wavy(), n)));
+        let mut random = (0, [0usize; 8]);
+        for seed in 0..8 {
+            let (t, h) = isolated_proposals(&RandomField::from_seed(seed), 24);
+            random.0 += t;
+            for (a, b) in random.1.iter_mut().zip(h) {
+                *a += b;
+            }
+        }
+        rows.push(("random x8", random));
+        for (name, (total, others)) in &rows {
+            assert_eq!(others.iter().sum::<usize>(), *total, "{name}");
+            let share: Vec<String> = others
+                .iter()
+                .map(|&k| format!("{:.1}%", 100.0 * k as f64 / (*total).max(1) as f64))
+                .collect();
+            println!(
+                "{name:10}: {total:6} proposals; with 0, 1, ..., 7+ other proposals in the star: {}",
+                share.join(" ")
+            );
+        }
+        for (name, (total, _)) in &rows[..2] {
+            assert!(*total > 1000, "{name}: only {total} proposals");
+        }
+        let empty = isolated_proposals(&Sphere::new(glam::Vec3::splat(5.0), 0.1), 8);
+        assert_eq!(empty, (0, [0; 8]), "no surface, no proposal");
+    }
+
     #[test]
     fn unchecked_numbering_by_planes_is_the_group_tables_numbering() {
         // `keep_all` (integrated-unchecked: every proposal kept, numbered plane by plane in
