@@ -246,8 +246,8 @@ impl Export {
             CONFIGURATIONS_FILE.to_string(),
             csv_bytes(&header, &configuration_rows)?,
         ));
-        let total = study.real_questions_per_participant() + study.questions.len()
-            - study.real_questions();
+        let total =
+            study.real_questions_per_participant() + study.questions.len() - study.real_questions();
         let mut completed = 0;
         let mut durations = Vec::new();
         let participant_rows: Vec<Vec<String>> = participants

@@ -269,7 +269,8 @@ impl Study {
 
     /// Real questions each participant answers.
     pub fn real_questions_per_participant(&self) -> usize {
-        self.per_participant.unwrap_or_else(|| self.real_questions())
+        self.per_participant
+            .unwrap_or_else(|| self.real_questions())
     }
 
     /// The plan of the participant with this token who arrived `seq`-th (1-based).
