@@ -852,6 +852,84 @@ mod tests {
     }
 
     #[test]
+    fn matrices_repeat_and_cross_simplifications_and_vertex_cache_orders() {
+        let p = plan(
+            r#"
+            name = "t"
+            render_cost = false
+            [[objects]]
+            name = "asteroid"
+            resolution = 6
+            [[matrix]]
+            lattices = ["bcdl"]
+            clustering = ["integrated"]
+            vertex_cache = [false, true]
+            [[matrix]]
+            methods = ["mc", "surface-nets"]
+            simplify = ["none", { method = "meshopt", target = "rmt" },
+                        { method = "meshopt", target = 0.5, lock_border = true }]
+            [[configurations]]
+            object = "asteroid"
+            simplify = "meshopt:100"
+            vertex_cache = true
+            "#,
+        )
+        .unwrap();
+        let ids: Vec<&str> = p.configurations.iter().map(|c| c.id.as_str()).collect();
+        assert_eq!(
+            ids,
+            [
+                "as_bi",
+                "as_bi_vc",
+                "as_mu",
+                "as_mu_mrmt",
+                "as_mu_ml0.5",
+                "as_nu",
+                "as_nu_mrmt",
+                "as_nu_ml0.5",
+                "as_bu_m100_vc",
+            ]
+        );
+        assert!(!p.render_cost);
+        let e = &p.configurations[4].extraction;
+        assert_eq!(
+            e.simplify,
+            Some(Simplify {
+                target: crate::finish::SimplifyTarget::Ratio(0.5),
+                lock_border: true
+            })
+        );
+        assert!(p.configurations[8].extraction.vertex_cache);
+        // One [matrix] table still works, and errors name the matrix and the value.
+        let err = plan(
+            "name = \"t\"\n[[objects]]\nname = \"sphere\"\n[[matrix]]\n[[matrix]]\nsimplify = []\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("matrix[1].simplify: the list is empty"),
+            "{err}"
+        );
+        let err = plan(
+            "name = \"t\"\n[[objects]]\nname = \"sphere\"\n[matrix]\nsimplify = [\"qem:rmt\"]\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("unknown simplifier `qem`") && err.contains("line"),
+            "{err}"
+        );
+        let err = plan(
+            "name = \"t\"\nworkload = \"edit\"\n[[objects]]\nname = \"terrain\"\n\
+             [[configurations]]\nobject = \"terrain\"\nclustering = \"integrated\"\n\
+             vertex_cache = true\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("cannot simplify or reorder"), "{err}");
+    }
+
+    #[test]
     fn shading_crosses_configurations_and_flat_ids_get_a_suffix() {
         let p = plan(
             r#"

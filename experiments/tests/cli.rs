@@ -164,6 +164,89 @@ fn extract_with_surface_nets_counts_its_defects_and_takes_no_clustering() {
 }
 
 #[test]
+fn extract_simplifies_any_method_to_rmts_count_and_measures_the_rendering_cost() {
+    let json = |args: &[&str]| -> serde_json::Value {
+        let mut line = vec![
+            "extract",
+            "--object",
+            "asteroid",
+            "--resolution",
+            "20",
+            "--threads",
+            "1",
+            "--json",
+        ];
+        line.extend_from_slice(args);
+        let o = experiments(&line);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let rmt = json(&[]);
+    let rmt_triangles = rmt["triangles"].as_u64().unwrap();
+    for method in ["mc", "surface-nets"] {
+        let plain = json(&["--method", method]);
+        let v = json(&[
+            "--method",
+            method,
+            "--simplify",
+            "meshopt:rmt",
+            "--vertex-cache",
+        ]);
+        assert_eq!(v["simplify"], "meshopt:rmt");
+        assert_eq!(v["vertex_cache"], true);
+        assert_eq!(
+            v["simplify_target"].as_u64(),
+            Some(rmt_triangles),
+            "{method}"
+        );
+        assert_eq!(
+            v["simplify_triangles_before"], plain["triangles"],
+            "{method}"
+        );
+        let t = v["triangles"].as_u64().unwrap();
+        // meshoptimizer stops at the target or just below it.
+        assert!(
+            t <= rmt_triangles && t * 100 >= rmt_triangles * 95,
+            "{method}: {t}"
+        );
+        assert!(v["simplify_error_h"].as_f64().unwrap() > 0.0);
+        let pipeline = v["t_pipeline_s"].as_f64().unwrap();
+        assert!(
+            pipeline
+                >= v["t_total_s"].as_f64().unwrap() + v["t_simplify_s"].as_f64().unwrap() * 0.999
+        );
+        // Reordered for the vertex cache: the analyzer sees little left to gain.
+        let (acmr, best) = (
+            v["acmr_16"].as_f64().unwrap(),
+            v["acmr_16_optimized"].as_f64().unwrap(),
+        );
+        assert!(acmr <= best * 1.05, "{method}: {acmr} vs {best}");
+    }
+    // Every mesh gets its rendering cost; a plain one too.
+    for key in [
+        "quad_occupancy_1080",
+        "quad_occupancy_135",
+        "overdraw",
+        "glb_bytes",
+    ] {
+        assert!(rmt[key].is_number(), "{key}: {}", rmt[key]);
+    }
+    assert_eq!(rmt["simplify"], "none");
+    assert!(rmt["simplify_target"].is_null());
+    // Bad values name themselves.
+    let o = experiments(&["extract", "--simplify", "meshopt:2.5"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("between 0 and 1"), "{}", stderr(&o));
+    let o = experiments(&["extract", "--chunks", "8", "--simplify", "meshopt:rmt"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--chunks cannot be combined"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
 fn extract_prints_a_readable_summary_without_json() {
     let o = experiments(&[
         "extract",

@@ -100,19 +100,10 @@ pub fn optimize_vertex_cache(mesh: &mut Mesh) {
 mod tests {
     use super::*;
     use crate::measure::on_box_boundary;
-    use crate::{Clustering, ExtractSettings, Extractor, Grid, Lattice, Method};
+    use crate::post::simplify::tests::marching_cubes;
+    use crate::Grid;
     use glam::Vec3;
     use rmt_fields::{FnField, ScalarField, Sphere};
-
-    fn marching_cubes(field: &dyn ScalarField, grid: Grid) -> Mesh {
-        let mut settings = ExtractSettings::new(grid, Lattice::Simple, Clustering::None);
-        settings.method = Method::Mc;
-        let mut mesh = Mesh::default();
-        Extractor::new()
-            .extract(field, &settings, &mut mesh)
-            .unwrap();
-        mesh
-    }
 
     fn sorted_triangles(m: &Mesh) -> Vec<[u32; 3]> {
         let mut t: Vec<[u32; 3]> = m

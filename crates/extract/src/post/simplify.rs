@@ -57,14 +57,15 @@ pub(crate) fn compact_vertices(mesh: &mut Mesh) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::measure::on_box_boundary;
     use crate::{Clustering, ExtractSettings, Extractor, Grid, Lattice, Method};
     use glam::Vec3;
     use rmt_fields::{FnField, ScalarField, Sphere};
 
-    fn marching_cubes(field: &dyn ScalarField, grid: Grid) -> Mesh {
+    /// Marching cubes of `field` on `grid` (the finish steps' tests use it too).
+    pub(crate) fn marching_cubes(field: &dyn ScalarField, grid: Grid) -> Mesh {
         let mut settings = ExtractSettings::new(grid, Lattice::Simple, Clustering::None);
         settings.method = Method::Mc;
         let mut mesh = Mesh::default();
