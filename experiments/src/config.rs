@@ -8,8 +8,8 @@ use rmt_extract::{Clustering, ExtractSettings, Grid, Lattice, Measurement, Metho
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
-use crate::finish::{simplify_name, Simplify};
 use crate::objects::{Bounds, ObjectSpec, Resolution};
+use crate::simplify::{simplify_name, Simplify};
 
 /// How normals are computed, with the names used on the command line and in manifests
 /// (`area`, `gradient`, `none`).

@@ -49,8 +49,8 @@ pub struct Args {
     /// Simplify after extraction with meshoptimizer: none, meshopt:<target> or
     /// meshopt-locked:<target> (borders locked); the target is rmt (RMT's triangle count on the
     /// same object and resolution), a ratio in (0, 1) or a triangle count.
-    #[arg(long, default_value = "none", value_parser = crate::finish::SimplifyChoice::parse)]
-    pub simplify: crate::finish::SimplifyChoice,
+    #[arg(long, default_value = "none", value_parser = crate::simplify::SimplifyChoice::parse)]
+    pub simplify: crate::simplify::SimplifyChoice,
     /// Reorder the triangles for the vertex cache (meshoptimizer), as an engine does before
     /// upload.
     #[arg(long)]

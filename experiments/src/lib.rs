@@ -6,8 +6,9 @@
 //!   random) built from names and parameters, shared by `extract` and manifests;
 //! - [`config`]: one extraction's full description, the names of its settings (each list of
 //!   choices once), and its record as JSON;
+//! - [`simplify`]: the names of meshoptimizer's simplification to a budget, a finish step;
 //! - [`finish`]: the steps any method's mesh may take after extraction (meshoptimizer's
-//!   simplifier to a budget, vertex-cache order), named and timed;
+//!   simplifier to a budget, vertex-cache order), run and timed;
 //! - [`extract_args`]: the options of one extraction parsed and checked (the `extract` command
 //!   line and the studio);
 //! - [`measured`]: one mesh's full record (measurement, finish steps, rendering cost), the
@@ -66,6 +67,7 @@ pub mod run_record;
 pub mod runner;
 pub mod seeds;
 pub mod shard;
+pub mod simplify;
 pub mod slurm;
 pub mod studio;
 pub mod study;

@@ -91,8 +91,8 @@ use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
 use crate::config::{Extraction, Normals};
-use crate::finish::{Simplify, SimplifyChoice};
 use crate::objects::{Bounds, ObjectKind, ObjectParams, Resolution};
+use crate::simplify::{Simplify, SimplifyChoice};
 pub use rmt_render::shade::Shading;
 
 /// Why a manifest cannot be run. Every message names the file; semantic errors name the key.
@@ -429,7 +429,7 @@ pub struct Matrix {
     /// Shadings `render` draws each configuration with (default smooth only).
     #[serde(default = "default_shadings")]
     pub shading: Vec<Shading>,
-    /// Simplifications after extraction (default `["none"]`; see [`crate::finish`]).
+    /// Simplifications after extraction (default `["none"]`; see [`crate::simplify`]).
     #[serde(default = "default_simplify")]
     pub simplify: Vec<SimplifyChoice>,
     /// Vertex-cache order after extraction, off and/or on (default `[false]`).
@@ -495,7 +495,7 @@ pub struct ConfigEntry {
     /// How `render` draws it (default smooth).
     #[serde(default)]
     pub shading: Option<Shading>,
-    /// Simplification after extraction (default none; see [`crate::finish`]).
+    /// Simplification after extraction (default none; see [`crate::simplify`]).
     #[serde(default)]
     pub simplify: Option<SimplifyChoice>,
     /// Vertex-cache order after extraction (default false).
@@ -895,7 +895,7 @@ mod tests {
         assert_eq!(
             e.simplify,
             Some(Simplify {
-                target: crate::finish::SimplifyTarget::Ratio(0.5),
+                target: crate::simplify::SimplifyTarget::Ratio(0.5),
                 lock_border: true
             })
         );

@@ -42,7 +42,7 @@ fn config_values(c: &Configuration) -> HashMap<&'static str, String> {
         ("clustering", e.clustering.name().to_string()),
         (
             "simplify",
-            crate::finish::simplify_name(e.simplify.as_ref()),
+            crate::simplify::simplify_name(e.simplify.as_ref()),
         ),
         ("vertex_cache", e.vertex_cache.to_string()),
         ("rx", rx.to_string()),
@@ -183,8 +183,9 @@ mod tests {
         let csv = String::from_utf8(configurations_csv(&plan).unwrap()).unwrap();
         assert_eq!(
             csv,
-            "id,object,lattice,clustering,method,kind,rx,ry,rz,collapse_threshold,iso,normals\n\
-             ss_bu,sphere,bcdl,none,mt,sphere,4,4,4,0.5,0,area\n"
+            "id,object,lattice,clustering,method,kind,rx,ry,rz,collapse_threshold,iso,normals,\
+             simplify,vertex_cache\n\
+             ss_bu,sphere,bcdl,none,mt,sphere,4,4,4,0.5,0,area,none,false\n"
         );
     }
 
@@ -207,9 +208,9 @@ mod tests {
         assert_eq!(
             csv,
             "id,object,lattice,clustering,method,kind,rx,ry,rz,collapse_threshold,iso,normals,\
-             shading\n\
-             ss_bi,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,smooth\n\
-             ss_bi_flat,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,flat\n"
+             simplify,vertex_cache,shading\n\
+             ss_bi,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,none,false,smooth\n\
+             ss_bi_flat,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,none,false,flat\n"
         );
     }
 }

@@ -222,9 +222,15 @@ impl StudioBackend {
         let finish = crate::finish::Finisher::new(e, field.as_ref(), self.threads)
             .run(&mut mesh, &mut stats)
             .map_err(|err| BackendError::Failed(format!("{err:#}")))?;
-        let measured =
-            crate::measured::measure(&mesh, &stats, &finish, Some(field.as_ref()), &settings, None)
-                .map_err(|err| BackendError::Failed(format!("{err:#}")))?;
+        let measured = crate::measured::measure(
+            &mesh,
+            &stats,
+            &finish,
+            Some(field.as_ref()),
+            &settings,
+            None,
+        )
+        .map_err(|err| BackendError::Failed(format!("{err:#}")))?;
         let m = &measured.measurement;
         let mut out: Map<String, Value> = config::config_json(e, self.threads);
         out.extend(

@@ -25,7 +25,7 @@ pub const CONFIGURATION: [&str; 14] = [
 ];
 
 /// The columns of `configurations.csv` (the order the study commands read).
-pub const CONFIGURATIONS: [&str; 12] = [
+pub const CONFIGURATIONS: [&str; 14] = [
     "id",
     "object",
     "lattice",
@@ -38,6 +38,8 @@ pub const CONFIGURATIONS: [&str; 12] = [
     "collapse_threshold",
     "iso",
     "normals",
+    "simplify",
+    "vertex_cache",
 ];
 
 /// The column `configurations.csv` appends after [`CONFIGURATIONS`] when some configuration is
@@ -187,10 +189,10 @@ mod tests {
     #[test]
     fn shared_lists_are_built_from_the_configuration_columns() {
         assert_eq!(RAW_PREFIX[0], "run_id");
-        assert_eq!(RAW_PREFIX[1..13], CONFIGURATION);
-        assert_eq!(RAW_PREFIX[13..], ["threads", "repetition"]);
-        assert_eq!(SUMMARY_PREFIX[..12], CONFIGURATION);
-        assert_eq!(SUMMARY_PREFIX[12], "threads");
+        assert_eq!(RAW_PREFIX[1..15], CONFIGURATION);
+        assert_eq!(RAW_PREFIX[15..], ["threads", "repetition"]);
+        assert_eq!(SUMMARY_PREFIX[..14], CONFIGURATION);
+        assert_eq!(SUMMARY_PREFIX[14], "threads");
         assert_eq!(SEEDS_PREFIX.last(), Some(&"collapse_threshold"));
         assert_eq!(TOPOLOGY_PREFIX.last(), Some(&"rz"));
     }

@@ -14,8 +14,8 @@ use super::{
     ManifestError, Matrix, Overrides, Plan, SeedOf, SeedRange, Shading,
 };
 use crate::config::{self, Extraction};
-use crate::finish::Simplify;
 use crate::objects::{self, Bounds, ObjectKind, ObjectSpec, Resolution};
+use crate::simplify::Simplify;
 
 /// Builds the errors of one manifest.
 struct Invalid<'a>(&'a Path);

@@ -66,7 +66,7 @@ pub fn candidates(plan: &crate::manifest::Plan) -> Vec<Candidate> {
                 lattice: crate::config::lattice_name(e.method, e.lattice).to_string(),
                 clustering: e.clustering.name().to_string(),
                 shading: crate::manifest::shading_name(c.shading).to_string(),
-                simplify: crate::finish::simplify_name(e.simplify.as_ref()),
+                simplify: crate::simplify::simplify_name(e.simplify.as_ref()),
             }
         })
         .collect()
