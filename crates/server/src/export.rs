@@ -90,6 +90,28 @@ pub const QUESTIONS_FILE: &str = "questions.csv";
 pub const CONFIGURATIONS_FILE: &str = "configurations.csv";
 /// Control answers.
 pub const CONTROLS_FILE: &str = "controls.csv";
+
+/// The columns of [`RESPONSES_FILE`], in order (what `analyse` reads; simulated studies write
+/// the same).
+pub const RESPONSES_COLUMNS: [&str; 6] = [
+    "participant",
+    "question",
+    "response",
+    "order",
+    "swapped",
+    "seconds",
+];
+
+/// The columns of [`CONTROLS_FILE`], in order.
+pub const CONTROLS_COLUMNS: [&str; 7] = [
+    "participant",
+    "control",
+    "configuration",
+    "name",
+    "response",
+    "order",
+    "seconds",
+];
 /// Participants.
 pub const PARTICIPANTS_FILE: &str = "participants.csv";
 
@@ -188,32 +210,11 @@ impl Export {
         let mut files = Vec::new();
         files.push((
             RESPONSES_FILE.to_string(),
-            csv_bytes(
-                &[
-                    "participant",
-                    "question",
-                    "response",
-                    "order",
-                    "swapped",
-                    "seconds",
-                ],
-                &responses,
-            )?,
+            csv_bytes(&RESPONSES_COLUMNS, &responses)?,
         ));
         files.push((
             CONTROLS_FILE.to_string(),
-            csv_bytes(
-                &[
-                    "participant",
-                    "control",
-                    "configuration",
-                    "name",
-                    "response",
-                    "order",
-                    "seconds",
-                ],
-                &controls,
-            )?,
+            csv_bytes(&CONTROLS_COLUMNS, &controls)?,
         ));
         let question_rows: Vec<Vec<String>> = study
             .questions

@@ -68,14 +68,7 @@ pub fn write_export(
         questions.push(vec![question_id(k), items.id(p.first), items.id(p.second)]);
     }
     write(dir, "questions.csv", &questions)?;
-    let mut responses = vec![row([
-        "participant",
-        "question",
-        "response",
-        "order",
-        "swapped",
-        "seconds",
-    ])];
+    let mut responses = vec![row(rmt_server::export::RESPONSES_COLUMNS)];
     for (a, s) in sim.answers.iter().zip(&sim.answer_seconds) {
         responses.push(vec![
             participant_name(a.participant),
@@ -87,15 +80,7 @@ pub fn write_export(
         ]);
     }
     write(dir, "responses.csv", &responses)?;
-    let mut controls = vec![row([
-        "participant",
-        "control",
-        "configuration",
-        "name",
-        "response",
-        "order",
-        "seconds",
-    ])];
+    let mut controls = vec![row(rmt_server::export::CONTROLS_COLUMNS)];
     for (c, s) in sim.controls.iter().zip(&sim.control_seconds) {
         controls.push(vec![
             participant_name(c.participant),

@@ -220,10 +220,11 @@ pub fn shuffle<T>(v: &mut [T], rng: &mut SplitMix64) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn items() -> StudyItems {
+    /// Three objects, four methods, two shadings (the simulation's tests use them too).
+    pub(crate) fn items() -> StudyItems {
         StudyItems {
             objects: vec!["asteroid".into(), "bunny".into(), "chunk".into()],
             methods: vec!["rmt".into(), "rmt-s".into(), "nets".into(), "mc".into()],

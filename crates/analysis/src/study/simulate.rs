@@ -356,16 +356,9 @@ pub fn coverage(
 
 #[cfg(test)]
 mod tests {
+    use super::super::design::tests::items;
     use super::super::design::{assign, study_pairs};
     use super::*;
-
-    fn items() -> StudyItems {
-        StudyItems {
-            objects: vec!["asteroid".into(), "bunny".into(), "chunk".into()],
-            methods: vec!["rmt".into(), "rmt-s".into(), "nets".into(), "mc".into()],
-            shadings: vec!["smooth".into(), "flat".into()],
-        }
-    }
 
     /// Method strengths the same in both shadings (no interaction), flat a little worse.
     fn model(items: &StudyItems, interaction: f64) -> PlantedModel {
