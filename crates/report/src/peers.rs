@@ -55,6 +55,10 @@ pub struct PeerRow {
     pub object: String,
     /// One of [`FAMILIES`].
     pub family: &'static str,
+    /// `mt`, `mc` or `surface-nets`.
+    pub method: String,
+    /// The clustering mode.
+    pub clustering: String,
     /// The readable method: family, lattice and border rule.
     pub label: String,
     /// `bcdl` or `simple`.
@@ -126,6 +130,11 @@ fn label(family: &str, method: &str, lattice: &str, simplify: &str) -> String {
     text
 }
 
+/// What a configuration and its vertex-cache twin share: everything but the reordering.
+fn twin_key(object: &str, method: &str, lattice: &str, clustering: &str, simplify: &str) -> String {
+    format!("{object}|{method}|{lattice}|{clustering}|{simplify}")
+}
+
 /// Reads the peers run's `summary.csv` into rows (vertex-cache rows folded into their method's
 /// ACMR), in file order.
 pub fn read_peers(folder: &Path) -> Result<Vec<PeerRow>> {
@@ -143,10 +152,12 @@ pub fn read_peers(folder: &Path) -> Result<Vec<PeerRow>> {
         let Some(fam) = family(&method, &clustering, &simplify) else {
             continue;
         };
-        let key = format!(
-            "{}|{}|{lattice}|{clustering}|{simplify}",
-            text(r, "object"),
-            method
+        let key = twin_key(
+            &text(r, "object"),
+            &method,
+            &lattice,
+            &clustering,
+            &simplify,
         );
         let opt = |name: &str| -> Result<Option<f64>> {
             if file.has(name) {
@@ -174,6 +185,8 @@ pub fn read_peers(folder: &Path) -> Result<Vec<PeerRow>> {
             object: text(r, "object"),
             family: fam,
             label: label(fam, &method, &lattice, &simplify),
+            method: method.clone(),
+            clustering: clustering.clone(),
             lattice: lattice.clone(),
             simplify: simplify.clone(),
             time_s,
@@ -192,24 +205,13 @@ pub fn read_peers(folder: &Path) -> Result<Vec<PeerRow>> {
     }
     // A vertex-cache twin's ACMR replaces the estimate from `acmr_16_optimized`.
     for row in &mut rows {
-        let key_of = |r: &PeerRow| {
-            let method = match r.family {
-                f if f.starts_with("marching cubes") => "mc",
-                f if f.starts_with("surface nets") => "surface-nets",
-                _ => "mt",
-            };
-            let clustering = match r.family {
-                "RMT" => "integrated",
-                "RMT unchecked" => "integrated-unchecked",
-                "edge collapse" => "postprocessed",
-                _ => "none",
-            };
-            format!(
-                "{}|{method}|{}|{clustering}|{}",
-                r.object, r.lattice, r.simplify
-            )
-        };
-        let key = key_of(row);
+        let key = twin_key(
+            &row.object,
+            &row.method,
+            &row.lattice,
+            &row.clustering,
+            &row.simplify,
+        );
         if let Some((_, acmr)) = reordered.iter().find(|(k, _)| *k == key) {
             row.acmr.1 = Some(*acmr);
         }
@@ -870,6 +872,8 @@ mod tests {
             object: object.into(),
             family,
             label: family.into(),
+            method: "mt".into(),
+            clustering: "integrated".into(),
             lattice: if family.contains("MT") || family == "RMT" {
                 "bcdl".into()
             } else {
