@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Times VTK's Flying Edges and scikit-image's marching cubes on sampled values dumped by Rust.
 
-Usage: peer_bench.py DIR [--reps N] [--methods vtk_flying_edges,skimage_mc]
+Usage: peer_bench.py DIR [--reps N] [--methods vtk_flying_edges,skimage_mc] [--only NAME]
 
 Needs numpy, vtk and scikit-image (`pip install vtk scikit-image numpy`). Prints CSV on stdout,
 one row per (values file, method), with a header row:
@@ -28,7 +28,8 @@ volume NAME, two files in DIR,
 - `NAME.f32`: `dims[0] * dims[1] * dims[2]` raw little-endian 32-bit floats, x fastest: the
   value of point (x, y, z) is at index `x + dims[0] * (y + dims[1] * z)`.
 
-Every `*.json` in DIR with `"format": "rmt-values-1"` is read, in name order.
+Every `*.json` in DIR with `"format": "rmt-values-1"` is read, in name order; with `--only NAME`,
+only `NAME.json` (an error if it is missing).
 """
 
 import argparse
@@ -120,6 +121,7 @@ def main():
     parser.add_argument("dir", type=pathlib.Path)
     parser.add_argument("--reps", type=int, default=10)
     parser.add_argument("--methods", default=",".join(METHODS))
+    parser.add_argument("--only", help="time only the volume NAME (NAME.json in DIR)")
     args = parser.parse_args()
     methods = [m for m in args.methods.split(",") if m]
     unknown = [m for m in methods if m not in METHODS]
@@ -134,7 +136,12 @@ def main():
         file=sys.stderr,
     )
     print("field,n,method,threads,median_ms,min_ms,reps,triangles")
-    headers = sorted(args.dir.glob("*.json"))
+    if args.only is not None:
+        headers = [args.dir / f"{args.only}.json"]
+        if not headers[0].is_file():
+            raise SystemExit(f"--only {args.only}: no {headers[0]}")
+    else:
+        headers = sorted(args.dir.glob("*.json"))
     if not headers:
         raise SystemExit(f"no *.json headers in {args.dir}")
     for header_path in headers:

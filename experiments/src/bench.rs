@@ -20,7 +20,13 @@
 //! vertex and geometry passes (from [`Stats`]) is reported too, and the allocation share of a
 //! second call on a reused extractor (`t_allocation_s / t_total_s`, pre-sampled, so sampling
 //! does not dilute it).
+//!
+//! With a Python interpreter (`--python PY`, [`BenchConfig::python`]), VTK's Flying Edges and
+//! scikit-image's `marching_cubes` are timed on the same corner grid, between the two halves of
+//! our repetitions of each field and size ([`crate::bench_python`]), and every row gets its ratio
+//! over Flying Edges; `--dump DIR` keeps the values, their headers and the script.
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use fast_surface_nets::ndshape::RuntimeShape;
@@ -33,6 +39,8 @@ use rmt_extract::{
 use rmt_fields::{Asteroid, AsteroidParams, ScalarField, Sphere};
 use rmt_mesh::Mesh;
 use serde::Serialize;
+
+use crate::bench_python::{dump_values, time_peers, PythonPeerError};
 
 /// Why a benchmark could not run.
 #[derive(Debug, thiserror::Error)]
@@ -70,6 +78,9 @@ pub enum BenchError {
         /// isomesh's error.
         message: String,
     },
+    /// The Python peers could not be timed.
+    #[error(transparent)]
+    Python(#[from] PythonPeerError),
     /// The surface comes too near the box faces for fast-surface-nets to close it.
     #[error(
         "the {field} surface at {n}^3 reaches corner ({x}, {y}, {z}): fast-surface-nets leaves \
@@ -243,6 +254,11 @@ pub struct BenchConfig {
     /// Where the workers of our methods' pools run ([`ThreadPlacement::Os`] by default; see
     /// `rmt_extract::threads` for what pinning changes on an idle pool).
     pub placement: ThreadPlacement,
+    /// Where to keep the sampled corner grids (`FIELD_N.f32`, `FIELD_N.json`) and the peer
+    /// script; `None`: not kept (a temporary folder when `python` is set).
+    pub dump: Option<PathBuf>,
+    /// A Python 3 with numpy, vtk and scikit-image: times the Python peers in the same run.
+    pub python: Option<String>,
 }
 
 impl Default for BenchConfig {
@@ -253,6 +269,8 @@ impl Default for BenchConfig {
             reps: 20,
             threads: vec![1, 2],
             placement: ThreadPlacement::Os,
+            dump: None,
+            python: None,
         }
     }
 }
@@ -306,6 +324,9 @@ pub struct BenchRow {
     /// `median_s` over fast-surface-nets' `median_s` at the same field, size and threads (whole
     /// calls: the body-centred lattice has about twice the points of the grid).
     pub ratio_to_fast_surface_nets: f64,
+    /// `median_s` over VTK Flying Edges' at the same field and size (Flying Edges on one
+    /// thread), when the Python peers were timed: the measure of the issue's speed targets.
+    pub ratio_to_flying_edges: Option<f64>,
     /// `ns_per_point` over fast-surface-nets' `ns_per_point` (per grid point) at the same field,
     /// size and threads: the measure of the performance target ("RMT per sample point within
     /// 2x of fast-surface-nets per grid point").
@@ -363,12 +384,17 @@ pub struct TrackedRatio {
 /// - integrated (checked) vertex + geometry passes over plain MT's, 1 thread;
 /// - the same for integrated-unchecked;
 /// - integrated ns per sample point over fast-surface-nets' ns per grid point, 1 thread;
-/// - integrated wall time on 1 thread over on 2 threads.
-pub const TRACKED: [&str; 4] = [
+/// - integrated wall time on 1 thread over on 2 threads;
+/// - with the Python peers, over VTK Flying Edges (whole calls, 1 thread): integrated, plain MT
+///   on the body-centred lattice, and our marching cubes.
+pub const TRACKED: [&str; 7] = [
     "integrated / plain MT (vg, 1 thread)",
     "unchecked / plain MT (vg, 1 thread)",
     "integrated ns/point / fast-surface-nets (1 thread)",
     "integrated 1 thread / 2 threads (wall)",
+    "integrated / Flying Edges (1 thread)",
+    "plain MT body-centred / Flying Edges (1 thread)",
+    "marching cubes / Flying Edges (1 thread)",
 ];
 
 /// The tracked ratios ([`TRACKED`]) of `results`, per field and size in the order they first
@@ -396,6 +422,9 @@ pub fn tracked_ratios(results: &[BenchRow]) -> Vec<TrackedRatio> {
             row(field, n, integrated, 1)
                 .zip(row(field, n, integrated, 2))
                 .map(|(one, two)| one.median_s / two.median_s),
+            row(field, n, integrated, 1).and_then(|r| r.ratio_to_flying_edges),
+            row(field, n, BenchMethod::MtBcdlNone.name(), 1).and_then(|r| r.ratio_to_flying_edges),
+            row(field, n, BenchMethod::Mc.name(), 1).and_then(|r| r.ratio_to_flying_edges),
         ];
         for (ratio, value) in TRACKED.into_iter().zip(values) {
             if let Some(value) = value {
@@ -710,13 +739,48 @@ pub fn run_bench(
 ) -> Result<BenchReport, BenchError> {
     config.check()?;
     let load_average_before = load_average();
-    let methods = BenchMethod::ALL;
     let sample_threads = config.threads.iter().copied().max().unwrap_or(1);
+    // The Python peers read the dumped values; without --dump they go to a temporary folder.
+    let dump_dir = match (&config.dump, &config.python) {
+        (Some(dir), _) => Some(dir.clone()),
+        (None, Some(_)) => {
+            Some(std::env::temp_dir().join(format!("rmt-bench-values-{}", std::process::id())))
+        }
+        (None, None) => None,
+    };
+    let result = run_cases(config, dump_dir.as_deref(), sample_threads, &mut progress);
+    if let (None, Some(dir)) = (&config.dump, &dump_dir) {
+        // Best effort: a leftover temporary folder is not worth failing a finished run.
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    let results = result?;
+    Ok(BenchReport {
+        tracked: tracked_ratios(&results),
+        results,
+        reps: config.reps,
+        placement: config.placement.name(),
+        load_average_before,
+        load_average_after: load_average(),
+    })
+}
+
+/// The rows of every field and size (see [`run_bench`]); the values are dumped into `dump_dir`
+/// when it is set.
+fn run_cases(
+    config: &BenchConfig,
+    dump_dir: Option<&std::path::Path>,
+    sample_threads: usize,
+    progress: &mut impl FnMut(&str),
+) -> Result<Vec<BenchRow>, BenchError> {
+    let methods = BenchMethod::ALL;
     let mut results = Vec::new();
     for &field in &config.fields {
         for &n in &config.sizes {
             progress(&format!("{} at {n}^3: sampling", field.name()));
             let case = Case::new(field, n, sample_threads)?;
+            if let Some(dir) = dump_dir {
+                dump_values(dir, field.name(), n, &case.simple)?;
+            }
             let mut runners = methods
                 .iter()
                 .map(|&m| case.runner(m, config.placement))
@@ -738,7 +802,18 @@ pub fn run_bench(
             let mut cpu = vec![vec![Vec::new(); methods.len()]; config.threads.len()];
             let mut passes = vec![vec![Vec::new(); methods.len()]; config.threads.len()];
             let mut triangles = vec![vec![0; methods.len()]; config.threads.len()];
-            for _ in 0..config.reps {
+            let mut peers = Vec::new();
+            for rep in 0..config.reps {
+                // The Python peers run once, between the two halves of our repetitions.
+                if let (Some(python), Some(dir), true) =
+                    (&config.python, dump_dir, rep == config.reps / 2)
+                {
+                    progress(&format!(
+                        "{} at {n}^3: Flying Edges and scikit-image ({python})",
+                        field.name()
+                    ));
+                    peers = time_peers(python, dir, field.name(), n, config.reps)?;
+                }
                 for (ti, &threads) in config.threads.iter().enumerate() {
                     for (mi, (&m, runner)) in methods.iter().zip(&mut runners).enumerate() {
                         let timing = case.run(m, runner, threads)?;
@@ -781,19 +856,44 @@ pub fn run_bench(
                             Some(median(&passes[ti][mi]) / median(&passes[ti][pi]))
                         }),
                         second_call_allocation_share: share[ti][mi],
+                        ratio_to_flying_edges: None,
                     });
+                }
+                let points = case.simple.point_count();
+                for peer in &peers {
+                    results.push(BenchRow {
+                        field: field.name(),
+                        n,
+                        method: peer.method,
+                        threads,
+                        threads_used: 1,
+                        median_s: peer.median_s,
+                        cpu_median_s: None,
+                        ns_per_point: peer.median_s * 1e9 / points as f64,
+                        ratio_to_fast_surface_nets: peer.median_s / fsn,
+                        point_ratio_to_fast_surface_nets: peer.median_s
+                            / points as f64
+                            / fsn_per_point,
+                        sample_points: points,
+                        triangles: peer.triangles,
+                        vertex_geometry_median_s: None,
+                        vertex_geometry_over_plain: None,
+                        second_call_allocation_share: None,
+                        ratio_to_flying_edges: None,
+                    });
+                }
+            }
+            if let Some(fe) = peers.iter().find(|p| p.method == "vtk_flying_edges") {
+                for row in results
+                    .iter_mut()
+                    .filter(|r| r.field == field.name() && r.n == n)
+                {
+                    row.ratio_to_flying_edges = Some(row.median_s / fe.median_s);
                 }
             }
         }
     }
-    Ok(BenchReport {
-        tracked: tracked_ratios(&results),
-        results,
-        reps: config.reps,
-        placement: config.placement.name(),
-        load_average_before,
-        load_average_after: load_average(),
-    })
+    Ok(results)
 }
 
 /// The report as an aligned text table, one row per result, plus the load averages.
@@ -802,7 +902,7 @@ pub fn format_table(report: &BenchReport) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<9} {:>4} {:>3} {:<22} {:>10} {:>10} {:>8} {:>7} {:>8} {:>10} {:>6} {:>7} {:>9}",
+        "{:<9} {:>4} {:>3} {:<22} {:>10} {:>10} {:>8} {:>7} {:>8} {:>6} {:>10} {:>6} {:>7} {:>9}",
         "field",
         "n",
         "thr",
@@ -812,6 +912,7 @@ pub fn format_table(report: &BenchReport) -> String {
         "ns/point",
         "x_fsn",
         "x_fsn/pt",
+        "x_fe",
         "vg_ms",
         "vg_xmt",
         "alloc2",
@@ -827,6 +928,9 @@ pub fn format_table(report: &BenchReport) -> String {
         let cpu = r
             .cpu_median_s
             .map_or("-".to_string(), |v| format!("{:.3}", v * 1e3));
+        let over_fe = r
+            .ratio_to_flying_edges
+            .map_or("-".to_string(), |v| format!("{v:.2}"));
         let alloc = r
             .second_call_allocation_share
             .map_or("-".to_string(), |v| format!("{:.2}%", v * 100.0));
@@ -837,7 +941,7 @@ pub fn format_table(report: &BenchReport) -> String {
         };
         let _ = writeln!(
             s,
-            "{:<9} {:>4} {:>3} {:<22} {:>10.3} {:>10} {:>8.2} {:>7.2} {:>8.2} {:>10} {:>6} {:>7} {:>9}",
+            "{:<9} {:>4} {:>3} {:<22} {:>10.3} {:>10} {:>8.2} {:>7.2} {:>8.2} {:>6} {:>10} {:>6} {:>7} {:>9}",
             r.field,
             r.n,
             thr,
@@ -847,6 +951,7 @@ pub fn format_table(report: &BenchReport) -> String {
             r.ns_per_point,
             r.ratio_to_fast_surface_nets,
             r.point_ratio_to_fast_surface_nets,
+            over_fe,
             vg,
             over_plain,
             alloc,
@@ -872,7 +977,7 @@ pub fn format_table(report: &BenchReport) -> String {
         s,
         "{} repetitions, medians; cpu = CPU time of all threads; * = single-threaded peer; \
          x_fsn = time over fast-surface-nets'; x_fsn/pt = ns/point over fast-surface-nets' ns per \
-         grid point (the target's measure); vg = vertex + geometry passes (wall); vg_xmt = vg over \
+         grid point (the target's measure); x_fe = time over VTK Flying Edges' (--python); vg = vertex + geometry passes (wall); vg_xmt = vg over \
          plain MT's on the same lattice; alloc2 = \
          allocation share of a second call; workers placed by: {}; load average before {}, after {}",
         report.reps,
@@ -1013,6 +1118,8 @@ mod tests {
             reps: 3,
             threads: vec![1, 2],
             placement: ThreadPlacement::Os,
+            dump: None,
+            python: None,
         };
         let mut lines = 0;
         let report = run_bench(&config, |_| lines += 1).unwrap();
@@ -1099,14 +1206,9 @@ mod tests {
         let table = format_table(&report);
         assert!(table.contains("rmt_bcdl_integrated") && table.contains("rmt_bcdl_unchecked"));
         assert!(table.contains("vg_xmt"));
-        // The tracked ratios: all four per field and size (both thread counts ran), each the
-        // quotient of the rows it names.
-        assert_eq!(
-            report.tracked.len(),
-            2 * TRACKED.len(),
-            "{:?}",
-            report.tracked
-        );
+        // The tracked ratios: the first four per field and size (both thread counts ran; the
+        // three over Flying Edges need the Python peers), each the quotient of the rows it names.
+        assert_eq!(report.tracked.len(), 2 * 4, "{:?}", report.tracked);
         let get = |n: usize, method: &str, threads: usize| {
             report
                 .results
@@ -1139,5 +1241,71 @@ mod tests {
         let tracked = tracked_ratios(&one);
         assert_eq!(tracked.len(), 2 * 3);
         assert!(tracked.iter().all(|t| t.ratio != TRACKED[3]));
+    }
+
+    /// The Python peers' wiring, with a stand-in interpreter (a shell script) that checks what
+    /// it is asked and answers as `peer_bench.py` would: the values are dumped before it runs,
+    /// its rows join the results, and every row gets its ratio over its Flying Edges.
+    #[cfg(unix)]
+    #[test]
+    fn python_peer_rows_join_the_results_with_ratios_over_flying_edges() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let fake = dir.path().join("fake-python");
+        std::fs::write(
+            &fake,
+            "#!/bin/sh\n\
+             # args: SCRIPT DIR --only NAME --reps R\n\
+             [ \"$3\" = --only ] && [ -f \"$2/$4.json\" ] && [ -f \"$2/$4.f32\" ] || exit 3\n\
+             n=${4#sphere_}\n\
+             echo field,n,method,threads,median_ms,min_ms,reps,triangles\n\
+             echo sphere,$n,vtk_flying_edges,1,0.010,0.009,$6,77\n\
+             echo sphere,$n,skimage_mc,1,0.040,0.030,$6,78\n",
+        )
+        .unwrap();
+        std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let dump = dir.path().join("values");
+        let config = BenchConfig {
+            fields: vec![BenchField::Sphere],
+            sizes: vec![12, 16],
+            reps: 2,
+            threads: vec![1],
+            placement: ThreadPlacement::Os,
+            dump: Some(dump.clone()),
+            python: Some(fake.display().to_string()),
+        };
+        let report = run_bench(&config, |_| {}).unwrap();
+        assert_eq!(report.results.len(), 2 * (BenchMethod::ALL.len() + 2));
+        for n in [12, 16] {
+            assert!(dump.join(format!("sphere_{n}.json")).is_file());
+            let row = |m: &str| {
+                report
+                    .results
+                    .iter()
+                    .find(|r| r.n == n && r.method == m)
+                    .unwrap()
+            };
+            let fe = row("vtk_flying_edges");
+            assert_eq!((fe.triangles, fe.threads_used), (77, 1));
+            assert!((fe.median_s - 1e-5).abs() < 1e-12);
+            assert_eq!(row("skimage_mc").ratio_to_flying_edges, Some(4.0));
+            let mc = row("mc");
+            let over = mc.ratio_to_flying_edges.unwrap();
+            assert!((over - mc.median_s / 1e-5).abs() < 1e-9 * over, "{over}");
+        }
+        let tracked: Vec<&str> = report.tracked.iter().map(|t| t.ratio).collect();
+        assert!(tracked.contains(&"marching cubes / Flying Edges (1 thread)"));
+        assert!(tracked.contains(&"integrated / Flying Edges (1 thread)"));
+        // A peer that fails stops the run with its message.
+        let config = BenchConfig {
+            python: Some("/bin/false".into()),
+            sizes: vec![12],
+            ..config
+        };
+        let err = run_bench(&config, |_| {}).unwrap_err().to_string();
+        assert!(
+            err.contains("/bin/false") && err.contains("sphere_12"),
+            "{err}"
+        );
     }
 }

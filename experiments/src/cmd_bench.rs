@@ -3,6 +3,7 @@
 //!
 //! ```text
 //! experiments bench --fields sphere,asteroid --sizes 32,64,128 --reps 20 --threads 1,2 [--pin] --json
+//! experiments bench --sizes 64,128 --threads 1 --python .venv/bin/python [--dump DIR]
 //! ```
 
 use anyhow::{Context, Result};
@@ -30,6 +31,15 @@ pub struct Args {
     /// them.
     #[arg(long)]
     pub pin: bool,
+    /// Also time VTK's Flying Edges and scikit-image's marching_cubes on the same values, with
+    /// this Python 3 (it needs numpy, vtk and scikit-image), and give every row its ratio over
+    /// Flying Edges.
+    #[arg(long, value_name = "PY")]
+    pub python: Option<String>,
+    /// Keep the sampled corner grids (FIELD_N.f32 and FIELD_N.json, format rmt-values-1) and the
+    /// peer script in this folder.
+    #[arg(long, value_name = "DIR")]
+    pub dump: Option<std::path::PathBuf>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -53,6 +63,8 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             ThreadPlacement::Os
         },
+        dump: args.dump,
+        python: args.python,
     };
     let report = run_bench(&config, |line| eprintln!("bench: {line}"))?;
     if args.json {

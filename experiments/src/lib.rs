@@ -29,6 +29,7 @@
 //! - [`edit`]: chunked terrain (`rmt-terrain`): `extract --chunks` and the `edit` workload;
 //! - [`studio`]: the studio's backend (page parameters parsed and checked as `extract` options);
 //! - [`bench`](mod@bench): extraction speed against peer crates on pre-sampled values;
+//!   [`bench_python`]: the Python peers (VTK's Flying Edges, scikit-image) on the same values;
 //! - [`study`]: perception studies of methods under shadings (design file, simulated
 //!   participants, the texts of `study plan`, `analyse` and `coverage`; the statistics are
 //!   `rmt_analysis::study`'s), run by [`cmd_study`].
@@ -40,6 +41,7 @@
 //! [`cmd_report`] (`reports/` rebuilt from a run, `rmt-report`), [`cmd_bench`].
 
 pub mod bench;
+pub mod bench_python;
 pub mod cmd_analyse;
 pub mod cmd_bench;
 pub mod cmd_cluster;
