@@ -97,6 +97,7 @@
 //! ```
 
 mod brush;
+pub mod lod;
 mod strokes;
 mod world;
 

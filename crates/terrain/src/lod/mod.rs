@@ -1,0 +1,48 @@
+//! Level of detail without cracks: one conforming multiresolution tetrahedral mesh over nested
+//! body-centred lattices, and marching tetrahedra on it.
+//!
+//! ```text
+//!   LevelMap (level_map.rs)   2:1-balanced octree of chunks, from a viewer + distance rule
+//!        |
+//!   forest (mesh.rs)          coarsest body-centred tets, red-refined where the map is finer
+//!        |
+//!   closure + green (refine.rs)   2:1 balance rule, face rule; cone / one-edge / ordered bisection
+//!        |
+//!   chunk tets (mesh.rs)      each chunk builds a window and keeps the tets whose centroid it owns
+//!        |
+//!   march (mt.rs)             marching tetrahedra, crossings keyed by their edge's lattice points
+//!        |
+//!   LodWorld (world.rs)       viewer moves -> new map -> re-mesh the chunks whose tets changed
+//! ```
+//!
+//! Lattice coordinates are integers in `u = h / 2` ([`lattice`]); level `l` has cells of
+//! `h 2^l`. On any conforming tetrahedral mesh marching tetrahedra's surface is closed, so the
+//! seams between levels need no transition tables: the mesh itself is conforming across them.
+//! A crossing is named by its edge's two lattice points and computed from them alone, so every
+//! chunk that meets it computes the same bits, and welding by key joins the chunks exactly.
+//!
+//! Not here (yet): clustering across levels (plain marching tetrahedra only), edits, morphing.
+
+pub mod check;
+pub mod lattice;
+pub mod level_map;
+pub mod mesh;
+pub mod refine;
+
+pub use level_map::{ChunkKey, LevelMap, LodGeometry};
+pub use mesh::{chunk_tets, world_tets, MeshTet};
+pub use refine::TetKind;
+
+/// Why a multiresolution mesh could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum LodError {
+    /// Bad geometry or settings.
+    #[error("invalid level-of-detail settings: {0}")]
+    Invalid(String),
+    /// A chunk that is not a leaf of the level map.
+    #[error("chunk {0:?} is not in the level map")]
+    NoSuchChunk(ChunkKey),
+    /// The closure left a pattern no green template handles (a bug, never expected).
+    #[error("closure incomplete: {0}")]
+    Closure(String),
+}

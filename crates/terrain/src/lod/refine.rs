@@ -1,0 +1,513 @@
+//! Red refinement, the closure, and the three green templates.
+//!
+//! ```text
+//!   red (1:8)       split the 6 edges: 4 corner tets + the inner octahedron cut along its
+//!                   SHORTEST diagonal (the one joining the two long-edge midpoints) = exactly
+//!                   the 8 body-centred tets of the next finer level
+//!   closure         for every leaf t of level > 0, with V = all leaf vertices and
+//!                   S = edges of t whose midpoint is in V, red-refine t when
+//!                     (balance) a point (i a + j b + k c) / 4 of a face abc, i + j + k = 4,
+//!                               not all of i, j, k even (a quarter point), is in V; or
+//!                     (face)    S holds all 3 edges of a face and S is not exactly that face;
+//!                   repeat until nothing changes (the least fixed point: refining only adds
+//!                   vertices, so the result does not depend on the order)
+//!   green           (no vertex added; green tets are never refined)
+//!     S empty            keep t
+//!     S = face abc       cone: split abc at its midpoints into 4, cone each to the opposite d
+//!     S, no full face    recursive bisection: bisect the first edge of S in the GLOBAL edge
+//!                        order (longest first, then the lexicographic order of the sorted
+//!                        endpoints), hand each other edge of S to the child holding it, repeat
+//! ```
+//!
+//! Why it conforms: a green tet's triangulation of each of its faces depends only on that face
+//! and which of its edges are split (0: the face; 1: two halves; 2: the first split edge in the
+//! global order is cut first, its midpoint joined to the opposite corner, then the other; 3:
+//! four), and which edges are split depends only on `V`, which both tets of a face see alike.
+//! The tests check every template on every body-centred tet against that face rule.
+
+use std::collections::HashSet;
+
+use super::lattice::{mid, orient, Point, Tet, EDGES, FACES};
+use super::LodError;
+
+/// The edges (indices into [`EDGES`]) of each face of [`FACES`].
+pub const FACE_EDGES: [[usize; 3]; 4] = [[3, 4, 5], [1, 2, 5], [0, 2, 4], [0, 1, 3]];
+
+/// The quarter points of a face, as weights `(i, j, k)` with `i + j + k = 4`, not all even.
+const QUARTERS: [(i64, i64, i64); 9] = [
+    (0, 1, 3),
+    (0, 3, 1),
+    (1, 0, 3),
+    (3, 0, 1),
+    (1, 3, 0),
+    (3, 1, 0),
+    (1, 1, 2),
+    (1, 2, 1),
+    (2, 1, 1),
+];
+
+/// How a tetrahedron of the multiresolution mesh came to be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum TetKind {
+    /// A body-centred tetrahedron of its level (a red-forest leaf with no split edge).
+    Bcc,
+    /// A child of the face-cone template.
+    Cone,
+    /// A child of recursive bisection of `n` split edges.
+    Bisect(u8),
+}
+
+/// A leaf of the red forest: a body-centred tetrahedron of `level`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Leaf {
+    /// The tetrahedron, positively oriented.
+    pub tet: Tet,
+    /// Its level.
+    pub level: u8,
+}
+
+fn half(p: Point, q: Point) -> Point {
+    // Callers pass edges of tets of level >= 1, whose midpoints are lattice points.
+    debug_assert!(mid(p, q).is_some());
+    [(p[0] + q[0]) >> 1, (p[1] + q[1]) >> 1, (p[2] + q[2]) >> 1]
+}
+
+/// Red (1:8) refinement of a body-centred tetrahedron of level >= 1: its 8 children, the
+/// body-centred tetrahedra of the next finer level inside it.
+pub fn red(t: &Tet) -> [Tet; 8] {
+    let m: [Point; 6] = EDGES.map(|(a, b)| half(t[a], t[b]));
+    // The three diagonals of the octahedron join midpoints of opposite edges.
+    const DIAG: [(usize, usize); 3] = [(0, 5), (1, 4), (2, 3)];
+    let len = |k: usize| super::lattice::d2(m[DIAG[k].0], m[DIAG[k].1]);
+    let best = (0..3).min_by_key(|&k| (len(k), k)).unwrap_or(0);
+    let (p, q) = DIAG[best];
+    // The other four edges in a ring (consecutive ones share a vertex).
+    let mut rest: Vec<usize> = (0..6).filter(|&e| e != p && e != q).collect();
+    let mut ring = vec![rest.remove(0)];
+    while !rest.is_empty() {
+        let last = EDGES[ring[ring.len() - 1]];
+        let shares = |e: usize| {
+            let (a, b) = EDGES[e];
+            a == last.0 || a == last.1 || b == last.0 || b == last.1
+        };
+        let i = rest.iter().position(|&e| shares(e)).unwrap_or(0);
+        ring.push(rest.remove(i));
+    }
+    let e = |a: usize, b: usize| {
+        let k = EDGES
+            .iter()
+            .position(|&x| x == (a.min(b), a.max(b)))
+            .unwrap_or(0);
+        m[k]
+    };
+    [
+        orient([t[0], e(0, 1), e(0, 2), e(0, 3)]),
+        orient([e(0, 1), t[1], e(1, 2), e(1, 3)]),
+        orient([e(0, 2), e(1, 2), t[2], e(2, 3)]),
+        orient([e(0, 3), e(1, 3), e(2, 3), t[3]]),
+        orient([m[p], m[q], m[ring[0]], m[ring[1]]]),
+        orient([m[p], m[q], m[ring[1]], m[ring[2]]]),
+        orient([m[p], m[q], m[ring[2]], m[ring[3]]]),
+        orient([m[p], m[q], m[ring[3]], m[ring[0]]]),
+    ]
+}
+
+/// The global edge order of recursive bisection: longest first, then the sorted endpoints.
+fn edge_order(p: Point, q: Point) -> (i64, Point, Point) {
+    let (a, b) = if p < q { (p, q) } else { (q, p) };
+    (-super::lattice::d2(a, b), a, b)
+}
+
+/// The split-edge mask of `t` (bit `e` for edge `EDGES[e]`): edges whose midpoint is in `v`.
+pub fn split_mask(t: &Tet, v: &HashSet<Point>) -> u8 {
+    let mut s = 0u8;
+    for (e, &(a, b)) in EDGES.iter().enumerate() {
+        if mid(t[a], t[b]).is_some_and(|m| v.contains(&m)) {
+            s |= 1 << e;
+        }
+    }
+    s
+}
+
+/// Whether the closure's face rule refines a tet with split mask `s`: a full face with more.
+pub fn face_rule(s: u8) -> bool {
+    let full = FACE_EDGES
+        .iter()
+        .filter(|fe| fe.iter().all(|&e| s >> e & 1 == 1))
+        .count();
+    full > 0 && !(full == 1 && s.count_ones() == 3)
+}
+
+/// Whether the closure's 2:1 balance rule refines `t`: a quarter point of a face is in `v`.
+pub fn balance_rule(t: &Tet, v: &HashSet<Point>) -> bool {
+    FACES.iter().any(|f| {
+        let (a, b, c) = (t[f[0]], t[f[1]], t[f[2]]);
+        QUARTERS.iter().any(|&(i, j, k)| {
+            let p: [i64; 3] = std::array::from_fn(|x| {
+                i * i64::from(a[x]) + j * i64::from(b[x]) + k * i64::from(c[x])
+            });
+            p.iter().all(|w| w % 4 == 0)
+                && v.contains(&[(p[0] / 4) as i32, (p[1] / 4) as i32, (p[2] / 4) as i32])
+        })
+    })
+}
+
+/// All vertices of the leaves.
+pub fn vertices(leaves: &[Leaf]) -> HashSet<Point> {
+    let mut v = HashSet::with_capacity(leaves.len());
+    for l in leaves {
+        v.extend(l.tet);
+    }
+    v
+}
+
+/// Runs the closure to its fixed point; returns how many leaves it red-refined.
+pub fn closure(leaves: &mut Vec<Leaf>) -> usize {
+    let mut reds = 0;
+    loop {
+        let v = vertices(leaves);
+        let mut next = Vec::with_capacity(leaves.len());
+        let mut changed = 0;
+        for l in leaves.iter() {
+            if l.level > 0 && (face_rule(split_mask(&l.tet, &v)) || balance_rule(&l.tet, &v)) {
+                changed += 1;
+                next.extend(red(&l.tet).map(|tet| Leaf {
+                    tet,
+                    level: l.level - 1,
+                }));
+            } else {
+                next.push(*l);
+            }
+        }
+        *leaves = next;
+        if changed == 0 {
+            return reds;
+        }
+        reds += changed;
+    }
+}
+
+/// The green template for split mask `s` (no full face with more, see [`face_rule`]), appended
+/// to `out` with the template's kind.
+pub fn green(t: &Tet, s: u8, out: &mut Vec<(Tet, TetKind)>) -> Result<(), LodError> {
+    if s == 0 {
+        out.push((*t, TetKind::Bcc));
+        return Ok(());
+    }
+    if face_rule(s) {
+        return Err(LodError::Closure(format!(
+            "split mask {s:06b} of {t:?} has no green template"
+        )));
+    }
+    if let Some(fi) = (0..4).find(|&fi| FACE_EDGES[fi].iter().all(|&e| s >> e & 1 == 1)) {
+        let d = t[fi];
+        let [a, b, c] = FACES[fi].map(|i| t[i]);
+        let (mab, mbc, mca) = (half(a, b), half(b, c), half(c, a));
+        for tri in [[a, mab, mca], [mab, b, mbc], [mca, mbc, c], [mab, mbc, mca]] {
+            out.push((orient([tri[0], tri[1], tri[2], d]), TetKind::Cone));
+        }
+        return Ok(());
+    }
+    let mut edges: Vec<(Point, Point)> = (0..6)
+        .filter(|&e| s >> e & 1 == 1)
+        .map(|e| (t[EDGES[e].0], t[EDGES[e].1]))
+        .collect();
+    let n = edges.len() as u8;
+    bisect(*t, &mut edges, n, out);
+    Ok(())
+}
+
+fn bisect(t: Tet, edges: &mut Vec<(Point, Point)>, n: u8, out: &mut Vec<(Tet, TetKind)>) {
+    let Some(first) = (0..edges.len()).min_by_key(|&k| edge_order(edges[k].0, edges[k].1)) else {
+        out.push((t, TetKind::Bisect(n)));
+        return;
+    };
+    let (p, q) = edges.swap_remove(first);
+    let m = half(p, q);
+    for (from, to) in [(q, m), (p, m)] {
+        let child = orient(t.map(|x| if x == from { to } else { x }));
+        let mut mine: Vec<(Point, Point)> = edges
+            .iter()
+            .copied()
+            .filter(|(a, b)| child.contains(a) && child.contains(b))
+            .collect();
+        bisect(child, &mut mine, n, out);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::lattice::{bcc_tet, d2, is_bcc_tet, vol6};
+    use super::*;
+    use std::collections::HashMap;
+
+    /// The outward faces of a positively oriented tet, in cyclic order.
+    fn faces(t: &Tet) -> [[Point; 3]; 4] {
+        [
+            [t[1], t[2], t[3]],
+            [t[0], t[3], t[2]],
+            [t[0], t[1], t[3]],
+            [t[0], t[2], t[1]],
+        ]
+    }
+
+    fn sorted(mut f: [Point; 3]) -> [Point; 3] {
+        f.sort_unstable();
+        f
+    }
+
+    fn normal(f: &[Point; 3]) -> [i64; 3] {
+        let u: [i64; 3] = std::array::from_fn(|i| i64::from(f[1][i] - f[0][i]));
+        let v: [i64; 3] = std::array::from_fn(|i| i64::from(f[2][i] - f[0][i]));
+        [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ]
+    }
+
+    fn dot(a: [i64; 3], b: [i64; 3]) -> i64 {
+        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    }
+
+    /// The face rule written independently of the templates: how a face `abc` with the given
+    /// split edges (as endpoint pairs) is triangulated (unoriented, sorted triples).
+    fn face_split(f: [Point; 3], split: &[(Point, Point)]) -> Vec<[Point; 3]> {
+        let [a, b, c] = f;
+        let has = |p: Point, q: Point| {
+            split
+                .iter()
+                .any(|&(x, y)| (x, y) == (p, q) || (x, y) == (q, p))
+        };
+        let mut out = match split.len() {
+            0 => vec![[a, b, c]],
+            1 => {
+                let (p, q) = split[0];
+                let o = *f.iter().find(|x| **x != p && **x != q).unwrap();
+                let m = half(p, q);
+                vec![[p, m, o], [m, q, o]]
+            }
+            2 => {
+                let (e1, e2) =
+                    if edge_order(split[0].0, split[0].1) < edge_order(split[1].0, split[1].1) {
+                        (split[0], split[1])
+                    } else {
+                        (split[1], split[0])
+                    };
+                // v shared by both edges; the first edge's far end x, the second's y.
+                let v = if e1.0 == e2.0 || e1.0 == e2.1 {
+                    e1.0
+                } else {
+                    e1.1
+                };
+                let x = if e1.0 == v { e1.1 } else { e1.0 };
+                let y = if e2.0 == v { e2.1 } else { e2.0 };
+                let (m1, m2) = (half(v, x), half(v, y));
+                // First cut: m1 to y; then the part holding e2 = (v, m1, y) is cut at m2.
+                vec![[m1, x, y], [v, m1, m2], [m1, m2, y]]
+            }
+            _ => {
+                assert!(has(a, b) && has(b, c) && has(c, a));
+                let (mab, mbc, mca) = (half(a, b), half(b, c), half(c, a));
+                vec![[a, mab, mca], [mab, b, mbc], [mca, mbc, c], [mab, mbc, mca]]
+            }
+        };
+        for t in &mut out {
+            t.sort_unstable();
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// Checks that `kids` tile `t` conformingly: positive volumes adding up to `t`'s, every
+    /// inner face shared by two kids with opposite orientation, and each face of `t` cut by
+    /// the face rule for `split` (which are the split edges).
+    fn check_tiles(t: &Tet, kids: &[Tet], split: &[(Point, Point)]) {
+        assert!(kids.iter().all(|k| vol6(k) > 0), "{t:?} {kids:?}");
+        assert_eq!(kids.iter().map(vol6).sum::<i64>(), vol6(t));
+        let allowed: HashSet<Point> = t
+            .iter()
+            .copied()
+            .chain(split.iter().map(|&(p, q)| half(p, q)))
+            .collect();
+        let used: HashSet<Point> = kids.iter().flatten().copied().collect();
+        assert_eq!(
+            used, allowed,
+            "kids use exactly the corners and the split midpoints"
+        );
+        let mut count: HashMap<[Point; 3], Vec<[Point; 3]>> = HashMap::new();
+        for k in kids {
+            for f in faces(k) {
+                count.entry(sorted(f)).or_default().push(f);
+            }
+        }
+        let mut on_face: [Vec<[Point; 3]>; 4] = Default::default();
+        for (key, fs) in &count {
+            match fs.len() {
+                1 => {
+                    // On a face of t, facing the same way.
+                    let n = normal(&fs[0]);
+                    let which = faces(t).iter().position(|pf| {
+                        let pn = normal(pf);
+                        (0..3).all(|i| {
+                            dot(pn, std::array::from_fn(|x| i64::from(key[i][x] - pf[0][x]))) == 0
+                        }) && dot(pn, n) > 0
+                    });
+                    let which =
+                        which.unwrap_or_else(|| panic!("inner face {key:?} of {t:?} has one tet"));
+                    on_face[which].push(*key);
+                }
+                2 => assert!(
+                    dot(normal(&fs[0]), normal(&fs[1])) < 0,
+                    "face {key:?} shared with the same orientation"
+                ),
+                n => panic!("face {key:?} in {n} kids"),
+            }
+        }
+        for (fi, pf) in faces(t).iter().enumerate() {
+            let fsplit: Vec<(Point, Point)> = split
+                .iter()
+                .copied()
+                .filter(|(p, q)| pf.contains(p) && pf.contains(q))
+                .collect();
+            let mut got = on_face[fi].clone();
+            got.sort_unstable();
+            assert_eq!(got, face_split(*pf, &fsplit), "face {fi} of {t:?}");
+        }
+    }
+
+    fn sample_tets() -> Vec<(Tet, u8)> {
+        let mut out = Vec::new();
+        for level in 1..=3u8 {
+            for cell in [[0, 0, 0], [-1, 2, 3], [5, -4, 1]] {
+                for axis in 0..3 {
+                    for m in 0..4 {
+                        out.push((bcc_tet(level, cell, axis, m), level));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn red_gives_the_eight_finer_body_centred_tets() {
+        for (t, level) in sample_tets() {
+            let kids = red(&t);
+            assert!(kids.iter().all(|k| is_bcc_tet(k, level - 1)), "{t:?}");
+            let all: Vec<(Point, Point)> = EDGES.iter().map(|&(a, b)| (t[a], t[b])).collect();
+            check_tiles(&t, &kids, &all);
+            // The octahedron's cut is the unique shortest diagonal.
+            let m: Vec<Point> = EDGES.iter().map(|&(a, b)| half(t[a], t[b])).collect();
+            let mut lens = [d2(m[0], m[5]), d2(m[1], m[4]), d2(m[2], m[3])];
+            lens.sort_unstable();
+            assert!(lens[0] < lens[1]);
+        }
+    }
+
+    #[test]
+    fn red_refinement_reproduces_the_finer_lattice() {
+        // All level-1 tets across the faces of a 3^3 block of cells, refined: exactly the
+        // level-0 tets of the same faces' region, each once.
+        let mut kids: Vec<Tet> = Vec::new();
+        let mut parents = 0;
+        for x in 0..3 {
+            for y in 0..3 {
+                for z in 0..3 {
+                    for axis in 0..3 {
+                        for m in 0..4 {
+                            parents += 1;
+                            kids.extend(red(&bcc_tet(1, [x, y, z], axis, m)).map(|k| {
+                                let mut s = k;
+                                s.sort_unstable();
+                                s
+                            }));
+                        }
+                    }
+                }
+            }
+        }
+        let distinct: HashSet<Tet> = kids.iter().copied().collect();
+        assert_eq!(distinct.len(), 8 * parents);
+        // Every level-0 tet whose centroid lies in the refined region is among them: count
+        // the level-0 tets inside each parent by containment of the centroid.
+        let mut fine = 0;
+        for x in -1..8 {
+            for y in -1..8 {
+                for z in -1..8 {
+                    for axis in 0..3 {
+                        for m in 0..4 {
+                            let mut f = bcc_tet(0, [x, y, z], axis, m);
+                            f.sort_unstable();
+                            if distinct.contains(&f) {
+                                fine += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(fine, 8 * parents);
+    }
+
+    #[test]
+    fn every_green_template_tiles_its_tet_and_follows_the_face_rule() {
+        let mut cases = [0usize; 3];
+        for (t, _) in sample_tets() {
+            for s in 0u8..64 {
+                let mut out = Vec::new();
+                let r = green(&t, s, &mut out);
+                if face_rule(s) {
+                    assert!(r.is_err());
+                    continue;
+                }
+                assert!(r.is_ok());
+                let split: Vec<(Point, Point)> = (0..6)
+                    .filter(|&e| s >> e & 1 == 1)
+                    .map(|e| (t[EDGES[e].0], t[EDGES[e].1]))
+                    .collect();
+                let kids: Vec<Tet> = out.iter().map(|k| k.0).collect();
+                check_tiles(&t, &kids, &split);
+                match out[0].1 {
+                    TetKind::Bcc => cases[0] += 1,
+                    TetKind::Cone => cases[1] += 1,
+                    TetKind::Bisect(n) => {
+                        assert_eq!(u32::from(n), s.count_ones());
+                        cases[2] += 1
+                    }
+                }
+            }
+        }
+        // Per tet: the empty mask, the 4 single faces, and every mask without a full face.
+        let no_full = (1u8..64)
+            .filter(|&s| {
+                !FACE_EDGES
+                    .iter()
+                    .any(|fe| fe.iter().all(|&e| s >> e & 1 == 1))
+            })
+            .count();
+        let n = sample_tets().len();
+        assert_eq!(cases, [n, 4 * n, no_full * n]);
+    }
+
+    #[test]
+    fn closure_rules() {
+        let t = bcc_tet(1, [0, 0, 0], 0, 0);
+        // A face with more: refine; exactly one face: cone.
+        assert!(face_rule(0b111111));
+        assert!(!face_rule(
+            1 << FACE_EDGES[0][0] | 1 << FACE_EDGES[0][1] | 1 << FACE_EDGES[0][2]
+        ));
+        assert!(face_rule(
+            1 << FACE_EDGES[0][0] | 1 << FACE_EDGES[0][1] | 1 << FACE_EDGES[0][2] | 1 << 0
+        ));
+        // A quarter point of a face in V forces balance refinement; a midpoint does not.
+        let [a, b, c] = FACES[0].map(|i| t[i]);
+        let q: Point = std::array::from_fn(|x| (a[x] * 2 + b[x] + c[x]) / 4);
+        assert!((0..3).all(|x| (a[x] * 2 + b[x] + c[x]) % 4 == 0));
+        assert!(balance_rule(&t, &[q].into_iter().collect()));
+        assert!(!balance_rule(&t, &[half(a, b)].into_iter().collect()));
+        let v: HashSet<Point> = [half(a, b)].into_iter().collect();
+        assert_eq!(split_mask(&t, &v).count_ones(), 1);
+    }
+}
