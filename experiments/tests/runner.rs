@@ -559,3 +559,66 @@ clustering = ["none", "integrated", "postprocessed"]
         fs::read(whole.join("topology.csv")).unwrap()
     );
 }
+
+#[test]
+fn configurations_that_differ_only_in_shading_share_one_extraction() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("shaded.toml");
+    fs::write(
+        &manifest,
+        "name = \"shaded\"\nrepetitions = 3\nwarmup = 1\nthreads = 1\n\
+         [[objects]]\nname = \"sphere\"\nresolution = 10\n\
+         [[objects]]\nname = \"asteroid\"\nresolution = 10\n\
+         [matrix]\nlattices = [\"bcdl\", \"simple\"]\nclustering = [\"integrated\"]\n\
+         shading = [\"smooth\", \"flat\"]\n",
+    )
+    .unwrap();
+    let whole = dir.path().join("whole");
+    runner::start(&manifest, &Overrides::default(), Some(&whole), &quiet()).unwrap();
+
+    // Every id column aside, a flat twin's rows are its smooth configuration's, times included:
+    // one extraction served both (two extractions would not time alike to the nanosecond).
+    let raw = Table::read(&whole.join("raw.csv")).unwrap();
+    let id = raw.header.iter().position(|h| h == "id").unwrap();
+    let time = raw.header.iter().position(|h| h == "t_total_s").unwrap();
+    let rows_of = |wanted: &str| -> Vec<Vec<String>> {
+        raw.rows
+            .iter()
+            .filter(|r| r[id] == wanted)
+            .map(|r| {
+                let mut r = r.clone();
+                r[id].clear();
+                r
+            })
+            .collect()
+    };
+    let mut twins = 0;
+    for smooth in ["ss_bi", "ss_si", "as_bi", "as_si"] {
+        let flat = format!("{smooth}_flat");
+        let (a, b) = (rows_of(smooth), rows_of(&flat));
+        assert_eq!(a.len(), 3, "{smooth}");
+        assert_eq!(a, b, "{flat} has its own rows");
+        assert!(a.iter().all(|r| r[time].parse::<f64>().unwrap() > 0.0));
+        let mesh = |i: &str| fs::read(whole.join("meshes").join(format!("{i}.ply"))).unwrap();
+        assert_eq!(mesh(smooth), mesh(&flat), "{flat}: another mesh");
+        twins += 1;
+    }
+    assert_eq!(twins, 4);
+    // Different configurations are extracted on their own.
+    assert_ne!(rows_of("ss_bi"), rows_of("ss_si"));
+
+    // Stopped between a configuration and its twin, the resumed session extracts the twin
+    // itself: the same rows apart from times, the same mesh.
+    let parts = dir.path().join("parts");
+    let stop = RunOptions {
+        quiet: true,
+        stop_after: Some(1),
+    };
+    runner::start(&manifest, &Overrides::default(), Some(&parts), &stop).unwrap();
+    runner::resume(&parts, &quiet()).unwrap();
+    assert_eq!(rows_without_times(&parts), rows_without_times(&whole));
+    for i in ["ss_bi_flat", "as_si_flat"] {
+        let mesh = |f: &Path| fs::read(f.join("meshes").join(format!("{i}.ply"))).unwrap();
+        assert_eq!(mesh(&parts), mesh(&whole), "{i}");
+    }
+}

@@ -20,6 +20,13 @@
 //! torn row and the rows of a configuration whose progress was not recorded, so no row is lost or
 //! duplicated; finished configurations are skipped.
 //!
+//! **Shared extractions.** Configurations that differ only in how `render` draws them (their
+//! shading) extract the same mesh, so within a session the first of them is extracted and the
+//! others take its result: its mesh, its measurement and its rows, timings included (the rows
+//! differ only in the id). A study's `_flat` twins thus cost no second extraction. A twin whose
+//! first was finished in an earlier session, or runs in another shard, is extracted itself (the
+//! same mesh, by determinism).
+//!
 //! The roles, in the order a run meets them: this module (start, resume, the loop over work
 //! units, the summaries at the end); [`session`] (options, `run.json` sessions, progress bar,
 //! report); [`repetitions`] (one configuration's timed extractions); the `edit` workload in
@@ -29,8 +36,10 @@ mod edits;
 pub mod repetitions;
 pub mod session;
 
+use std::collections::HashMap;
 use std::fs;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
@@ -342,33 +351,43 @@ fn execute(
         pending: Vec::new(),
         last: Instant::now(),
     };
+    let mut shared = SharedExtractions::of(&todo)?;
     for (k, &(unit, c)) in todo.iter().enumerate() {
         if opts.stop_after.is_some_and(|limit| k >= limit) {
             status = Status::Stopped;
             break;
         }
         bar.set_message(c.id.clone());
-        let field = fields
-            .get(&c.field_key())
-            .with_context(|| format!("no field built for object {}", c.field_key()))?;
-        let result = match run_repetitions(
-            c,
-            field,
-            plan,
-            unit.first,
-            unit.last,
-            plan.render_cost.then_some(&mut meter),
-            &bar,
-        ) {
-            Ok(r) => r,
-            Err(e) => {
-                checkpoints.now()?;
-                return Err(e.context(format!(
-                    "configuration {} failed; the finished configurations are kept: fix the \
-                     cause and continue with `experiments run --resume {}`",
-                    c.id,
-                    folder.display()
-                )));
+        let key = geometry_key(unit, c)?;
+        let result = match shared.take(&key) {
+            Some(r) => {
+                bar.inc((plan.warmup + unit.len()) as u64);
+                r
+            }
+            None => {
+                let field = fields
+                    .get(&c.field_key())
+                    .with_context(|| format!("no field built for object {}", c.field_key()))?;
+                match run_repetitions(
+                    c,
+                    field,
+                    plan,
+                    unit.first,
+                    unit.last,
+                    plan.render_cost.then_some(&mut meter),
+                    &bar,
+                ) {
+                    Ok(r) => shared.keep(key, r),
+                    Err(e) => {
+                        checkpoints.now()?;
+                        return Err(e.context(format!(
+                            "configuration {} failed; the finished configurations are kept: fix \
+                             the cause and continue with `experiments run --resume {}`",
+                            c.id,
+                            folder.display()
+                        )));
+                    }
+                }
             }
         };
         let rows = raw_rows_from(
@@ -403,6 +422,72 @@ fn execute(
         configurations_done: checkpoints.progress.completed.len(),
         configurations_total: units.len(),
     })
+}
+
+/// What decides a work unit's mesh, rows and timings apart from its id: the field, the
+/// extraction (object, box, resolution, method, lattice, clustering, finish steps, ...) and the
+/// repetitions. Configurations that differ only in shading have the same key.
+fn geometry_key(unit: &WorkUnit, c: &Configuration) -> Result<String> {
+    let extraction = serde_json::to_string(&c.extraction)
+        .with_context(|| format!("describing configuration {}", c.id))?;
+    Ok(format!(
+        "{}|{}|{}|{extraction}",
+        c.field_key(),
+        unit.first,
+        unit.last
+    ))
+}
+
+/// The results of a session's work units that later units share (same [`geometry_key`]), each
+/// kept until its last user has taken it.
+struct SharedExtractions {
+    /// Users still to come, per key (keys of one unit only are not listed).
+    waiting: HashMap<String, usize>,
+    /// Results kept for them.
+    kept: HashMap<String, Rc<ConfigResult>>,
+}
+
+impl SharedExtractions {
+    /// The keys of `todo` that more than one unit has.
+    fn of(todo: &[(&WorkUnit, &Configuration)]) -> Result<Self> {
+        let mut count: HashMap<String, usize> = HashMap::new();
+        for &(unit, c) in todo {
+            *count.entry(geometry_key(unit, c)?).or_default() += 1;
+        }
+        count.retain(|_, n| *n > 1);
+        Ok(Self {
+            waiting: count,
+            kept: HashMap::new(),
+        })
+    }
+
+    /// The result kept for `key`, if an earlier unit of this session made it.
+    fn take(&mut self, key: &str) -> Option<Rc<ConfigResult>> {
+        let result = self.kept.get(key).cloned()?;
+        self.used(key);
+        Some(result)
+    }
+
+    /// Records `result`, made for `key`, and keeps it when later units share it.
+    fn keep(&mut self, key: String, result: ConfigResult) -> Rc<ConfigResult> {
+        let result = Rc::new(result);
+        if self.waiting.contains_key(&key) {
+            self.kept.insert(key.clone(), Rc::clone(&result));
+            self.used(&key);
+        }
+        result
+    }
+
+    /// One user of `key` is served: the last one drops the kept result.
+    fn used(&mut self, key: &str) {
+        if let Some(n) = self.waiting.get_mut(key) {
+            *n -= 1;
+            if *n == 0 {
+                self.waiting.remove(key);
+                self.kept.remove(key);
+            }
+        }
+    }
 }
 
 /// The units of `units` not finished in `progress`, each with its configuration.
