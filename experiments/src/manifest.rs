@@ -22,6 +22,8 @@
 //! resolution = 50           # or [75, 40, 56] (default 50)
 //! bounds = [-1, -1, -1, 1, 1, 1]   # default [-1, 1]^3
 //! radius = 1.0              # the kind's parameters (see `objects`)
+//! elevation_deg = 50        # camera elevation `render` draws it with (default: the render
+//!                           # settings', 20 degrees); a terrain chunk seen from above
 //!
 //! [matrix]                  # objects x methods x lattices x clustering x simplify x
 //!                           # vertex_cache x shading; several: [[matrix]] tables, each crossed
@@ -79,7 +81,11 @@
 //! change the extraction (two configurations that differ only in shading extract the same mesh),
 //! only how `render` draws it. `configurations.csv` gains a `shading` column when some
 //! configuration is not smooth, so manifests that never name shading keep their files byte for
-//! byte.
+//! byte. The runner extracts such twins once (see `crate::runner`).
+//!
+//! **Camera elevation** is an object's, like shading not part of the extraction:
+//! `configurations.csv` gains an `elevation_deg` column (empty where the object sets none) when
+//! some object sets one, and `render` draws each configuration from its elevation.
 
 mod plan;
 
@@ -336,6 +342,10 @@ pub struct ObjectEntry {
     /// See [`ObjectParams::cave_ceiling`].
     #[serde(default)]
     pub cave_ceiling: Option<f32>,
+    /// The camera elevation `render` draws this object's configurations with, in degrees
+    /// (-89..=89; default: the render settings', 20). Not part of the extraction.
+    #[serde(default)]
+    pub elevation_deg: Option<f32>,
 }
 
 impl ObjectEntry {
@@ -530,6 +540,10 @@ pub struct Configuration {
     /// How `render` draws the mesh (not part of the extraction).
     #[serde(skip_serializing_if = "is_smooth")]
     pub shading: Shading,
+    /// The camera elevation `render` draws the mesh with, in degrees, when its object sets one
+    /// (not part of the extraction).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub elevation_deg: Option<f32>,
 }
 
 fn is_smooth(s: &Shading) -> bool {

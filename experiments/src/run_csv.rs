@@ -111,7 +111,8 @@ pub fn raw_rows_from(
 
 /// `configurations.csv` of a plan: the columns of [`schema::CONFIGURATIONS`], then
 /// [`schema::SHADING`] when some configuration is not smooth (so that the study commands pair
-/// configurations within a shading, and plans that never name shading keep their bytes).
+/// configurations within a shading, and plans that never name shading keep their bytes), then
+/// [`schema::ELEVATION`] when some object sets its camera elevation (empty for the others).
 pub fn configurations_csv(plan: &Plan) -> Result<Vec<u8>> {
     let shaded = plan
         .configurations
@@ -124,6 +125,13 @@ pub fn configurations_csv(plan: &Plan) -> Result<Vec<u8>> {
     if shaded {
         header.push(schema::SHADING.to_string());
     }
+    let elevated = plan
+        .configurations
+        .iter()
+        .any(|c| c.elevation_deg.is_some());
+    if elevated {
+        header.push(schema::ELEVATION.to_string());
+    }
     let mut rows = vec![header];
     for c in &plan.configurations {
         let v = config_values(c);
@@ -133,6 +141,9 @@ pub fn configurations_csv(plan: &Plan) -> Result<Vec<u8>> {
             .collect();
         if shaded {
             row.push(crate::manifest::shading_name(c.shading).to_string());
+        }
+        if elevated {
+            row.push(c.elevation_deg.map(|e| e.to_string()).unwrap_or_default());
         }
         rows.push(row);
     }
@@ -212,5 +223,38 @@ mod tests {
              ss_bi,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,none,false,smooth\n\
              ss_bi_flat,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,none,false,flat\n"
         );
+    }
+
+    #[test]
+    fn an_elevation_column_appears_only_when_some_object_sets_one() {
+        let plan = |elevation: &str| {
+            crate::manifest::parse(
+                &format!(
+                    "name = \"t\"\n[[objects]]\nname = \"sphere\"\nresolution = 4\n\
+                     [[objects]]\nname = \"torus\"\nresolution = 4\n{elevation}\
+                     [matrix]\nlattices = [\"bcdl\"]\nclustering = [\"integrated\"]\n"
+                ),
+                std::path::Path::new("t.toml"),
+            )
+            .unwrap()
+            .plan(
+                std::path::Path::new("t.toml"),
+                std::path::Path::new("."),
+                &Default::default(),
+            )
+        };
+        let csv = |p: &Plan| String::from_utf8(configurations_csv(p).unwrap()).unwrap();
+        let plain = csv(&plan("").unwrap());
+        assert!(!plain.contains("elevation_deg"), "{plain}");
+        let set = csv(&plan("elevation_deg = 55\n").unwrap());
+        assert_eq!(
+            set,
+            "id,object,lattice,clustering,method,kind,rx,ry,rz,collapse_threshold,iso,normals,\
+             simplify,vertex_cache,elevation_deg\n\
+             ss_bi,sphere,bcdl,integrated,mt,sphere,4,4,4,0.5,0,area,none,false,\n\
+             os_bi,torus,bcdl,integrated,mt,torus,4,4,4,0.5,0,area,none,false,55\n"
+        );
+        let err = plan("elevation_deg = 90\n").unwrap_err().to_string();
+        assert!(err.contains("elevation_deg must be -89 to 89"), "{err}");
     }
 }

@@ -103,6 +103,11 @@ fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
 /// with that shading, as always); `settings.json` then holds the settings with smooth shading
 /// and `key.csv` says which animation is which. `settings` must then be smooth (an error
 /// otherwise: the run decides). Without the column every animation takes `settings.shading`.
+///
+/// **Elevation per configuration.** Likewise, when `configurations.csv` has an
+/// [`ELEVATION_COLUMN`] (the runner writes one when some object sets `elevation_deg`), a
+/// configuration with a value there is drawn from that camera elevation, the others from
+/// `settings.elevation_degrees`; `settings.json` holds `settings`.
 pub fn render_run(
     run: &Path,
     settings: &TurntableSettings,
@@ -118,14 +123,10 @@ pub fn render_run(
             run.join(CONFIGURATIONS_FILE).display()
         )));
     }
+    let elevations = configuration_elevations(&manifest, &run.join(CONFIGURATIONS_FILE))?;
     let renderer = Renderer::new(settings.clone())?;
-    let flat_renderer = match &shadings {
-        Some(list) if list.contains(&Shading::Flat) => Some(Renderer::new(TurntableSettings {
-            shading: Shading::Flat,
-            ..settings.clone()
-        })?),
-        _ => None,
-    };
+    // One renderer per shading and elevation the configurations ask for (the settings' own first).
+    let mut renderers: Vec<Renderer> = Vec::new();
     let names = random_names(manifest.configurations.len(), seed)?;
     let render_dir = run.join(RENDER_DIR);
     std::fs::create_dir_all(&render_dir).map_err(io_error(&render_dir))?;
@@ -139,10 +140,25 @@ pub fn render_run(
     for (k, (config, name)) in manifest.configurations.iter().zip(&names).enumerate() {
         let mesh_path = run.join(MESHES_DIR).join(format!("{}.ply", config.id));
         let mesh = load_mesh(&mesh_path)?;
-        let shading = shadings.as_ref().map_or(settings.shading, |s| s[k]);
-        let renderer = match (&flat_renderer, shading) {
-            (Some(flat), Shading::Flat) => flat,
-            _ => &renderer,
+        let wanted = TurntableSettings {
+            shading: shadings.as_ref().map_or(settings.shading, |s| s[k]),
+            elevation_degrees: elevations
+                .as_ref()
+                .and_then(|e| e[k])
+                .unwrap_or(settings.elevation_degrees),
+            ..settings.clone()
+        };
+        let renderer = if wanted == *settings {
+            &renderer
+        } else {
+            let at = match renderers.iter().position(|r| *r.settings() == wanted) {
+                Some(at) => at,
+                None => {
+                    renderers.push(Renderer::new(wanted)?);
+                    renderers.len() - 1
+                }
+            };
+            &renderers[at]
         };
         let animation = renderer.render(&mesh).map_err(|e| RenderError::MeshFile {
             path: mesh_path.clone(),
@@ -207,6 +223,41 @@ pub fn configuration_shadings(manifest: &Manifest, path: &Path) -> Result<Option
                     c.id
                 ),
             }),
+        })
+        .collect::<Result<Vec<_>>>()
+        .map(Some)
+}
+
+/// The column of `configurations.csv` that gives a configuration's camera elevation in degrees
+/// (empty: the render settings').
+pub const ELEVATION_COLUMN: &str = rmt_runfolder::schema::ELEVATION;
+
+/// Each configuration's camera elevation, in manifest order (`None` where the cell is empty),
+/// when the configurations have an [`ELEVATION_COLUMN`] (`None` without one); `path` names the
+/// file in errors.
+pub fn configuration_elevations(
+    manifest: &Manifest,
+    path: &Path,
+) -> Result<Option<Vec<Option<f32>>>> {
+    let Some(column) = manifest.variable_index(ELEVATION_COLUMN) else {
+        return Ok(None);
+    };
+    manifest
+        .configurations
+        .iter()
+        .map(|c| match c.values[column].as_str() {
+            "" => Ok(None),
+            text => match text.parse::<f32>() {
+                Ok(e) if (-89.0..=89.0).contains(&e) => Ok(Some(e)),
+                _ => Err(RenderError::BadFile {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "configuration `{}`: elevation `{text}` is not a number of degrees in \
+                         -89..=89",
+                        c.id
+                    ),
+                }),
+            },
         })
         .collect::<Result<Vec<_>>>()
         .map(Some)
@@ -612,6 +663,63 @@ mod tests {
         .unwrap();
         let err = render_run(run, &tiny_settings(), 3, |_, _, _| {}).unwrap_err();
         assert!(err.to_string().contains("toon"), "{err}");
+    }
+
+    #[test]
+    fn an_elevation_column_draws_those_configurations_from_their_elevation() {
+        let dir = tempfile::tempdir().unwrap();
+        let run = dir.path();
+        std::fs::write(
+            run.join(CONFIGURATIONS_FILE),
+            "id,object,shading,elevation_deg\n\
+             a,sphere,smooth,\n\
+             c,chunk,smooth,55\n\
+             c_flat,chunk,flat,55\n",
+        )
+        .unwrap();
+        std::fs::create_dir_all(run.join(MESHES_DIR)).unwrap();
+        // A squashed sphere, so that the elevation shows in the image.
+        let mut mesh = uv_sphere(1.0, 9, 5);
+        mesh.positions.iter_mut().for_each(|p| p[1] *= 0.3);
+        for id in ["a", "c", "c_flat"] {
+            rmt_mesh::io::save_ply(run.join(MESHES_DIR).join(format!("{id}.ply")), &mesh, true)
+                .unwrap();
+        }
+        let rendered = render_run(run, &tiny_settings(), 3, |_, _, _| {}).unwrap();
+        let bytes = |i: usize| std::fs::read(&rendered[i].path).unwrap();
+        let alone = |settings: TurntableSettings| {
+            let path = run.join("alone.gif");
+            let animation = Renderer::new(settings).unwrap().render(&mesh).unwrap();
+            animation.write_gif(&path).unwrap();
+            std::fs::read(&path).unwrap()
+        };
+        // No value: the settings' elevation; a value: that elevation, with its own shading.
+        assert_eq!(bytes(0), alone(tiny_settings()));
+        let above = TurntableSettings {
+            elevation_degrees: 55.0,
+            ..tiny_settings()
+        };
+        assert_eq!(bytes(1), alone(above.clone()));
+        assert_ne!(bytes(0), bytes(1));
+        let flat_above = TurntableSettings {
+            shading: Shading::Flat,
+            ..above
+        };
+        assert_eq!(bytes(2), alone(flat_above));
+        // settings.json keeps the settings the run was rendered with.
+        let settings: TurntableSettings = serde_json::from_str(
+            &std::fs::read_to_string(run.join(RENDER_DIR).join(SETTINGS_FILE)).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(settings, tiny_settings());
+        // An elevation out of range is named.
+        std::fs::write(
+            run.join(CONFIGURATIONS_FILE),
+            "id,object,elevation_deg\na,sphere,95\n",
+        )
+        .unwrap();
+        let err = render_run(run, &tiny_settings(), 3, |_, _, _| {}).unwrap_err();
+        assert!(err.to_string().contains("elevation `95`"), "{err}");
     }
 
     #[test]

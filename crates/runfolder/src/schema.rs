@@ -46,6 +46,11 @@ pub const CONFIGURATIONS: [&str; 14] = [
 /// drawn with flat shading (`smooth` or `flat`; absent, every configuration is smooth).
 pub const SHADING: &str = "shading";
 
+/// The column `configurations.csv` appends after [`CONFIGURATIONS`] (and [`SHADING`]) when some
+/// object sets the camera elevation `render` draws it with (degrees; empty: the render
+/// settings').
+pub const ELEVATION: &str = "elevation_deg";
+
 /// The columns that precede the measurement in `raw.csv`: `run_id`, [`CONFIGURATION`],
 /// `threads`, `repetition`.
 pub const RAW_PREFIX: [&str; 17] =

@@ -48,6 +48,7 @@ struct PlannedObject {
     spec: ObjectSpec,
     resolution: Resolution,
     bounds: Bounds,
+    elevation_deg: Option<f32>,
 }
 
 /// A configuration before sweeps: its object, id, method, lattice, clustering, its own
@@ -191,12 +192,21 @@ fn check_objects(m: &Manifest, invalid: &Invalid) -> Result<Vec<PlannedObject>, 
         if !safe_name(&code) {
             return Err(invalid.at(&key, format!("code `{code}` must be letters or digits")));
         }
+        if let Some(e) = o.elevation_deg {
+            if !(-89.0..=89.0).contains(&e) {
+                return Err(invalid.at(
+                    &key,
+                    format!("elevation_deg must be -89 to 89 degrees, got {e}"),
+                ));
+            }
+        }
         objs.push(PlannedObject {
             name: o.name.clone(),
             code,
             spec,
             resolution: o.resolution.map(|c| c.0).unwrap_or(Resolution::Cube(50)),
             bounds: o.bounds.unwrap_or_default(),
+            elevation_deg: o.elevation_deg,
         });
     }
     Ok(objs)
@@ -473,6 +483,7 @@ fn expand(
                     extraction,
                     seed_of: None,
                     shading: b.shading,
+                    elevation_deg: o.elevation_deg,
                 };
                 let seeded = o.spec.kind.accepted().contains(&"seed");
                 match m.seeds {
@@ -516,6 +527,7 @@ fn plan_seeds(
                 seed,
             }),
             shading: c.shading,
+            elevation_deg: c.elevation_deg,
         });
     }
     Ok(())
