@@ -6,7 +6,9 @@ check that the session resumes), finishes, reloads again (finishing is idempoten
 blinding on the wire: every response body the browser received (HTML, JS, CSS, JSON, GIFs,
 captured through the DevTools protocol) and the session JSON fetched again with urllib under the
 same token are searched for the run's configuration ids, variable values and mesh file names.
-Saves a screenshot of one question screen.
+Saves a screenshot of one question screen. With --record FILE, writes what the participant saw
+and did: per answered question its position, the two animation names on the screen (left,
+right) and the side clicked, so that the export can be checked against the screen.
 
 Needs Debian's chromium, chromium-driver and python3-selenium (nothing is downloaded):
     /usr/bin/python3 survey_browser.py --url http://127.0.0.1:PORT/ --run RUN --screenshot q.png
@@ -67,6 +69,7 @@ def main():
     ap.add_argument("--screenshot", required=True)
     ap.add_argument("--chromedriver", default="/usr/bin/chromedriver")
     ap.add_argument("--chromium", default="/usr/bin/chromium")
+    ap.add_argument("--record", help="write the screens and clicks as JSON to this file")
     args = ap.parse_args()
     url = args.url if args.url.endswith("/") else args.url + "/"
 
@@ -126,6 +129,7 @@ def main():
         assert m, progress()
         total = int(m.group(2))
         answered = 0
+        record = []
         reloaded = False
         shot = False
         while True:
@@ -156,6 +160,12 @@ def main():
                 wait.until(lambda d: d.find_element(By.ID, "question").is_displayed())
                 continue
             code = CHOICES[number % 3]
+            left, right = driver.execute_script(
+                "return ['left', 'right'].map(s => decodeURIComponent("
+                "document.getElementById(s).getAttribute('src').split('/').pop()"
+                ".replace(/\\.gif$/, '')));"
+            )
+            record.append({"position": number, "left": left, "right": right, "clicked": code})
             driver.find_element(By.CSS_SELECTOR, f'.choice[data-answer="{code}"]').click()
             answered += 1
             wait.until(
@@ -163,6 +173,9 @@ def main():
                 or progress() == f"Question {answered + 1} of {total}"
             )
         assert answered == total, (answered, total)
+        if args.record:
+            with open(args.record, "w") as f:
+                json.dump(record, f, indent=1)
         assert reloaded and shot
         # Finished; a reload shows the end again (finishing is idempotent).
         collect()
