@@ -89,7 +89,7 @@ pub(crate) mod util;
 pub use error::ExtractError;
 pub use measure::{measure, Measurement};
 pub use post::{CollapseAttempt, CollapseOutcome};
-pub use samples::{Samples, Sampling};
+pub use samples::{SampleValues, Samples, Sampling};
 pub use settings::{
     CellRange, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Tiling,
 };
@@ -269,6 +269,55 @@ impl Extractor {
         pool.install(|| self.mesh_samples(None, settings, mesh, &mut stats))?;
         stats.t_total_s = start.elapsed().as_secs_f64();
         Ok(stats)
+    }
+
+    /// Extracts from `values`, read in place for this call (no copy): the sample array as
+    /// [`Samples::prepare`] lays it out for `settings`. On the simple lattice, and for marching
+    /// cubes and surface nets, that is corner `(x, y, z)` at `x + (nx + 1) * (y + (ny + 1) *
+    /// z)`, i.e. a C-ordered `(z, y, x)` volume of `(nz + 1, ny + 1, nx + 1)` values. The mesh
+    /// is the one [`Extractor::extract_presampled`] gives for the same values copied into
+    /// [`Extractor::samples_mut`]; the extractor's own sample array is left as it was. Errors
+    /// when `values` has another length; the values are not checked (see
+    /// [`Samples::sample`] for fields: they must be finite).
+    ///
+    /// ```
+    /// use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, Method};
+    /// let n = 16;
+    /// let mut s = ExtractSettings::new(Grid::cube(n, 1.0), Lattice::Simple, Clustering::None);
+    /// s.method = Method::Mc;
+    /// let h = 2.0 / n as f32;
+    /// let mut volume = Vec::new();
+    /// for z in 0..=n {
+    ///     for y in 0..=n {
+    ///         for x in 0..=n {
+    ///             let p = glam::Vec3::new(x as f32, y as f32, z as f32) * h - 1.0;
+    ///             volume.push(p.length() - 0.6);
+    ///         }
+    ///     }
+    /// }
+    /// let mut mesh = rmt_mesh::Mesh::default();
+    /// let stats = Extractor::new().extract_borrowed(&volume, &s, &mut mesh).unwrap();
+    /// assert_eq!(stats.triangles, mesh.triangle_count());
+    /// assert!(mesh.triangle_count() > 0);
+    /// ```
+    pub fn extract_borrowed(
+        &mut self,
+        values: &[f32],
+        settings: &ExtractSettings,
+        mesh: &mut Mesh,
+    ) -> Result<Stats, ExtractError> {
+        // SAFETY: the borrowed sample array is taken out of `self` below, before this call
+        // returns or its panic unwinds out of it, so it is not used after `values`' borrow.
+        let borrowed = unsafe { Samples::borrowing(values, settings)? };
+        let own = std::mem::replace(&mut self.samples, borrowed);
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            self.extract_presampled(settings, mesh)
+        }));
+        self.samples = own;
+        match result {
+            Ok(r) => r,
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
     }
 
     /// Sets whether extractions record, for marching tetrahedra with integrated clustering

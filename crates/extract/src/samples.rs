@@ -74,7 +74,133 @@ pub struct Samples {
     /// body-centred lattice `[nx + 2, ny + 2, 2 nz + 3]` (x and y slots, z planes).
     pub dims: [usize; 3],
     /// The values, `dims[0] * dims[1] * dims[2]` of them.
-    pub values: Vec<f32>,
+    pub values: SampleValues,
+}
+
+/// The values of a [`Samples`], one per storage slot: the sample array's own buffer, or, for
+/// the one call of [`crate::Extractor::extract_borrowed`], the caller's slice read in place (no
+/// copy). Both dereference to `[f32]`, so readers index it as a slice; writing to a borrowed
+/// one ([`SampleValues::to_mut`], or any `&mut` access) copies it into a buffer of its own first,
+/// as [`std::borrow::Cow::to_mut`] does, so the caller's values are never written.
+pub struct SampleValues(Repr);
+
+enum Repr {
+    Owned(Vec<f32>),
+    /// A caller's `&[f32]` whose lifetime is not in the type: only
+    /// [`crate::Extractor::extract_borrowed`] makes one (with [`SampleValues::borrow`]) and
+    /// takes it out of the extractor before that borrow ends.
+    Borrowed(std::ptr::NonNull<f32>, usize),
+}
+
+// SAFETY: a `Borrowed` is a shared borrow of `[f32]` (which is `Send` and `Sync`), read only,
+// and valid while it exists (see `SampleValues::borrow`); an `Owned` is a `Vec<f32>`.
+unsafe impl Send for SampleValues {}
+// SAFETY: as for `Send`: nothing writes through a `Borrowed`.
+unsafe impl Sync for SampleValues {}
+
+impl SampleValues {
+    /// The values of `values`, read in place.
+    ///
+    /// # Safety
+    ///
+    /// The result (and every `&[f32]` taken from it) must not be used after the borrow of
+    /// `values` ends: the caller drops it or replaces it before then, also when a panic unwinds.
+    pub(crate) unsafe fn borrow(values: &[f32]) -> Self {
+        Self(Repr::Borrowed(
+            std::ptr::NonNull::from(values).cast(),
+            values.len(),
+        ))
+    }
+
+    /// Whether these are a caller's values read in place (during
+    /// [`crate::Extractor::extract_borrowed`]).
+    pub fn is_borrowed(&self) -> bool {
+        matches!(self.0, Repr::Borrowed(..))
+    }
+
+    /// The values as a buffer of their own, copied first when they are borrowed.
+    pub fn to_mut(&mut self) -> &mut Vec<f32> {
+        if let Repr::Borrowed(..) = self.0 {
+            self.0 = Repr::Owned(self.to_vec());
+        }
+        match &mut self.0 {
+            Repr::Owned(v) => v,
+            Repr::Borrowed(..) => unreachable!("made owned above"),
+        }
+    }
+
+    /// Resizes the buffer to `len` values, new ones `value` (as [`Vec::resize`]).
+    pub fn resize(&mut self, len: usize, value: f32) {
+        self.to_mut().resize(len, value);
+    }
+
+    /// The values as a vector (moved out when owned, copied when borrowed).
+    pub fn into_vec(self) -> Vec<f32> {
+        match self.0 {
+            Repr::Owned(v) => v,
+            Repr::Borrowed(..) => self.to_vec(),
+        }
+    }
+}
+
+impl std::ops::Deref for SampleValues {
+    type Target = [f32];
+
+    #[inline]
+    fn deref(&self) -> &[f32] {
+        match &self.0 {
+            Repr::Owned(v) => v,
+            // SAFETY: made from a `&[f32]` that outlives `self` (see `SampleValues::borrow`).
+            Repr::Borrowed(ptr, len) => unsafe { std::slice::from_raw_parts(ptr.as_ptr(), *len) },
+        }
+    }
+}
+
+impl std::ops::DerefMut for SampleValues {
+    #[inline]
+    fn deref_mut(&mut self) -> &mut [f32] {
+        self.to_mut()
+    }
+}
+
+impl Default for SampleValues {
+    fn default() -> Self {
+        Self(Repr::Owned(Vec::new()))
+    }
+}
+
+/// A clone owns its values (a borrowed one is copied).
+impl Clone for SampleValues {
+    fn clone(&self) -> Self {
+        Self(Repr::Owned(self.to_vec()))
+    }
+}
+
+impl std::fmt::Debug for SampleValues {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
+}
+
+impl PartialEq for SampleValues {
+    fn eq(&self, other: &Self) -> bool {
+        self[..] == other[..]
+    }
+}
+
+impl From<Vec<f32>> for SampleValues {
+    fn from(values: Vec<f32>) -> Self {
+        Self(Repr::Owned(values))
+    }
+}
+
+impl<'a> IntoIterator for &'a SampleValues {
+    type Item = &'a f32;
+    type IntoIter = std::slice::Iter<'a, f32>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
 }
 
 /// Cells per axis of a block of sparse sampling.
@@ -106,6 +232,14 @@ impl Samples {
     /// Sets the layout for `settings` and sizes `values` (keeping its allocation when it is large
     /// enough). Values are left as they were or NaN; fill them before use.
     pub fn prepare(&mut self, settings: &ExtractSettings) {
+        self.set_layout(settings);
+        let len = self.dims.iter().product();
+        self.values.resize(len, f32::NAN);
+    }
+
+    /// Sets the layout for `settings` (lattice, cells, box, storage dimensions) and leaves the
+    /// values alone.
+    fn set_layout(&mut self, settings: &ExtractSettings) {
         let lattice = sampled_lattice(settings);
         let [nx, ny, nz] = settings.grid.cells;
         self.lattice = Some(lattice);
@@ -116,8 +250,35 @@ impl Samples {
             Lattice::Simple => [nx + 1, ny + 1, nz + 1],
             Lattice::BodyCentred => [nx + 2, ny + 2, 2 * nz + 3],
         };
-        let len = self.dims.iter().product();
-        self.values.resize(len, f32::NAN);
+    }
+
+    /// The layout for `settings` over the caller's `values`, read in place: the values of the
+    /// slots as [`Samples::prepare`] lays them out (on the simple lattice, and for marching
+    /// cubes and surface nets, corner `(x, y, z)` at `x + (nx + 1) * (y + (ny + 1) * z)`: a
+    /// C-ordered `(z, y, x)` array). Errors when `values` has another length.
+    ///
+    /// # Safety
+    ///
+    /// As [`SampleValues::borrow`]: the result must not be used after the borrow of `values`
+    /// ends.
+    pub(crate) unsafe fn borrowing(
+        values: &[f32],
+        settings: &ExtractSettings,
+    ) -> Result<Self, ExtractError> {
+        let mut s = Samples::default();
+        s.set_layout(settings);
+        let len: usize = s.dims.iter().product();
+        if values.len() != len {
+            return Err(ExtractError::InvalidSettings(format!(
+                "{} values given for a sample array of {:?} slots ({len}) on the {:?} lattice",
+                values.len(),
+                s.dims,
+                sampled_lattice(settings)
+            )));
+        }
+        // SAFETY: passed on to the caller.
+        s.values = unsafe { SampleValues::borrow(values) };
+        Ok(s)
     }
 
     /// Sets the layout for `settings` (as [`Samples::prepare`]) and fills it with the values of

@@ -92,7 +92,7 @@ fn extract(
     ex.set_sampling(sampling);
     let mut mesh = Mesh::default();
     let stats = ex.extract(f, s, &mut mesh).expect("extraction runs");
-    (mesh, stats, ex.samples().values.clone())
+    (mesh, stats, ex.samples().values.to_vec())
 }
 
 /// The counters that describe the mesh (not the sampling or the timings).

@@ -854,13 +854,13 @@ mod tests {
             min: glam::Vec3::ZERO,
             spacing: glam::Vec3::ONE,
             dims: [6, 6, 11],
-            values: vec![0.0; 6 * 6 * 11],
+            values: vec![0.0; 6 * 6 * 11].into(),
         };
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             let mut s = samples.clone();
             if lattice == Lattice::Simple {
                 s.dims = [5, 5, 5];
-                s.values = vec![0.0; 125];
+                s.values = vec![0.0; 125].into();
             }
             let l = Layout::new(&s, lattice);
             for (g, group) in l.groups.iter().enumerate() {
