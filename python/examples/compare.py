@@ -56,8 +56,8 @@ def main() -> None:
         from skimage.measure import marching_cubes
 
         t, (verts, faces, _, _) = timed(lambda: marching_cubes(volume, 0.0, spacing=spacing))
-        # scikit-image returns (z, y, x) from 0; ours (x, y, z) from the origin.
-        verts = verts[:, ::-1] + np.array(s.origin[::-1])
+        # Both in array order (z, y, x); scikit-image's from 0, ours from the volume's origin.
+        verts = verts + np.array(s.origin)
         rows.append(("scikit-image marching_cubes", verts, faces, t))
     except ImportError:
         print("scikit-image is not installed (pip install scikit-image matplotlib): its row is "

@@ -1,8 +1,9 @@
 """The Python overhead of rmt_terrain.extract over the Rust extraction it runs, on a 64^3
 float32 volume (a sphere's signed distance): the wall time of the Python call against the
-extractor's own ``stats["t_total_s"]`` (Rust, ``Extractor::extract_presampled`` plus gradient
-normals), median of interleaved repetitions. The overhead is the argument checks, the copy of
-the volume into the extractor's sample array (``stats["t_input_s"]``), and wrapping the result.
+extractor's own ``stats["t_total_s"]`` (Rust, ``Extractor::extract_borrowed`` plus gradient
+normals), median of interleaved repetitions. The overhead is the argument checks, the scan of
+the volume for non-finite values (``stats["t_input_s"]``; the volume itself is read in place,
+not copied), turning the mesh into array order (z, y, x), and wrapping the result.
 Then the cost of ``extract_field``'s callable beyond the callable's own work, per lattice point
 (64^3 cells, body-centred: 561,345 points).
 

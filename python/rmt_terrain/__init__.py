@@ -10,28 +10,40 @@ True
 
 Conventions
 -----------
-* ``volume[i, j, k]`` is read the way ``skimage.measure.marching_cubes`` reads it: a C-ordered
-  array whose axes are (z, y, x), so the last axis varies fastest, and ``spacing`` and
-  ``origin`` are given in the same array order ``(dz, dy, dx)``. Point ``[i, j, k]`` lies at
-  ``x = origin[2] + k * dx``, ``y = origin[1] + j * dy``, ``z = origin[0] + i * dz``.
-* The returned ``vertices`` are ``(x, y, z)`` world coordinates, the order of every mesh file
-  format and of the Rust library. scikit-image returns its vertices in array order
-  ``(i, j, k)``, i.e. ``(z, y, x)``: ``mesh.vertices[:, ::-1]`` gives that order (the faces'
-  winding then describes the mirrored orientation).
+* :func:`extract` follows ``skimage.measure.marching_cubes``: ``volume[i, j, k]`` is a
+  C-ordered array whose axes are, say, (z, y, x) (the last axis varies fastest); ``spacing``
+  (and ``origin``) are given in the same array order ``(dz, dy, dx)``, and the returned
+  ``vertices`` (and ``normals``) are in that array order too: vertex ``(a, b, c)`` lies at
+  ``origin + (i, j, k) * spacing``, so ``a`` runs along axis 0 (z), ``c`` along axis 2 (x).
+  Vertices from scikit-image and from us overlay directly. ``mesh.axes`` is ``"zyx"``.
+* :func:`extract_field`, :func:`sample` and the command line work in world ``(x, y, z)``
+  order: ``bounds`` and ``resolution`` are (x, y, z), ``f(x, y, z)`` gets world coordinates,
+  and the mesh of :func:`extract_field` has ``(x, y, z)`` vertices (``mesh.axes == "xyz"``).
+  :meth:`Mesh.with_axes` turns one order into the other (exactly: it only moves values), e.g.
+  ``mesh.with_axes("xyz").write(path)`` writes the command line's file, byte for byte.
 * Inside is ``volume < level``; ``volume == level`` counts as outside. Triangles are
-  counter-clockwise seen from the side of increasing values, so normals point outward for a
-  signed distance field (negative inside).
-* ``volume`` may be any floating-point array. A C-contiguous float32 array is read in place (no
-  conversion copy); other float arrays are converted to C-contiguous float32 first. The values
-  are then copied once into the extractor's own sample array, with the finiteness check in the
-  same pass (``stats["t_input_s"]`` is that time).
-* The body-centred lattice (``lattice="bcdl"``) also samples the centre of every cube: pass
-  ``centres`` (shape ``volume.shape - 1``), or a callable ``centres(x, y, z)``; without them it
-  is refused, the values are never guessed. The centres of the cubes just outside the box
-  ("ghosts", sampled on the box faces) matter only where the surface comes within half a cell
-  of the box: with ``volume.shape - 1`` centres they are the mean of their face's four corners
-  (the bilinear interpolant there); pass centres of shape ``volume.shape + 1`` (ghost layer
-  included, as ``sample`` returns them) or a callable to give them exactly.
+  counter-clockwise seen from the side of increasing values *in the mesh's own frame* (the
+  right-hand normal of each face points toward increasing values, outward for a signed
+  distance field, negative inside). Swapping x and z mirrors the frame, so a ``"zyx"`` mesh has
+  every triangle's last two corners swapped against its ``"xyz"`` twin; this is scikit-image's
+  winding with its default ``gradient_direction="descent"`` (checked by the tests on a sphere).
+  Our ``normals`` also point toward increasing values; scikit-image's point the other way.
+* ``volume`` may be any floating-point array. A C-contiguous float32 array is used without a
+  copy: on the simple lattice (and for ``method="mc"`` and ``"surface-nets"``) the extractor
+  reads it in place, after a parallel scan for non-finite values (``stats["t_input_s"]``;
+  ``stats["input_copied"]`` is False). Other float arrays are converted to C-contiguous float32
+  first (one copy, by numpy). The body-centred lattice interleaves corner and centre planes in
+  its sample array, so there the values are copied into it (``stats["input_copied"]`` True).
+  Do not write to the volume from another thread during the call.
+* The body-centred lattice (``lattice="bcdl"``) also samples the centre of every cube, and the
+  centres of the cubes just outside each face of the box ("ghosts", sampled on the face, at its
+  centre: the tetrahedra between the box face and the first centres need them). They are never
+  guessed: pass ``centres`` of shape ``volume.shape + 1`` (the ghost layer included, as
+  :func:`sample` returns them; entries outside two or three faces are not read), or a callable
+  ``centres(x, y, z)``, or ``centres`` of shape ``volume.shape - 1`` together with ``ghosts``:
+  a number (every ghost has that value, e.g. a value outside when the object stays away from
+  the box) or a callable ``ghosts(x, y, z)`` evaluated at the ghosts. Without them
+  ``lattice="bcdl"`` is refused.
 * The GIL is released while the extractor runs; ``threads`` defaults to the machine's cores.
   Errors are ``ValueError`` (with the library's message), ``TypeError`` for a non-float dtype,
   and ``MemoryError`` when the size estimate exceeds the available memory.
@@ -60,11 +72,17 @@ class Mesh:
     Attributes
     ----------
     vertices : ndarray, (N, 3) float32
-        Vertex positions, (x, y, z). The array owns the extractor's buffer (no copy).
+        Vertex positions in the order ``axes``: the volume's array order (z, y, x) from
+        :func:`extract`, world (x, y, z) from :func:`extract_field`. The array owns the
+        extractor's buffer (no copy).
     faces : ndarray, (M, 3) uint32
-        Vertex indices, counter-clockwise seen from increasing values.
+        Vertex indices, counter-clockwise seen from increasing values in that frame.
     normals : ndarray, (N, 3) float32, or None
-        Unit vertex normals (``normals="none"`` gives None).
+        Unit vertex normals, toward increasing values, in the order ``axes``
+        (``normals="none"`` gives None).
+    axes : str
+        ``"zyx"`` (array order, :func:`extract`) or ``"xyz"`` (world order); see
+        :meth:`with_axes`.
     stats : dict
         Counters and stage times of the extraction (the command line's ``--json`` keys:
         ``vertices``, ``triangles``, ``crossings``, ``clusters_committed``, ``t_total_s``,
@@ -72,20 +90,45 @@ class Mesh:
         ``t_total_s`` is the Rust extraction (with gradient normals), ``t_input_s`` the copy
         and check of the input before it, ``t_call_s`` the whole compiled call (input, extraction
         and conversion of the result; the rest of a call's time is the Python wrapper).
+        ``input_copied`` (from :func:`extract`) says whether the volume was copied into the
+        extractor's sample array (body-centred lattice) or read in place.
     """
 
-    __slots__ = ("vertices", "faces", "normals", "stats", "_box")
+    __slots__ = ("vertices", "faces", "normals", "stats", "axes", "_box")
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, normals: Optional[np.ndarray],
-                 stats: Dict[str, Any], box: Any = None) -> None:
+                 stats: Dict[str, Any], box: Any = None, axes: str = "xyz") -> None:
+        if axes not in ("xyz", "zyx"):
+            raise ValueError(f"axes must be 'xyz' or 'zyx', got {axes!r}")
         self.vertices = vertices
         self.faces = faces
         self.normals = normals
         self.stats = stats
+        self.axes = axes
         self._box = box
 
     def __repr__(self) -> str:
-        return f"Mesh({len(self.vertices)} vertices, {len(self.faces)} faces)"
+        return f"Mesh({len(self.vertices)} vertices, {len(self.faces)} faces, axes={self.axes!r})"
+
+    def with_axes(self, axes: str) -> "Mesh":
+        """This mesh in the coordinate order ``axes`` (``"xyz"`` or ``"zyx"``): itself when it
+        is already in that order, else a copy with the first and last coordinates of every
+        vertex and normal swapped and every face's last two corners swapped, so that its faces
+        stay counter-clockwise seen from increasing values in the mirrored frame. Exact: only
+        values move, and converting back gives the same arrays."""
+        if axes not in ("xyz", "zyx"):
+            raise ValueError(f"axes must be 'xyz' or 'zyx', got {axes!r}")
+        if axes == self.axes:
+            return self
+        vertices = np.ascontiguousarray(self.vertices[:, ::-1])
+        faces = np.ascontiguousarray(self.faces[:, [0, 2, 1]])
+        normals = None if self.normals is None else np.ascontiguousarray(self.normals[:, ::-1])
+        box = None
+        if self._box is not None:
+            lo, hi, cells = self._box
+            box = (tuple(lo)[::-1], tuple(hi)[::-1], tuple(cells)[::-1])
+        stats = dict(self.stats, axes=axes)
+        return Mesh(vertices, faces, normals, stats, box, axes)
 
     def _arrays(self) -> Tuple[np.ndarray, np.ndarray]:
         v = np.ascontiguousarray(self.vertices, dtype=np.float32)
@@ -125,7 +168,9 @@ class Mesh:
 
     def write(self, path: Union[str, "os.PathLike[str]"]) -> None:
         """Writes the mesh as binary PLY (``.ply``), OBJ (``.obj``) or binary glTF (``.glb``),
-        by the extension: the command line's writers, so the same mesh gives the same bytes."""
+        by the extension: the command line's writers, so the same mesh gives the same bytes.
+        The file holds ``vertices`` as they are, in the order ``axes``; the command line's
+        files are (x, y, z): ``mesh.with_axes("xyz").write(path)``."""
         v, f = self._arrays()
         n = None if self.normals is None else np.ascontiguousarray(self.normals, dtype=np.float32)
         _native.write(os.fspath(path), v, f, n)
@@ -191,41 +236,100 @@ def _as_field(f: Callable[..., Any]) -> Callable[[np.ndarray, np.ndarray, np.nda
 
 def _mesh(result) -> Mesh:
     vertices, faces, normals, stats, box = result
-    return Mesh(vertices, faces, normals, stats, box)
+    return Mesh(vertices, faces, normals, stats, box, stats["axes"])
+
+
+def _ghost_mask(shape: Tuple[int, int, int]) -> np.ndarray:
+    """The ghosts of a centre array of ``shape`` (ghost layer included): the entries outside
+    exactly one face of the box."""
+    outside = [np.zeros(n, dtype=np.int8) for n in shape]
+    for o in outside:
+        o[0] = o[-1] = 1
+    count = outside[0][:, None, None] + outside[1][None, :, None] + outside[2][None, None, :]
+    return count == 1
+
+
+def _centres_with_ghosts(centres: np.ndarray, ghosts: Any, shape, spacing, origin) -> np.ndarray:
+    """The centres of shape ``shape - 1`` and the user's ``ghosts`` (a number or a callable)
+    as one array of shape ``shape + 1`` (NaN at the entries that are never read)."""
+    finite = np.isfinite(centres)
+    if not finite.all():
+        at = np.unravel_index(int(np.argmin(finite.ravel())), centres.shape)
+        raise ValueError(f"centres is not finite at index [{at[0]}, {at[1]}, {at[2]}] (z, y, x): "
+                         f"got {centres[at]}; the first such value in C order")
+    full = np.full(tuple(s + 1 for s in shape), np.nan, dtype=np.float32)
+    full[1:-1, 1:-1, 1:-1] = centres
+    mask = _ghost_mask(full.shape)
+    if callable(ghosts):
+        xx, yy, zz = _centre_positions(shape, spacing, origin)
+        x, y, z = (c[mask].astype(np.float64) for c in (xx, yy, zz))
+        values = _as_field(ghosts)(x, y, z)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if len(bad):
+            k = bad[0]
+            raise ValueError(f"ghosts(x, y, z) is not finite at ({x[k]}, {y[k]}, {z[k]}): got "
+                             f"{values[k]}")
+        full[mask] = values
+    else:
+        if isinstance(ghosts, (bool, np.bool_)):
+            raise TypeError("ghosts must be a number or a callable ghosts(x, y, z), got a bool")
+        try:
+            value = float(ghosts)
+        except (TypeError, ValueError):
+            raise TypeError("ghosts must be a number or a callable ghosts(x, y, z), got "
+                            f"{type(ghosts).__name__}") from None
+        if not np.isfinite(np.float32(value)):
+            raise ValueError(f"ghosts must be finite in float32, got {value}")
+        full[mask] = np.float32(value)
+    return full
 
 
 def extract(volume: Any, level: float = 0.0, *, spacing: Sequence[float] = (1.0, 1.0, 1.0),
-            lattice: str = "simple", clustering: Optional[str] = None, method: str = "mt",
+            lattice: str = "simple", clustering: str = "integrated", method: str = "mt",
             normals: str = "gradient", threads: Optional[int] = None,
-            centres: Any = None, origin: Sequence[float] = (0.0, 0.0, 0.0)) -> Mesh:
-    """Extracts the isosurface ``volume == level`` of a sampled volume.
+            centres: Any = None, ghosts: Any = None,
+            origin: Sequence[float] = (0.0, 0.0, 0.0)) -> Mesh:
+    """Extracts the isosurface ``volume == level`` of a sampled volume, in the shape of
+    ``skimage.measure.marching_cubes(volume, level, spacing=...)``.
 
     Parameters
     ----------
     volume : (nz + 1, ny + 1, nx + 1) float array
-        Values at the grid points, indexed ``volume[z, y, x]`` as scikit-image reads it.
+        Values at the grid points, indexed ``volume[z, y, x]`` (C order) as scikit-image reads
+        it. Used without a copy when it is C-contiguous float32 (simple lattice, marching
+        cubes, surface nets; the body-centred lattice copies it into its interleaved sample
+        array).
     level : float
         The isovalue; inside is ``volume < level``.
     spacing : 3 floats
         Grid spacing in array order ``(dz, dy, dx)``, as in scikit-image.
     lattice : "simple" or "bcdl"
         Marching tetrahedra on the simple cubic lattice (six tetrahedra per cube) or on the
-        body-centred lattice (needs ``centres``). Ignored by ``method="mc"``.
-    clustering : None, "integrated", "integrated-unchecked", "none", "postprocessed", "meshopt"
-        Vertex clustering; None takes the method's default: ``"integrated"`` (RMT) for
-        marching tetrahedra, ``"none"`` for marching cubes and surface nets (which take no
-        other).
+        body-centred lattice (needs ``centres``, see below). Ignored by ``method="mc"`` and
+        ``"surface-nets"``.
+    clustering : "integrated", "none", "integrated-unchecked", "postprocessed", "meshopt"
+        Vertex clustering of marching tetrahedra: ``"integrated"`` is RMT (clusters checked
+        as they are made), ``"none"`` plain marching tetrahedra. Marching cubes and surface
+        nets have no clustering: they run without it under the default or ``"none"``, and
+        refuse the other modes.
     method : "mt", "mc" or "surface-nets"
         Marching tetrahedra, marching cubes, or surface nets (the peer).
     normals : "gradient", "area" or "none"
         Vertex normals: the gradient of the volume (central differences, interpolated
-        trilinearly), the area-weighted face normals, or none.
+        trilinearly), the area-weighted face normals, or none. They point toward increasing
+        values.
     threads : int or None
         Worker threads (None: the machine's cores). The mesh does not depend on it.
-    centres : (nz, ny, nx) or (nz + 2, ny + 2, nx + 2) float array, callable, or None
-        Values at the cube centres, for ``lattice="bcdl"``: the cube centres, or the cube
-        centres with the ghost layer (see the module doc), or ``centres(x, y, z)``, a
-        vectorised callable evaluated once at every centre and ghost.
+    centres : (nz + 2, ny + 2, nx + 2) or (nz, ny, nx) float array, callable, or None
+        Values at the cube centres, for ``lattice="bcdl"``: with the ghost layer (entry
+        ``[k + 1, j + 1, i + 1]`` is the centre of cube ``[k, j, i]``; the first and last
+        entries along an axis are the ghosts on that box face, as :func:`sample` returns
+        them), or without it (then ``ghosts`` is needed), or ``centres(x, y, z)``, a
+        vectorised callable of world coordinates evaluated once at every centre and ghost.
+    ghosts : number, callable, or None
+        With ``(nz, ny, nx)`` centres only: the values of the ghosts (the centres of the cubes
+        just outside the box, sampled at the centre of their box face): one number for all, or
+        ``ghosts(x, y, z)`` evaluated at them. Never guessed; see the module doc.
     origin : 3 floats
         World position of ``volume[0, 0, 0]``, array order ``(z, y, x)``. Not in scikit-image
         (which starts at 0, the default).
@@ -233,12 +337,20 @@ def extract(volume: Any, level: float = 0.0, *, spacing: Sequence[float] = (1.0,
     Returns
     -------
     Mesh
-        ``vertices`` (N, 3) float32 in (x, y, z) order, ``faces`` (M, 3) uint32, ``normals``,
-        ``stats``; ``validate()``, ``quality()``, ``to_trimesh()``, ``write(path)``.
+        ``vertices`` (N, 3) float32 and ``normals`` in array order (z, y, x) like
+        scikit-image's, ``faces`` (M, 3) uint32 (counter-clockwise seen from increasing values
+        in that frame), ``stats``, ``axes == "zyx"``; ``validate()``, ``quality()``,
+        ``to_trimesh()``, ``write(path)``, ``with_axes("xyz")``.
     """
     volume = _as_float32(volume, "volume")
     spacing = _triple(spacing, "spacing")
     origin = _triple(origin, "origin")
+    if centres is not None and (lattice != "bcdl" or method != "mt"):
+        raise ValueError("centres are read only on the body-centred lattice (lattice='bcdl' "
+                         f"with method='mt'), got lattice={lattice!r}, method={method!r}")
+    if ghosts is not None and (centres is None or callable(centres)):
+        raise ValueError("ghosts= completes centres of shape volume.shape - 1; a callable "
+                         "centres gives the ghosts itself")
     if centres is not None:
         if callable(centres):
             xx, yy, zz = _centre_positions(volume.shape, spacing, origin)
@@ -248,8 +360,22 @@ def extract(volume: Any, level: float = 0.0, *, spacing: Sequence[float] = (1.0,
             centres = np.ascontiguousarray(centres)
         else:
             centres = _as_float32(centres, "centres")
+            inner = tuple(s - 1 for s in volume.shape)
+            if centres.shape == inner:
+                if ghosts is None:
+                    raise ValueError(
+                        f"centres of shape {inner} (the volume's shape minus 1) leave out the "
+                        "ghosts, the centres of the cubes just outside the box, which the "
+                        "body-centred tetrahedra along the box faces need: pass ghosts= (a "
+                        "number, or a callable ghosts(x, y, z)), or centres of shape "
+                        f"{tuple(s + 1 for s in volume.shape)} with the ghost layer, or a "
+                        "callable centres; they are not guessed by interpolation")
+                centres = _centres_with_ghosts(centres, ghosts, volume.shape, spacing, origin)
+            elif ghosts is not None:
+                raise ValueError(f"ghosts= completes centres of shape {inner}; got centres of "
+                                 f"shape {centres.shape}")
     return _mesh(_native.extract_volume(volume, centres, float(level), spacing, origin, lattice,
-                                        method, clustering, normals, threads))
+                                        method, str(clustering), normals, threads))
 
 
 def _cells(resolution: Any) -> Tuple[int, int, int]:
@@ -272,7 +398,7 @@ def _bounds(bounds: Any) -> Tuple[float, ...]:
 def extract_field(f: Callable[[np.ndarray, np.ndarray, np.ndarray], Any],
                   bounds: Sequence[float] = (-1.0, -1.0, -1.0, 1.0, 1.0, 1.0),
                   resolution: Union[int, Sequence[int]] = 64, *, lattice: str = "bcdl",
-                  level: float = 0.0, clustering: Optional[str] = None, method: str = "mt",
+                  level: float = 0.0, clustering: str = "integrated", method: str = "mt",
                   normals: str = "gradient", threads: Optional[int] = None,
                   batch: int = 1 << 16) -> Mesh:
     """Samples a vectorised callable and extracts its isosurface ``f == level``.
@@ -289,15 +415,18 @@ def extract_field(f: Callable[[np.ndarray, np.ndarray, np.ndarray], Any],
     call ``f`` again on six points per vertex.
 
     ``bounds`` is ``(xmin, ymin, zmin, xmax, ymax, zmax)`` and ``resolution`` the cells per
-    axis, ``N`` or ``(nx, ny, nz)``, in the command line's (x, y, z) order. The body-centred
-    lattice (the default here) samples the cube corners, the cube centres and the ghosts on
-    the box faces, exactly the library's points. Other arguments as in :func:`extract`.
+    axis, ``N`` or ``(nx, ny, nz)``, in the command line's (x, y, z) order, and the mesh is in
+    world order too: ``(x, y, z)`` vertices and normals, ``mesh.axes == "xyz"`` (the command
+    line's mesh; :meth:`Mesh.with_axes` gives the array order of :func:`extract`). The
+    body-centred lattice (the default here) samples the cube corners, the cube centres and the
+    ghosts on the box faces, exactly the library's points. Other arguments as in
+    :func:`extract`.
     """
     if not callable(f):
         raise TypeError("f must be a callable f(x, y, z) over numpy arrays")
     return _mesh(_native.extract_field(_as_field(f), _bounds(bounds), _cells(resolution),
-                                       float(level), lattice, method, clustering, normals,
-                                       threads, int(batch)))
+                                       float(level), lattice, method, str(clustering),
+                                       normals, threads, int(batch)))
 
 
 class Sampled:
@@ -329,11 +458,13 @@ class Sampled:
 
     def extract(self, level: float = 0.0, **kwargs: Any) -> Mesh:
         """:func:`extract` on these values, lattice, spacing and origin (keyword arguments as
-        there). The same object, box and resolution give the command line's mesh, byte for
-        byte (``experiments extract --object ... --out``)."""
+        there): a mesh in array order (z, y, x), like every :func:`extract`. In world order,
+        ``.with_axes("xyz")``, it is the command line's mesh for the same object, box and
+        resolution, byte for byte (``experiments extract --object ... --out``)."""
         kwargs.setdefault("lattice", self.lattice)
+        bcdl = kwargs["lattice"] == "bcdl" and kwargs.get("method", "mt") == "mt"
         return extract(self.volume, level, spacing=self.spacing, origin=self.origin,
-                       centres=self.centres if kwargs["lattice"] == "bcdl" else None, **kwargs)
+                       centres=self.centres if bcdl else None, **kwargs)
 
 
 def sample(object: str, resolution: Union[int, Sequence[int]] = 50,  # noqa: A002

@@ -24,7 +24,7 @@ def extract_volume(
     origin: Tuple[float, float, float],
     lattice: str,
     method: str,
-    clustering: Optional[str],
+    clustering: str,
     normals: str,
     threads: Optional[int],
 ) -> _Result: ...
@@ -35,7 +35,7 @@ def extract_field(
     level: float,
     lattice: str,
     method: str,
-    clustering: Optional[str],
+    clustering: str,
     normals: str,
     threads: Optional[int],
     batch: int,

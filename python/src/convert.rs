@@ -11,17 +11,51 @@ use rmt_extract::{Grid, Lattice, Samples, Stats};
 use rmt_mesh::Mesh;
 use serde_json::Value;
 
+/// The coordinate order of a returned mesh.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Axes {
+    /// World `(x, y, z)`, the library's and the mesh files' order.
+    World,
+    /// A volume's array order `(z, y, x)`, as scikit-image returns its vertices.
+    Array,
+}
+
+/// Turns a mesh in world order `(x, y, z)` into array order `(z, y, x)`: the first and last
+/// coordinates of every position and normal swapped, and every triangle's last two corners,
+/// since swapping two axes mirrors the mesh: so its triangles stay counter-clockwise seen from
+/// increasing values in the new frame. Exact (no arithmetic); doing it twice gives the mesh
+/// back.
+pub fn to_array_order(mesh: &mut Mesh) {
+    for p in mesh.positions.iter_mut().chain(mesh.normals.iter_mut()) {
+        p.swap(0, 2);
+    }
+    for t in mesh.indices.chunks_exact_mut(3) {
+        t.swap(1, 2);
+    }
+}
+
 /// `(vertices (N, 3) float32, faces (M, 3) uint32, normals (N, 3) float32 or None, stats dict,
-/// (box min, box max, cells))`. The arrays take over the mesh's buffers. The stats get the
-/// `extra` entries and `t_call_s`, the time since `started` (the native call's entry).
+/// (box min, box max, cells))`, in the order `axes` (the box too). The arrays take over the
+/// mesh's buffers. The stats get the `extra` numbers and `flags`, and `t_call_s`, the time since
+/// `started` (the native call's entry).
+#[allow(clippy::too_many_arguments)]
 pub fn result<'py>(
     py: Python<'py>,
-    mesh: Mesh,
+    mut mesh: Mesh,
     stats: &Stats,
     grid: &Grid,
     extra: &[(&str, f64)],
+    flags: &[(&str, bool)],
+    axes: Axes,
     started: std::time::Instant,
 ) -> PyResult<Bound<'py, PyTuple>> {
+    let (mut lo, mut hi, mut cells) = (grid.min.to_array(), grid.max.to_array(), grid.cells);
+    if axes == Axes::Array {
+        to_array_order(&mut mesh);
+        lo.reverse();
+        hi.reverse();
+        cells.reverse();
+    }
     let Mesh {
         positions,
         normals,
@@ -37,7 +71,17 @@ pub fn result<'py>(
     for (k, v) in extra {
         stats.set_item(*k, *v)?;
     }
-    let grid_box = (grid.min.to_array(), grid.max.to_array(), grid.cells);
+    for (k, v) in flags {
+        stats.set_item(*k, *v)?;
+    }
+    stats.set_item(
+        "axes",
+        match axes {
+            Axes::World => "xyz",
+            Axes::Array => "zyx",
+        },
+    )?;
+    let grid_box = (lo, hi, cells);
     stats.set_item("t_call_s", started.elapsed().as_secs_f64())?;
     (vertices, faces, normals, stats, grid_box).into_pyobject(py)
 }
@@ -163,7 +207,7 @@ pub fn sampled<'py>(
                 .map_err(|e| PyValueError::new_err(e.to_string()))?;
             (corners, Some(centres.into_pyarray(py)))
         }
-        _ => (samples.values.clone(), None),
+        _ => (samples.values.to_vec(), None),
     };
     let volume = Array3::from_shape_vec(shape, volume)
         .map_err(|e| PyValueError::new_err(e.to_string()))?

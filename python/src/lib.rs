@@ -42,7 +42,7 @@ impl Options {
         level: f64,
         lattice: &str,
         method: &str,
-        clustering: Option<&str>,
+        clustering: &str,
         normals: &str,
         threads: Option<usize>,
     ) -> PyResult<Self> {
@@ -61,6 +61,7 @@ impl Options {
                 )))
             }
         };
+        let method_name = method;
         let method = match method {
             "mt" => Method::Mt,
             "mc" => Method::Mc,
@@ -71,27 +72,32 @@ impl Options {
                 )))
             }
         };
-        let clustering = match clustering {
-            // The method's own default, as on the command line.
-            None if method == Method::Mt => Clustering::Integrated,
-            None => Clustering::None,
-            Some("none") => Clustering::None,
-            Some("integrated") => Clustering::Integrated,
-            Some("integrated-unchecked") => Clustering::IntegratedUnchecked,
-            Some("postprocessed") => Clustering::Postprocessed,
-            Some("meshopt") => Clustering::Meshopt,
-            Some(other) => {
+        let mut clustering = match clustering {
+            "none" => Clustering::None,
+            "integrated" => Clustering::Integrated,
+            "integrated-unchecked" => Clustering::IntegratedUnchecked,
+            "postprocessed" => Clustering::Postprocessed,
+            "meshopt" => Clustering::Meshopt,
+            other => {
                 return Err(PyValueError::new_err(format!(
-                    "clustering must be 'none', 'integrated', 'integrated-unchecked', \
+                    "clustering must be 'integrated', 'none', 'integrated-unchecked', \
                      'postprocessed' or 'meshopt', got {other:?}"
                 )))
             }
         };
-        if method != Method::Mt && clustering != Clustering::None {
-            return Err(PyValueError::new_err(format!(
-                "method {method:?} takes clustering 'none', got {:?}",
-                clustering.name()
-            )));
+        // Clustering belongs to marching tetrahedra: the other methods run without it, which
+        // the default ('integrated') and 'none' both ask for; another mode is a mistake.
+        if method != Method::Mt {
+            match clustering {
+                Clustering::None | Clustering::Integrated => clustering = Clustering::None,
+                other => {
+                    return Err(PyValueError::new_err(format!(
+                        "method {method_name:?} has no clustering: pass clustering='none' \
+                         (the default 'integrated' applies to method='mt' only), got {:?}",
+                        other.name()
+                    )))
+                }
+            }
         }
         if !matches!(normals, "gradient" | "area" | "none") {
             return Err(PyValueError::new_err(format!(
@@ -173,8 +179,10 @@ fn volume_grid(shape: [usize; 3], spacing: [f64; 3], origin: [f64; 3]) -> PyResu
 /// Extracts the surface of a sampled volume (the work behind `rmt_terrain.extract`).
 ///
 /// `volume` is C-contiguous float32 of shape (nz + 1, ny + 1, nx + 1); `centres` (body-centred
-/// lattice only) of shape (nz, ny, nx) or (nz + 2, ny + 2, nx + 2). Returns
-/// `(vertices, faces, normals, stats, box)`.
+/// lattice only) of shape (nz + 2, ny + 2, nx + 2), the ghost layer included (the Python
+/// wrapper builds it from `centres` and `ghosts`). On the simple lattice (and for marching
+/// cubes and surface nets) the volume is read in place, without a copy. Returns `(vertices,
+/// faces, normals, stats, box)` in array order (z, y, x), faces wound for that order.
 #[pyfunction]
 #[pyo3(signature = (volume, centres, level, spacing, origin, lattice, method, clustering, normals, threads))]
 #[allow(clippy::too_many_arguments)]
@@ -187,7 +195,7 @@ fn extract_volume<'py>(
     origin: [f64; 3],
     lattice: &str,
     method: &str,
-    clustering: Option<&str>,
+    clustering: &str,
     normals: &str,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyTuple>> {
@@ -223,35 +231,44 @@ fn extract_volume<'py>(
         centres: centres_slice,
     };
     let gradient = options.normals == "gradient";
-    let (mesh, stats, t_input) = py.detach(|| -> Result<(Mesh, Stats, f64), errors::Error> {
-        let mut ex = pool::take();
-        let result = (|| {
-            let t = std::time::Instant::now();
-            let workers = pool::workers(settings.threads)?;
-            ex.set_pool(workers.clone());
-            workers.install(|| input.fill(&settings, ex.samples_mut()))?;
-            let t_input = t.elapsed().as_secs_f64();
-            let mut mesh = Mesh::default();
-            let mut stats = ex
-                .extract_presampled(&settings, &mut mesh)
-                .map_err(|e| errors::Error::Library(e.to_string()))?;
-            if gradient {
+    let (mesh, stats, t_input, copied) =
+        py.detach(|| -> Result<(Mesh, Stats, f64, bool), errors::Error> {
+            let mut ex = pool::take();
+            let result = (|| {
                 let t = std::time::Instant::now();
-                normals::from_volume(&input, &settings.grid, &mut mesh);
-                stats.t_normals_s += t.elapsed().as_secs_f64();
-                stats.t_total_s += stats.t_normals_s;
-            }
-            Ok((mesh, stats, t_input))
-        })();
-        pool::give_back(ex);
-        result
-    })?;
+                let workers = pool::workers(settings.threads)?;
+                ex.set_pool(workers.clone());
+                // In place when the storage is the volume's own (simple lattice); the
+                // body-centred lattice interleaves corner and centre planes: a copy.
+                let in_place =
+                    workers.install(|| input.check_or_fill(&settings, ex.samples_mut()))?;
+                let t_input = t.elapsed().as_secs_f64();
+                let mut mesh = Mesh::default();
+                let extracted = if in_place {
+                    ex.extract_borrowed(input.values, &settings, &mut mesh)
+                } else {
+                    ex.extract_presampled(&settings, &mut mesh)
+                };
+                let mut stats = extracted.map_err(|e| errors::Error::Library(e.to_string()))?;
+                if gradient {
+                    let t = std::time::Instant::now();
+                    normals::from_volume(&input, &settings.grid, &mut mesh);
+                    stats.t_normals_s += t.elapsed().as_secs_f64();
+                    stats.t_total_s += stats.t_normals_s;
+                }
+                Ok((mesh, stats, t_input, !in_place))
+            })();
+            pool::give_back(ex);
+            result
+        })?;
     convert::result(
         py,
         mesh,
         &stats,
         &settings.grid,
         &[("t_input_s", t_input)],
+        &[("input_copied", copied)],
+        convert::Axes::Array,
         started,
     )
 }
@@ -269,7 +286,7 @@ fn sample<'py>(
     params: &Bound<'py, PyDict>,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyTuple>> {
-    let options = Options::parse(0.0, lattice, "mt", Some("none"), "none", threads)?;
+    let options = Options::parse(0.0, lattice, "mt", "none", "none", threads)?;
     let spec = objects::spec_from_dict(object, params)?;
     let grid = Grid::new(
         resolution,
@@ -306,7 +323,7 @@ fn extract_field<'py>(
     level: f64,
     lattice: &str,
     method: &str,
-    clustering: Option<&str>,
+    clustering: &str,
     normals: &str,
     threads: Option<usize>,
     batch: usize,
@@ -346,7 +363,16 @@ fn extract_field<'py>(
         stats.t_normals_s += t.elapsed().as_secs_f64();
         stats.t_total_s += stats.t_normals_s;
     }
-    convert::result(py, mesh, &stats, &settings.grid, &[], started)
+    convert::result(
+        py,
+        mesh,
+        &stats,
+        &settings.grid,
+        &[],
+        &[],
+        convert::Axes::World,
+        started,
+    )
 }
 
 /// Validates a mesh: closed, manifold, oriented, Euler characteristic, components. Edges on
