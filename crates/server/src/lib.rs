@@ -14,7 +14,8 @@
 //!   assets, running a router);
 //! - [`error`]: the JSON error reply both share;
 //! - [`serve`]: the connection loop both servers run on: read timeouts, a connection cap, size
-//!   limits, and one JSON error shape for everything refused.
+//!   limits, and one JSON error shape for everything refused; [`write_stall`]: its write
+//!   deadline for clients that stop reading.
 //!
 //! ```no_run
 //! use std::path::Path;
@@ -39,3 +40,4 @@ pub mod store;
 pub mod studio;
 pub mod study;
 pub mod survey;
+pub mod write_stall;

@@ -1,6 +1,6 @@
 //! Serving a router on tokio with production limits: a read timeout for request heads (which also
-//! closes idle kept-alive connections), a read timeout for bodies, a cap on concurrent
-//! connections, size limits for the URI, the head and the body, and one JSON error shape for
+//! closes idle kept-alive connections), a read timeout for bodies, a write deadline for clients
+//! that stop reading ([`crate::write_stall`]), a cap on concurrent connections, size limits for the URI, the head and the body, and one JSON error shape for
 //! everything the server refuses, including what hyper answers on its own (`400`, `414`, `431`
 //! for heads it cannot parse).
 
@@ -26,6 +26,7 @@ use tokio::net::TcpListener;
 use tokio::sync::Semaphore;
 
 use crate::error::ApiError;
+use crate::write_stall::WriteStall;
 
 /// The limits a server applies to every connection; [`Limits::default`] is what the survey and
 /// the studio use (README, "Limits").
@@ -37,6 +38,9 @@ pub struct Limits {
     pub header_timeout: Duration,
     /// Time a client has to send a request's whole body once its head has arrived (`408`).
     pub body_timeout: Duration,
+    /// Time a reply may wait for the client to read any of it; then the connection is closed
+    /// (a client reading slowly but steadily is never cut off: see [`crate::write_stall`]).
+    pub write_timeout: Duration,
     /// Connections served at once; more wait in the listen backlog until one closes.
     pub max_connections: usize,
     /// Longest request target (path and query), bytes (`414`).
@@ -53,6 +57,7 @@ impl Default for Limits {
         Self {
             header_timeout: Duration::from_secs(30),
             body_timeout: Duration::from_secs(30),
+            write_timeout: Duration::from_secs(30),
             max_connections: 512,
             max_uri_bytes: 8 * 1024,
             max_head_bytes: 32 * 1024,
@@ -98,7 +103,10 @@ pub async fn serve(
             .header_read_timeout(limits.header_timeout)
             .max_buf_size(limits.max_head_bytes.max(8192));
         let conn = builder.serve_connection(
-            TokioIo::new(JsonAutoErrors::new(stream)),
+            TokioIo::new(JsonAutoErrors::new(WriteStall::new(
+                stream,
+                limits.write_timeout,
+            ))),
             TowerToHyperService::new(app.clone()),
         );
         let conn = graceful.watch(conn);

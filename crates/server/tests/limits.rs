@@ -1,6 +1,7 @@
 //! The connection limits of both servers ([`rmt_server::serve`]) and their one error shape, over
 //! raw TCP on loopback: idle connections are closed after the header timeout, a body that never
-//! arrives gets a 408 after the body timeout, a 10 GB `Content-Length` is refused at once, a
+//! arrives gets a 408 after the body timeout, a client that stops reading a large reply is cut
+//! off after the write timeout, a 10 GB `Content-Length` is refused at once, a
 //! connection cap queues clients instead of dropping them, 200 idle connections do not stop a
 //! participant, and every refusal (405, 413, 414, 431, a malformed head, an unknown path) is
 //! `{"error": "..."}`. Also: every animation of the survey is served at the same size and still
@@ -310,4 +311,44 @@ fn every_animation_is_served_at_one_size_and_decodes_unchanged() {
         );
         assert_eq!(frames(&r.body), frames(original), "{name}");
     }
+}
+
+/// A client that asks for a large reply and never reads it is cut off after the write timeout,
+/// so under a cap of one connection the next client is served instead of waiting forever.
+#[test]
+fn a_client_that_stops_reading_frees_its_slot_after_the_write_timeout() {
+    use axum::routing::get as route;
+    let router = axum::Router::new()
+        .route("/big", route(|| async { vec![7u8; 64 << 20] }))
+        .route("/healthz", route(|| async { "ok" }));
+    let limits = Limits {
+        max_connections: 1,
+        write_timeout: Duration::from_secs(1),
+        ..short()
+    };
+    let server = spawn_with(router, "127.0.0.1:0".parse().unwrap(), limits).expect("server");
+    let mut hog = connect(server.addr);
+    hog.write_all(b"GET /big HTTP/1.1\r\nHost: x\r\n\r\n")
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    // The read timeout of `get` (60 s) fails the test if the hog keeps the only slot.
+    let start = Instant::now();
+    let r = get(server.addr, "/healthz", None).expect("served once the hog is cut off");
+    assert_eq!(r.text(), "ok");
+    assert!(
+        start.elapsed() >= Duration::from_millis(500),
+        "{:?}",
+        start.elapsed()
+    );
+    // The hog's connection was closed: reading it to the end stops short of the 64 MiB.
+    hog.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    let mut got = 0usize;
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        match hog.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => got += n,
+        }
+    }
+    assert!(got < 64 << 20, "the whole reply arrived: {got} bytes");
 }
