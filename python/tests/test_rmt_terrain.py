@@ -361,9 +361,13 @@ def test_ghosts_are_given_never_guessed():
 # ----------------------------------------------------------------------- the volume, not copied
 
 def peak_rss_reset():
-    """Resets the peak resident set size of this process (Linux: clear_refs 5)."""
-    with open("/proc/self/clear_refs", "w") as f:
-        f.write("5")
+    """Resets the peak resident set size of this process (Linux: clear_refs 5); skips the test
+    where the system does not allow it."""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+    except OSError as e:
+        pytest.skip(f"cannot reset the peak resident set size: {e}")
 
 
 def peak_rss():

@@ -3,7 +3,8 @@
 //! # Public API
 //!
 //! - [`Extractor`]: samples a [`ScalarField`] and meshes it, keeping every buffer between calls,
-//!   as a game would ([`Extractor::extract`], [`Extractor::extract_presampled`]; the
+//!   as a game would ([`Extractor::extract`], [`Extractor::extract_presampled`],
+//!   [`Extractor::extract_borrowed`] on the caller's values in place; the
 //!   [`BufferPolicy`], [`Sampling`] and [`ThreadPlacement`] it runs with; with
 //!   [`Extractor::set_recording`], the anchor cell of every triangle and the clustering's
 //!   activity);
