@@ -5,7 +5,7 @@
 //! ```text
 //! experiments report --run results/paper-20260301-120000 --scaling results/scaling-... \
 //!     --check-cost results/check-cost-... --peers results/peers-... \
-//!     --peers-seeds results/peers-seeds-... --out reports
+//!     --peers-seeds results/peers-seeds-... --study sim-study --out reports
 //! experiments report --check        # reports/ against a rebuild from reports/data
 //! ```
 
@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context};
 use rmt_report::{
     build, check, default_check_cost, default_peers, default_peers_seeds, default_scaling,
-    Questionnaire, ReportInputs,
+    default_study, Questionnaire, ReportInputs,
 };
 
 /// Arguments of `report`.
@@ -44,6 +44,13 @@ pub struct Args {
     /// Leave out the section "Against what game developers use".
     #[arg(long)]
     pub no_peers: bool,
+    /// The second study's folder: `study simulate --out` (and `study coverage --out`) files
+    /// [default: RUN/study when it holds one].
+    #[arg(long, conflicts_with = "no_study")]
+    pub study: Option<PathBuf>,
+    /// Leave out the second study's section.
+    #[arg(long)]
+    pub no_study: bool,
     /// Report folder to write (or, with --check, to compare with).
     #[arg(long, default_value = "reports")]
     pub out: PathBuf,
@@ -95,6 +102,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .or_else(|| default_peers_seeds(&args.run)),
         )
     };
+    let study = if args.no_study {
+        None
+    } else {
+        args.study.clone().or_else(|| default_study(&args.run))
+    };
     let questionnaire = (!args.no_questionnaire).then(|| Questionnaire {
         inputs: rmt_analysis::Inputs::in_dir(&args.questionnaire),
         options: rmt_analysis::Options {
@@ -110,6 +122,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         check_cost,
         peers,
         peers_seeds,
+        study,
         questionnaire,
         keep_raw: !args.no_raw,
     };

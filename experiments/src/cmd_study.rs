@@ -71,7 +71,8 @@ pub struct SimulateArgs {
     /// Seed of the answers.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output folder of the export-shaped files (without --serve).
+    /// Output folder of the export-shaped files (without --serve), with `study.csv`: the
+    /// design's numbers, which the report's study section reads beside them.
     #[arg(long, required_unless_present = "serve")]
     pub out: Option<PathBuf>,
     /// Answer through the survey served at this address instead (`survey serve` of a folder
@@ -119,6 +120,10 @@ pub struct CoverageArgs {
     /// Seed of the first study (study k uses seed + k).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Also write the table as `coverage.csv` and `coverage_tests.csv` into this folder (the
+    /// report's study section reads them).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 /// Runs `study`.
@@ -145,6 +150,7 @@ pub fn run(args: Args) -> Result<()> {
             let plans = study::participant_plans(&design, n);
             let sim = simulate(&design.pairs, &plans, &model, a.seed);
             export::write_export(&out, &design.items, &design.pairs, &plans, &sim)?;
+            study::report_data::write_study_csv(&out, &design, n, &a.model, a.seed)?;
             println!(
                 "{n} simulated participants, {} answers and {} control answers in {}",
                 sim.answers.len(),
@@ -214,6 +220,9 @@ pub fn run(args: Args) -> Result<()> {
                 a.studies,
                 a.seed,
             );
+            if let Some(out) = &a.out {
+                study::report_data::write_coverage(out, &design, &report, n)?;
+            }
             print!("{}", study::coverage_text(&design, &report, n));
             Ok(())
         }

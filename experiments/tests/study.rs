@@ -365,3 +365,96 @@ fn study_run_serves_balanced_subsets_that_simulated_participants_answer_over_htt
         assert_eq!(n, 15, "{q}");
     }
 }
+
+/// The report's study section from the command line: `study simulate --out` writes the design's
+/// numbers beside the export files, `study coverage --out` its table, `report --study` the
+/// section (titled as simulated), and `report --check` rebuilds it from the report's copy.
+#[test]
+fn simulate_and_coverage_write_what_report_study_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    let s = sim.to_str().unwrap();
+    let o = experiments(&[
+        "study",
+        "simulate",
+        STUDY,
+        "--participants",
+        "30",
+        "--model",
+        MODEL,
+        "--seed",
+        "5",
+        "--out",
+        s,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let design = std::fs::read_to_string(sim.join("study.csv")).unwrap();
+    for row in [
+        "participants,30\n",
+        "questions,24\n",
+        "reference,rmt-bcdl\n",
+        "answers,simulated\n",
+        "model,peers-model.toml\n",
+        "seed,5\n",
+    ] {
+        assert!(design.contains(row), "{row} missing: {design}");
+    }
+    let o = experiments(&[
+        "study",
+        "coverage",
+        STUDY,
+        "--model",
+        MODEL,
+        "--studies",
+        "3",
+        "--participants",
+        "30",
+        "--out",
+        s,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let coverage = std::fs::read_to_string(sim.join("coverage.csv")).unwrap();
+    assert!(coverage.starts_with("method,shading,intervals,covered,mean_error\n"));
+    assert_eq!(coverage.lines().count(), 1 + 8, "{coverage}");
+    let tests = std::fs::read_to_string(sim.join("coverage_tests.csv")).unwrap();
+    assert!(
+        tests.contains("studies,3\n") && tests.contains("participants,30\n"),
+        "{tests}"
+    );
+
+    let report = dir.path().join("report");
+    let run = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../crates/report/tests/fixtures/ci"
+    );
+    let args = |check: bool| {
+        let mut a = vec![
+            "report",
+            "--run",
+            run,
+            "--out",
+            report.to_str().unwrap(),
+            "--study",
+            s,
+            "--no-questionnaire",
+        ];
+        if check {
+            a.push("--check");
+        }
+        a
+    };
+    let o = experiments(&args(false));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let readme = std::fs::read_to_string(report.join("README.md")).unwrap();
+    assert!(
+        readme.contains(
+            "## A second study on screen, from simulated participants (no real answers yet)"
+        ),
+        "{readme}"
+    );
+    assert!(readme.contains("30 simulated participants"), "{readme}");
+    assert!(report.join("tables/study_coverage.md").is_file());
+    assert!(report.join("data/study/responses.csv").is_file());
+    let o = experiments(&args(true));
+    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+}

@@ -21,6 +21,8 @@
 //!   clustering, with the dissertation's own ratio) and the defects of each mesh;
 //! - [`peers`]: against what game developers use (marching cubes, surface nets, meshoptimizer
 //!   at RMT's count): time, quality, rendering cost and defects per object, over seeds too;
+//! - [`study`]: the second perception study (RMT against the peers, smooth and flat): the
+//!   analysis of its answers, the power table and the coverage check on simulated studies;
 //! - [`readme`]: the one-page README; [`report`]: building and checking the folder.
 //!
 //! ```no_run
@@ -33,6 +35,7 @@
 //!     check_cost: None,
 //!     peers: None,
 //!     peers_seeds: None,
+//!     study: None,
 //!     questionnaire: None,
 //!     keep_raw: true,
 //! };
@@ -59,10 +62,11 @@ pub mod readme;
 pub mod report;
 pub mod scaling;
 pub mod seeds;
+pub mod study;
 pub mod tables;
 
 pub use error::{ReportError, Result};
 pub use report::{
     build, check, compare, default_check_cost, default_peers, default_peers_seeds, default_scaling,
-    validate, CheckOutcome, Questionnaire, ReportInputs,
+    default_study, validate, CheckOutcome, Questionnaire, ReportInputs,
 };

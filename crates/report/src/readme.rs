@@ -40,6 +40,8 @@ pub struct ReadmeInput<'a> {
     pub check_cost: Option<&'a Run>,
     /// The peers run and its rows, when given.
     pub peers: Option<(&'a RunInfo, &'a [crate::peers::PeerRow])>,
+    /// The second study, when given.
+    pub study: Option<&'a crate::study::Study>,
 }
 
 fn provenance_rows(info: &RunInfo) -> Vec<(String, String)> {
@@ -554,6 +556,12 @@ pub fn readme(input: &ReadmeInput) -> String {
         }
     }
 
+    if let Some(study) = input.study {
+        out.push_str(&crate::study::readme_section(study, input.tables, |name| {
+            table_link(input.tables, name)
+        }));
+    }
+
     out.push_str("## Files\n\n");
     out.push_str("| file | what |\n|---|---|\n");
     for table in input.tables {
@@ -577,6 +585,12 @@ pub fn readme(input: &ReadmeInput) -> String {
             "summary.csv" => "one row per configuration (the source of every benchmark figure)",
             "paper_comparison.csv" => "ours against the dissertation, per configuration and metric",
             "seeds.csv" => "each configuration's distribution over the noise seeds (seed study)",
+            "study.csv" => "the study's design: questions, power assumptions, answers' source",
+            "questions.csv" => "question to configurations (canonical sides)",
+            "responses.csv" => "one row per answer to a pair (as the survey export writes it)",
+            "controls.csv" => "one row per control answer",
+            "coverage.csv" => "coverage of the planted strengths over simulated studies",
+            "coverage_tests.csv" => "the simulated studies' test rates",
             _ => "input",
         };
         let scope = if file.starts_with("scaling/") {
@@ -587,6 +601,8 @@ pub fn readme(input: &ReadmeInput) -> String {
             " (peers run)"
         } else if file.starts_with("peers-seeds/") {
             " (peers seed study)"
+        } else if file.starts_with("study/") {
+            " (second study)"
         } else {
             ""
         };

@@ -10,13 +10,14 @@
 //! <out>/data/peers/          the peers run (run.json, manifest.toml, configurations.csv,
 //!                            summary.csv), when given
 //! <out>/data/peers-seeds/    the peers seed study (run.json, manifest.toml, seeds.csv)
+//! <out>/data/study/          the second study's answers and design (crate::study), when given
 //! <out>/figures/NAME.{png,svg}
 //! <out>/tables/NAME.{md,csv}
 //! <out>/questionnaire/       the questionnaire analysis (rmt-analysis: tables and charts)
 //! ```
 //!
 //! `data/` is itself a valid run folder (with `data/scaling/`, `data/check-cost/`,
-//! `data/peers/` and `data/peers-seeds/` found by default), so a report
+//! `data/peers/`, `data/peers-seeds/` and `data/study/` found by default), so a report
 //! rebuilds from its own copy: that is what [`check`] does.
 
 use std::collections::BTreeSet;
@@ -70,6 +71,9 @@ pub struct ReportInputs {
     /// The run folder of `experiments/manifests/peers-seeds.toml` (its `seeds.csv`), if any (see
     /// [`default_peers_seeds`]).
     pub peers_seeds: Option<PathBuf>,
+    /// The folder of the second study's answers and design (see [`crate::study`] and
+    /// [`default_study`]), if any.
+    pub study: Option<PathBuf>,
     /// The questionnaire, if it is part of the report.
     pub questionnaire: Option<Questionnaire>,
     /// Copy `raw.csv` into `data/` (it can be large; `summary.csv` holds what the report uses).
@@ -99,6 +103,15 @@ pub fn default_peers_seeds(run: &Path) -> Option<PathBuf> {
         .is_file()
         .then_some(candidate)
 }
+
+/// `run/study` when it holds a study (as a report's `data/` folder does).
+pub fn default_study(run: &Path) -> Option<PathBuf> {
+    let candidate = run.join(STUDY_DIR);
+    crate::study::is_study(&candidate).then_some(candidate)
+}
+
+/// The folder of `data/` that holds the second study.
+pub const STUDY_DIR: &str = "study";
 
 /// The folder of `data/` that holds the peers run.
 pub const PEERS_DIR: &str = "peers";
@@ -203,6 +216,13 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         )),
         None => None,
     };
+    let study = match &inputs.study {
+        Some(folder) => Some((
+            crate::study::read_study(folder)?,
+            crate::study::study_files(folder)?,
+        )),
+        None => None,
+    };
     // Read every input before writing anything: `out/data` may be the input.
     let data = read_data_files(&inputs.run, inputs.keep_raw)?;
     let sub_data = |folder: &Option<PathBuf>| match folder {
@@ -231,11 +251,37 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         (PEERS_DIR, peers_data),
         (PEERS_SEEDS_DIR, peers_seeds_data),
     ];
-
     let mut written: Vec<PathBuf> = Vec::new();
     std::fs::create_dir_all(out).map_err(io_error(out))?;
     let data_dir = out.join("data");
     let mut data_files = write_data_files(&data_dir, &data)?;
+    // The study's folder holds its own files (not a run's): written whole, or removed.
+    let study_dir = data_dir.join(STUDY_DIR);
+    match &study {
+        Some((_, files)) => {
+            std::fs::create_dir_all(&study_dir).map_err(io_error(&study_dir))?;
+            for (name, bytes) in files {
+                write_atomic(&study_dir.join(name), bytes)?;
+            }
+            for name in crate::study::STUDY_FILES {
+                let path = study_dir.join(name);
+                if path.is_file() && !files.iter().any(|(n, _)| *n == name) {
+                    std::fs::remove_file(&path).map_err(io_error(&path))?;
+                }
+            }
+            data_files.extend(files.iter().map(|(n, _)| format!("{STUDY_DIR}/{n}")));
+        }
+        None if study_dir.is_dir() => {
+            for name in crate::study::STUDY_FILES {
+                let path = study_dir.join(name);
+                if path.is_file() {
+                    std::fs::remove_file(&path).map_err(io_error(&path))?;
+                }
+            }
+        }
+        None => {}
+    }
+
     for (name, files) in &subs {
         let dir = data_dir.join(name);
         match files {
@@ -278,6 +324,9 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         if let Some(table) = crate::peers::seeds_table(&info.run_id, seeds)? {
             all_tables.push(table);
         }
+    }
+    if let Some((s, _)) = &study {
+        all_tables.extend(crate::study::study_tables(s));
     }
     let mut kept = BTreeSet::new();
     for table in &all_tables {
@@ -368,6 +417,7 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         scaling: scaling.as_ref().map(|(r, f)| (r, f.as_slice())),
         check_cost: check_cost.as_ref(),
         peers: peers.as_ref().map(|(info, rows)| (info, rows.as_slice())),
+        study: study.as_ref().map(|(s, _)| s),
         figures: &figure_names,
         tables: &all_tables,
         questionnaire: questionnaire.as_ref(),

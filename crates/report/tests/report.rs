@@ -29,6 +29,7 @@ fn inputs(run: &Path, scaling: Option<&Path>, resamples: Option<usize>) -> Repor
         check_cost: None,
         peers: None,
         peers_seeds: None,
+        study: None,
         questionnaire: resamples.map(questionnaire),
         keep_raw: true,
     }
@@ -572,4 +573,90 @@ fn the_peers_section_shows_every_method_per_object_and_the_seed_intervals() {
     ] {
         assert!(!out.path().join(gone).exists(), "{gone} left behind");
     }
+}
+
+#[test]
+fn the_study_section_is_built_from_simulated_answers_and_says_so() {
+    let out = tempfile::tempdir().unwrap();
+    let ci = fixtures().join("ci");
+    let with_study = ReportInputs {
+        study: Some(fixtures().join("study")),
+        ..inputs(&ci, None, None)
+    };
+    build(&with_study, out.path()).unwrap();
+    for file in [
+        "data/study/study.csv",
+        "data/study/responses.csv",
+        "data/study/coverage.csv",
+        "tables/study_strengths.csv",
+        "tables/study_power.csv",
+        "tables/study_coverage.csv",
+    ] {
+        assert!(out.path().join(file).is_file(), "{file} missing");
+    }
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(readme.contains(
+        "## A second study on screen, from simulated participants (no real answers yet)"
+    ));
+    assert!(readme.contains("**No participant has answered yet.**"));
+    for heading in [
+        "### Bradley-Terry with ties, per shading",
+        "### Does the ranking change with shading?",
+        "### Position and order",
+        "### Power",
+        "### Method: does the analysis recover what was planted?",
+    ] {
+        assert!(readme.contains(heading), "{heading} missing");
+    }
+    assert!(readme.contains("statistic ") && readme.contains("degrees of freedom"));
+    // One strength per configuration (3 objects x 4 methods x 2 shadings) after the 8 means.
+    let strengths = std::fs::read_to_string(out.path().join("tables/study_strengths.csv")).unwrap();
+    assert_eq!(strengths.lines().count(), 1 + 8 + 24, "{strengths}");
+    // The planted order (rmt-bcdl strongest, mc-meshopt weakest) comes back in both shadings.
+    let mean = |method: &str, shading: &str| -> f64 {
+        let line = strengths
+            .lines()
+            .find(|l| l.starts_with(&format!("all,{method},{shading},")))
+            .unwrap();
+        line.split(',').nth(3).unwrap().parse().unwrap()
+    };
+    for shading in ["smooth", "flat"] {
+        assert!(
+            mean("rmt-bcdl", shading) > mean("mc-meshopt", shading),
+            "{shading}"
+        );
+    }
+    // Power: the reference against each of the 3 peers in each shading.
+    let power = std::fs::read_to_string(out.path().join("tables/study_power.csv")).unwrap();
+    assert_eq!(power.lines().count(), 1 + 6, "{power}");
+
+    // The report's own copy finds the study again; real answers drop "simulated" from the title.
+    let again = ReportInputs {
+        study: rmt_report::default_study(&out.path().join("data")),
+        ..inputs(&out.path().join("data"), None, None)
+    };
+    assert!(again.study.is_some());
+    assert!(check(&again, out.path()).unwrap().passed());
+    let real = tempfile::tempdir().unwrap();
+    for entry in std::fs::read_dir(fixtures().join("study")).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let text = text.replace("answers,simulated", "answers,real");
+        std::fs::write(real.path().join(path.file_name().unwrap()), text).unwrap();
+    }
+    let with_real = ReportInputs {
+        study: Some(real.path().to_path_buf()),
+        ..inputs(&ci, None, None)
+    };
+    build(&with_real, out.path()).unwrap();
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(readme.contains("## A second study on screen\n"));
+    assert!(!readme.contains("simulated participants (planted model"));
+    // Without it the section and its files go.
+    build(&inputs(&ci, None, None), out.path()).unwrap();
+    for gone in ["tables/study_power.csv", "data/study/study.csv"] {
+        assert!(!out.path().join(gone).exists(), "{gone} left behind");
+    }
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(!readme.contains("A second study on screen"));
 }

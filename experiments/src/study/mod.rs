@@ -9,6 +9,7 @@ pub mod design_file;
 pub mod export;
 pub mod http_participants;
 pub mod model_file;
+pub mod report_data;
 pub mod survey_key;
 
 use std::fmt::Write as _;
