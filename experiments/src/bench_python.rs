@@ -305,9 +305,11 @@ mod tests {
     #[test]
     fn a_dump_is_the_grid_its_header_describes() {
         let dir = tempfile::tempdir().unwrap();
-        let mut samples = Samples::default();
-        samples.dims = [3, 2, 2];
-        samples.values = (0..12).map(|i| i as f32 - 5.5).collect::<Vec<f32>>().into();
+        let mut samples = Samples {
+            dims: [3, 2, 2],
+            values: (0..12).map(|i| i as f32 - 5.5).collect::<Vec<f32>>().into(),
+            ..Samples::default()
+        };
         let name = dump_values(dir.path(), "sphere", 2, &samples).unwrap();
         assert_eq!(name, "sphere_2");
         let header: serde_json::Value = serde_json::from_str(

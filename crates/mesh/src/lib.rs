@@ -3,7 +3,8 @@
 //! This crate owns the output type of every extractor in the workspace, [`Mesh`], and the checks
 //! that decide whether a mesh is fit for a game: [`validate()`] (closed, manifold, consistently
 //! oriented, no duplicate or zero-area triangles, Euler characteristic, components) and
-//! [`quality()`] (radius ratio, minimum angle, area statistics). It also reads and writes meshes
+//! [`quality()`] (radius ratio, minimum angle, area statistics), and how far one surface is from
+//! another ([`distance`]: point-to-triangles distances on a grid). It also reads and writes meshes
 //! ([`io`]: binary and ASCII PLY, OBJ, binary glTF; OBJ input through `tobj`, glTF through
 //! `gltf`).
 //!
@@ -20,6 +21,7 @@
 //! assert_eq!(mesh.triangle_count(), 4);
 //! ```
 
+pub mod distance;
 pub mod glb;
 pub mod io;
 pub mod quality;
