@@ -1,7 +1,7 @@
 //! Checks of a tetrahedral mesh: volume, face sharing and orientation, hanging vertices, and
 //! boundary faces on the domain's boundary. Used by the tests and the measuring example.
 
-use std::collections::{HashMap, HashSet};
+use foldhash::{HashMap, HashSet};
 
 use super::lattice::{mid, vol6, Point, Tet, EDGES};
 
@@ -51,9 +51,9 @@ pub fn check_tets<'a>(
     tets: impl IntoIterator<Item = &'a Tet>,
 ) -> (TetCheck, HashMap<[Point; 3], [Point; 3]>) {
     let mut c = TetCheck::default();
-    let mut faces: HashMap<[Point; 3], (u32, i32, [Point; 3])> = HashMap::new();
-    let mut verts: HashSet<Point> = HashSet::new();
-    let mut edges: HashSet<(Point, Point)> = HashSet::new();
+    let mut faces: HashMap<[Point; 3], (u32, i32, [Point; 3])> = HashMap::default();
+    let mut verts: HashSet<Point> = HashSet::default();
+    let mut edges: HashSet<(Point, Point)> = HashSet::default();
     for t in tets {
         c.tets += 1;
         let v = vol6(t);
@@ -73,7 +73,7 @@ pub fn check_tets<'a>(
             edges.insert((p, q));
         }
     }
-    let mut boundary = HashMap::new();
+    let mut boundary = HashMap::default();
     for (k, (n, sum, f)) in faces {
         match n {
             1 => {
@@ -135,4 +135,68 @@ pub fn faces_off(faces: &[[Point; 3]], reference: &[[Point; 3]]) -> usize {
             })
         })
         .count()
+}
+
+/// What [`check_surface`] found on a welded surface.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SurfaceCheck {
+    /// Triangles.
+    pub triangles: usize,
+    /// Edges of one triangle that do not lie in a boundary face of the tetrahedral mesh.
+    pub open_inside: usize,
+    /// Edges of one triangle on the domain's boundary (expected where the surface leaves it).
+    pub open_on_boundary: usize,
+    /// Edges of more than two triangles.
+    pub non_manifold: usize,
+    /// Edges of two triangles that run the same way in both.
+    pub misoriented: usize,
+}
+
+/// Checks a surface whose vertices are crossings (`keys[v]`, the tet edge it lies on):
+/// every edge in two triangles with opposite directions, except edges in a boundary face of
+/// the tetrahedral mesh (`boundary`, from [`check_tets`]).
+pub fn check_surface(
+    keys: &[[Point; 2]],
+    indices: &[u32],
+    boundary: &HashMap<[Point; 3], [Point; 3]>,
+) -> SurfaceCheck {
+    let mut edges: HashMap<(u32, u32), (u32, i32)> = HashMap::default();
+    for tri in indices.chunks_exact(3) {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            let e = edges.entry((a.min(b), a.max(b))).or_insert((0, 0));
+            e.0 += 1;
+            e.1 += if a < b { 1 } else { -1 };
+        }
+    }
+    let mut c = SurfaceCheck {
+        triangles: indices.len() / 3,
+        ..SurfaceCheck::default()
+    };
+    for ((a, b), (n, dir)) in edges {
+        match n {
+            1 => {
+                let mut pts: Vec<Point> = keys[a as usize]
+                    .iter()
+                    .chain(&keys[b as usize])
+                    .copied()
+                    .collect();
+                pts.sort_unstable();
+                pts.dedup();
+                let on = pts.len() == 3 && boundary.contains_key(&[pts[0], pts[1], pts[2]]);
+                if on {
+                    c.open_on_boundary += 1;
+                } else {
+                    c.open_inside += 1;
+                }
+            }
+            2 => {
+                if dir != 0 {
+                    c.misoriented += 1;
+                }
+            }
+            _ => c.non_manifold += 1,
+        }
+    }
+    c
 }

@@ -218,6 +218,36 @@ impl LevelMap {
         best
     }
 
+    /// The leaves whose closed box meets the closed box `[lo, hi]`, sorted.
+    pub fn leaves_touching(&self, lo: [i64; 3], hi: [i64; 3]) -> Vec<ChunkKey> {
+        let mut out = Vec::new();
+        let mut stack: Vec<ChunkKey> = Vec::new();
+        let g = &self.geom;
+        for x in 0..g.roots[0] as i32 {
+            for y in 0..g.roots[1] as i32 {
+                for z in 0..g.roots[2] as i32 {
+                    stack.push(ChunkKey {
+                        level: g.levels,
+                        at: [x, y, z],
+                    });
+                }
+            }
+        }
+        while let Some(k) = stack.pop() {
+            let (a, b) = k.bounds(g);
+            if (0..3).any(|i| a[i] > hi[i] || b[i] < lo[i]) {
+                continue;
+            }
+            if self.set.contains(&k) {
+                out.push(k);
+            } else if k.level > 0 {
+                stack.extend(k.children());
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
     fn descend(&self, k: ChunkKey, lo: [i64; 3], hi: [i64; 3], best: &mut Option<u8>) {
         let (a, b) = k.bounds(&self.geom);
         if (0..3).any(|i| a[i] > hi[i] || b[i] < lo[i]) {

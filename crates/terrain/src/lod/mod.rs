@@ -27,11 +27,15 @@ pub mod check;
 pub mod lattice;
 pub mod level_map;
 pub mod mesh;
+pub mod mt;
 pub mod refine;
+pub mod world;
 
 pub use level_map::{ChunkKey, LevelMap, LodGeometry};
 pub use mesh::{chunk_tets, world_tets, MeshTet};
+pub use mt::{march, weld, ChunkMesh, LodFrame};
 pub use refine::TetKind;
+pub use world::{mesh_chunks, mesh_whole, thread_pool, LodRemesh, LodSettings, LodWorld};
 
 /// Why a multiresolution mesh could not be built.
 #[derive(Debug, thiserror::Error)]

@@ -25,7 +25,7 @@
 //! four), and which edges are split depends only on `V`, which both tets of a face see alike.
 //! The tests check every template on every body-centred tet against that face rule.
 
-use std::collections::HashSet;
+use foldhash::HashSet;
 
 use super::lattice::{mid, orient, Point, Tet, EDGES, FACES};
 use super::LodError;
@@ -154,7 +154,7 @@ pub fn balance_rule(t: &Tet, v: &HashSet<Point>) -> bool {
 
 /// All vertices of the leaves.
 pub fn vertices(leaves: &[Leaf]) -> HashSet<Point> {
-    let mut v = HashSet::with_capacity(leaves.len());
+    let mut v = HashSet::with_capacity_and_hasher(leaves.len(), Default::default());
     for l in leaves {
         v.extend(l.tet);
     }
@@ -239,7 +239,7 @@ fn bisect(t: Tet, edges: &mut Vec<(Point, Point)>, n: u8, out: &mut Vec<(Tet, Te
 mod tests {
     use super::super::lattice::{bcc_tet, d2, is_bcc_tet, vol6};
     use super::*;
-    use std::collections::HashMap;
+    use foldhash::HashMap;
 
     /// The outward faces of a positively oriented tet, in cyclic order.
     fn faces(t: &Tet) -> [[Point; 3]; 4] {
@@ -335,7 +335,7 @@ mod tests {
             used, allowed,
             "kids use exactly the corners and the split midpoints"
         );
-        let mut count: HashMap<[Point; 3], Vec<[Point; 3]>> = HashMap::new();
+        let mut count: HashMap<[Point; 3], Vec<[Point; 3]>> = HashMap::default();
         for k in kids {
             for f in faces(k) {
                 count.entry(sorted(f)).or_default().push(f);

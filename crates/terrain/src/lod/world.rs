@@ -1,0 +1,241 @@
+//! A multiresolution world that follows a viewer: the level map, one surface per chunk, and
+//! re-meshing of only the chunks whose tets can have changed.
+//!
+//! ```text
+//!   set_viewer(pos) -> LevelMap::from_viewer (pending)
+//!   remesh():  for every chunk K of the new map
+//!                new, or the leaves touching dependency_box(K) differ between the maps
+//!                  -> chunk_tets + march (in parallel, on the world's threads)
+//!                else keep K's surface
+//!              chunks no longer in the map are dropped
+//! ```
+//!
+//! A chunk's tets are a function of the map's leaves inside its dependency box
+//! ([`super::mesh::dependency_box`]), and its surface a function of its tets and the field, so
+//! the incrementally updated world equals a from-scratch meshing of the new map, byte for
+//! byte (tested).
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use rmt_fields::ScalarField;
+use rmt_mesh::Mesh;
+
+use super::lattice::Point;
+use super::level_map::{ChunkKey, LevelMap, LodGeometry};
+use super::mesh::{chunk_tets, dependency_box, world_tets, MeshTet};
+use super::mt::{march, weld, ChunkMesh, LodFrame};
+use super::LodError;
+
+/// What a multiresolution world is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LodSettings {
+    /// Levels, chunk size and extent.
+    pub geometry: LodGeometry,
+    /// Where the lattice sits in the world.
+    pub frame: LodFrame,
+    /// The distance rule: a chunk is split while the viewer is closer to it than `ratio` of
+    /// its edge ([`LevelMap::from_viewer`]).
+    pub ratio: f64,
+    /// Worker threads (>= 1); the meshes do not depend on it.
+    pub threads: usize,
+}
+
+/// What one [`LodWorld::remesh`] did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LodRemesh {
+    /// Chunks (re-)meshed, in map order.
+    pub remeshed: Vec<ChunkKey>,
+    /// Chunks dropped (no longer leaves of the map), sorted.
+    pub dropped: Vec<ChunkKey>,
+    /// Chunks whose surface was kept.
+    pub kept: usize,
+    /// Triangles in the world after the step.
+    pub triangles: usize,
+}
+
+/// A multiresolution world over a procedural field: a level map chosen from the viewer and
+/// one surface per chunk.
+pub struct LodWorld<F: ScalarField> {
+    field: F,
+    settings: LodSettings,
+    pool: rayon::ThreadPool,
+    /// The map the surfaces are of.
+    map: Option<LevelMap>,
+    /// The map the next remesh moves to.
+    pending: LevelMap,
+    meshes: HashMap<ChunkKey, ChunkMesh>,
+}
+
+/// Meshes every chunk of `map` on `pool`, in map order.
+pub fn mesh_chunks(
+    map: &LevelMap,
+    field: &dyn ScalarField,
+    frame: &LodFrame,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<ChunkMesh>, LodError> {
+    mesh_some(map, map.chunks(), field, frame, pool)
+}
+
+fn mesh_some(
+    map: &LevelMap,
+    keys: &[ChunkKey],
+    field: &dyn ScalarField,
+    frame: &LodFrame,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<ChunkMesh>, LodError> {
+    pool.install(|| {
+        keys.par_iter()
+            .map(|k| Ok(march(&chunk_tets(map, k)?, field, frame)))
+            .collect()
+    })
+}
+
+/// The reference: the whole world's tets built at once ([`world_tets`]), cut by owning chunk
+/// and marched chunk by chunk, in map order.
+pub fn mesh_whole(
+    map: &LevelMap,
+    field: &dyn ScalarField,
+    frame: &LodFrame,
+) -> Result<Vec<ChunkMesh>, LodError> {
+    let all = world_tets(map)?;
+    let mut out = Vec::with_capacity(map.chunks().len());
+    let mut start = 0;
+    for i in 0..map.chunks().len() {
+        let end = start + all[start..].iter().take_while(|(c, _)| *c == i).count();
+        let tets: Vec<MeshTet> = all[start..end].iter().map(|(_, t)| *t).collect();
+        out.push(march(&tets, field, frame));
+        start = end;
+    }
+    Ok(out)
+}
+
+/// A rayon pool of `threads` threads.
+pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, LodError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+        .map_err(|e| LodError::Invalid(format!("could not start {threads} threads: {e}")))
+}
+
+impl<F: ScalarField> LodWorld<F> {
+    /// A world with the viewer at the world's origin corner; nothing is meshed until
+    /// [`LodWorld::remesh`].
+    pub fn new(field: F, settings: LodSettings) -> Result<Self, LodError> {
+        if !(settings.frame.h.is_finite() && settings.frame.h > 0.0) {
+            return Err(LodError::Invalid(format!("cell size {}", settings.frame.h)));
+        }
+        if !(settings.ratio.is_finite() && settings.ratio >= 0.0) {
+            return Err(LodError::Invalid(format!("ratio {}", settings.ratio)));
+        }
+        if settings.threads == 0 {
+            return Err(LodError::Invalid("threads must be >= 1".into()));
+        }
+        let pool = thread_pool(settings.threads)?;
+        let pending = LevelMap::from_viewer(settings.geometry, [0.0; 3], settings.ratio);
+        Ok(LodWorld {
+            field,
+            settings,
+            pool,
+            map: None,
+            pending,
+            meshes: HashMap::new(),
+        })
+    }
+
+    /// Moves the viewer (world coordinates); the new level map takes effect at the next
+    /// [`LodWorld::remesh`].
+    pub fn set_viewer(&mut self, pos: Vec3) {
+        let f = &self.settings.frame;
+        let u = f64::from(f.h) * 0.5;
+        let p = (pos.as_dvec3() - f.origin.as_dvec3()) / u;
+        self.pending =
+            LevelMap::from_viewer(self.settings.geometry, p.to_array(), self.settings.ratio);
+    }
+
+    /// Sets the next level map directly (it must have the world's geometry).
+    pub fn set_level_map(&mut self, map: LevelMap) -> Result<(), LodError> {
+        if *map.geometry() != self.settings.geometry {
+            return Err(LodError::Invalid("level map of another geometry".into()));
+        }
+        self.pending = map;
+        Ok(())
+    }
+
+    /// Re-meshes the chunks the pending level map changed (all of them the first time).
+    pub fn remesh(&mut self) -> Result<LodRemesh, LodError> {
+        let new = &self.pending;
+        let stale: Vec<ChunkKey> = new
+            .chunks()
+            .iter()
+            .copied()
+            .filter(|k| match (&self.map, self.meshes.contains_key(k)) {
+                (Some(old), true) => {
+                    let (lo, hi) = dependency_box(new, k);
+                    old.leaves_touching(lo, hi) != new.leaves_touching(lo, hi)
+                }
+                _ => true,
+            })
+            .collect();
+        let meshes = mesh_some(new, &stale, &self.field, &self.settings.frame, &self.pool)?;
+        let mut dropped: Vec<ChunkKey> = self
+            .meshes
+            .keys()
+            .copied()
+            .filter(|k| !new.contains(k))
+            .collect();
+        dropped.sort_unstable();
+        for k in &dropped {
+            self.meshes.remove(k);
+        }
+        for (k, m) in stale.iter().zip(meshes) {
+            self.meshes.insert(*k, m);
+        }
+        self.map = Some(new.clone());
+        let triangles = self.meshes.values().map(ChunkMesh::triangles).sum();
+        Ok(LodRemesh {
+            kept: new.chunks().len() - stale.len(),
+            remeshed: stale,
+            dropped,
+            triangles,
+        })
+    }
+
+    /// The level map of the current surfaces (`None` before the first remesh).
+    pub fn level_map(&self) -> Option<&LevelMap> {
+        self.map.as_ref()
+    }
+
+    /// One chunk's surface.
+    pub fn chunk_mesh(&self, key: &ChunkKey) -> Option<&ChunkMesh> {
+        self.meshes.get(key)
+    }
+
+    /// Every chunk's surface, in map order.
+    pub fn chunk_meshes(&self) -> Vec<(ChunkKey, &ChunkMesh)> {
+        self.map
+            .iter()
+            .flat_map(|m| m.chunks())
+            .filter_map(|k| self.meshes.get(k).map(|m| (*k, m)))
+            .collect()
+    }
+
+    /// The whole surface, welded by crossing key in map order, with each vertex's key.
+    pub fn mesh_welded(&self) -> (Mesh, Vec<[Point; 2]>) {
+        weld(self.chunk_meshes().into_iter().map(|(_, m)| m))
+    }
+
+    /// Bytes held by the chunk surfaces and the level map (the field is procedural; no
+    /// samples are kept).
+    pub fn memory_bytes(&self) -> usize {
+        let meshes: usize = self.meshes.values().map(ChunkMesh::bytes).sum();
+        let map = self.map.as_ref().map_or(0, |m| m.chunks().len()) * 2 * 16;
+        meshes + map + self.meshes.capacity() * (16 + std::mem::size_of::<ChunkMesh>())
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &LodSettings {
+        &self.settings
+    }
+}
