@@ -30,7 +30,7 @@ Conventions
   Our ``normals`` also point toward increasing values; scikit-image's point the other way.
 * ``volume`` may be any floating-point array. A C-contiguous float32 array is used without a
   copy: on the simple lattice (and for ``method="mc"`` and ``"surface-nets"``) the extractor
-  reads it in place, after a parallel scan for non-finite values (``stats["t_input_s"]``;
+  reads it in place, after a vectorised scan for non-finite values (``stats["t_input_s"]``;
   ``stats["input_copied"]`` is False). Other float arrays are converted to C-contiguous float32
   first (one copy, by numpy). The body-centred lattice interleaves corner and centre planes in
   its sample array, so there the values are copied into it (``stats["input_copied"]`` True).

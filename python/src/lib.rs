@@ -7,11 +7,13 @@
 //! exceptions), [`volume`] (numpy volumes into the extractor's sample array), [`normals`]
 //! (gradient normals of a volume), [`objects`] (the built-in objects of `sample`), [`field`]
 //! (a vectorised Python callable sampled in batches), [`pool`] (extractors kept between calls),
-//! [`convert`] (results as numpy arrays and dicts).
+//! [`flat`] (flat structs such as the stats as dicts, directly), [`convert`] (results as numpy
+//! arrays and dicts).
 
 mod convert;
 mod errors;
 mod field;
+mod flat;
 mod normals;
 mod objects;
 mod pool;
@@ -239,9 +241,10 @@ fn extract_volume<'py>(
                 let workers = pool::workers(settings.threads)?;
                 ex.set_pool(workers.clone());
                 // In place when the storage is the volume's own (simple lattice); the
-                // body-centred lattice interleaves corner and centre planes: a copy.
-                let in_place =
-                    workers.install(|| input.check_or_fill(&settings, ex.samples_mut()))?;
+                // body-centred lattice interleaves corner and centre planes: a copy. Checked
+                // on this thread (the pool only for a large volume): the extractor hands its
+                // work to the pool itself, as it does for a caller in Rust.
+                let in_place = input.check_or_fill(&settings, ex.samples_mut(), &workers)?;
                 let t_input = t.elapsed().as_secs_f64();
                 let mut mesh = Mesh::default();
                 let extracted = if in_place {
@@ -256,6 +259,8 @@ fn extract_volume<'py>(
                     stats.t_normals_s += t.elapsed().as_secs_f64();
                     stats.t_total_s += stats.t_normals_s;
                 }
+                // Array order before the GIL is taken back.
+                convert::to_array_order(&mut mesh);
                 Ok((mesh, stats, t_input, !in_place))
             })();
             pool::give_back(ex);

@@ -34,18 +34,67 @@ fn index_of(at: usize, shape: [usize; 3]) -> [usize; 3] {
     ]
 }
 
-/// Values per task of the parallel copy and check.
-const CHUNK: usize = 1 << 15;
+/// Values per task of the parallel check.
+const CHUNK: usize = 1 << 16;
 
-/// Whether `v` holds a non-finite value (a vectorisable scan).
-fn has_non_finite(v: &[f32]) -> bool {
-    v.iter().fold(false, |acc, x| acc | !x.is_finite())
+/// Volumes with fewer values than this (about 160^3) are checked on the calling thread: the
+/// scan runs at memory speed (a 64^3 volume, 275k values, in 20-40 us), and handing it to the
+/// worker pool and back costs a wake-up of each, which on a busy machine is more than the
+/// second core saves on all but large volumes.
+const PARALLEL_MIN: usize = 1 << 22;
+
+/// Whether `v` holds a non-finite value. Branch-free and vectorisable: `x - x` is 0 for a
+/// finite `x` and NaN for infinities and NaN, and a sum that meets a NaN stays NaN; 32
+/// independent sums let the compiler keep them in vector registers (float additions are not
+/// reordered for it).
+#[inline(always)]
+fn has_non_finite_lanes(v: &[f32]) -> bool {
+    const LANES: usize = 32;
+    let mut acc = [0f32; LANES];
+    let chunks = v.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for (a, x) in acc.iter_mut().zip(c) {
+            // Not 0: NaN for a non-finite x (the point of the scan).
+            #[allow(clippy::eq_op)]
+            {
+                *a += x - x;
+            }
+        }
+    }
+    acc.iter().fold(false, |bad, a| bad | (*a != 0.0))
+        | rest.iter().fold(false, |bad, x| bad | !x.is_finite())
 }
 
-/// The first non-finite value of `v`, if any (a parallel vectorisable scan first, on the
-/// current rayon pool; the search only when there is one).
-fn first_non_finite(v: &[f32]) -> Option<(usize, f32)> {
-    if !v.par_chunks(CHUNK).any(has_non_finite) {
+/// [`has_non_finite_lanes`] compiled for AVX2 (twice the width of the baseline's SSE2).
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn has_non_finite_avx2(v: &[f32]) -> bool {
+    has_non_finite_lanes(v)
+}
+
+/// Whether `v` holds a non-finite value (AVX2 where the CPU has it).
+fn has_non_finite(v: &[f32]) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { has_non_finite_avx2(v) };
+    }
+    has_non_finite_lanes(v)
+}
+
+/// The first non-finite value of `v`, if any: a vectorised scan first (on the calling thread,
+/// or on `pool` for a large volume), and the search for the index only when it found one.
+fn first_non_finite(v: &[f32], pool: &rayon::ThreadPool) -> Option<(usize, f32)> {
+    let bad = if v.len() < PARALLEL_MIN {
+        has_non_finite(v)
+    } else {
+        pool.install(|| v.par_chunks(CHUNK).any(has_non_finite))
+    };
+    if !bad {
         return None;
     }
     v.iter().position(|x| !x.is_finite()).map(|i| (i, v[i]))
@@ -69,12 +118,13 @@ impl Input<'_> {
         &self,
         settings: &ExtractSettings,
         samples: &mut Samples,
+        pool: &rayon::ThreadPool,
     ) -> Result<bool, Error> {
         let lattice = sampled_lattice(settings);
         if self.values.len() != self.shape.iter().product::<usize>() {
             return Err(Error::Value("volume: data and shape disagree".into()));
         }
-        if let Some((i, v)) = first_non_finite(self.values) {
+        if let Some((i, v)) = first_non_finite(self.values, pool) {
             return Err(non_finite("volume", i, v, self.shape));
         }
         match lattice {
@@ -167,10 +217,40 @@ mod tests {
 
     #[test]
     fn first_non_finite_finds_the_first() {
-        let mut v = vec![0.0f32; 10_000];
-        assert_eq!(first_non_finite(&v), None);
-        v[7000] = f32::INFINITY;
-        v[9000] = f32::NAN;
-        assert_eq!(first_non_finite(&v), Some((7000, f32::INFINITY)));
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        // On this thread, and on the pool (the bad values in different chunks).
+        for n in [10_000, PARALLEL_MIN + 1000] {
+            let mut v = vec![0.0f32; n];
+            assert_eq!(first_non_finite(&v, &pool), None);
+            v[n / 2] = f32::INFINITY;
+            v[n - 1000] = f32::NAN;
+            assert_eq!(first_non_finite(&v, &pool), Some((n / 2, f32::INFINITY)));
+        }
+    }
+
+    #[test]
+    fn every_position_and_kind_is_seen() {
+        // Every position of a length that leaves a remainder after the 32 lanes, in both the
+        // dispatched and the baseline kernel; large finite values (whose x - x is 0) are not
+        // flagged.
+        let bad = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -f32::NAN];
+        let mut v: Vec<f32> = (0..103).map(|i| (i as f32 - 50.0) * 1e36).collect();
+        v[7] = f32::MAX;
+        v[8] = f32::MIN;
+        v[9] = f32::MIN_POSITIVE / 4.0;
+        assert!(!has_non_finite(&v) && !has_non_finite_lanes(&v));
+        for at in 0..v.len() {
+            for b in bad {
+                let keep = v[at];
+                v[at] = b;
+                assert!(has_non_finite(&v), "{b} at {at}");
+                assert!(has_non_finite_lanes(&v), "{b} at {at}");
+                v[at] = keep;
+            }
+        }
+        assert!(!has_non_finite(&[]));
     }
 }

@@ -9,6 +9,7 @@ is skipped, with a message saying so, only when no such binary exists.
 """
 
 import inspect
+import json
 import os
 import subprocess
 import threading
@@ -266,6 +267,32 @@ def test_outputs_are_owned_arrays_of_the_promised_types():
     assert mesh.stats["t_total_s"] > 0
 
 
+def test_stats_have_the_command_lines_fields_and_types():
+    # The stats dict is built from the library's Stats directly (no JSON in between): every
+    # field the command line's --json prints, in its order, with its type, on every call.
+    exe = experiments_binary()
+    if exe is None:
+        pytest.skip("no experiments binary (set RMT_EXPERIMENTS or build target/release/"
+                    "experiments): the comparison with the command line's --json is skipped")
+    out = subprocess.run([str(exe), "extract", "--object", "sphere", "--radius", "0.7",
+                          "--resolution", "16", "--lattice", "simple", "--method", "mc",
+                          "--threads", "1", "--json"],
+                         check=True, capture_output=True, cwd=ROOT, text=True).stdout
+    cli = json.loads(out)
+    keys = list(cli)
+    fields = keys[keys.index("vertices"):keys.index("bytes_indices") + 1]
+    assert len(fields) > 30
+    for _ in range(3):
+        mesh = rmt_terrain.extract(sphere_volume(16), 0.0, method="mc", normals="area")
+        assert list(mesh.stats)[:len(fields)] == fields
+        for k in fields:
+            assert type(mesh.stats[k]) is type(cli[k]), k
+        assert mesh.stats["triangles"] == len(mesh.faces)
+        assert mesh.stats["vertices"] == len(mesh.vertices)
+        assert mesh.stats["input_copied"] is False and mesh.stats["axes"] == "zyx"
+        assert 0 < mesh.stats["t_total_s"] < mesh.stats["t_call_s"]
+
+
 def test_any_float_dtype_and_layout_give_the_same_mesh():
     v32 = sphere_volume(20)
     ref = rmt_terrain.extract(v32, 0.0)
@@ -491,6 +518,26 @@ def test_write_formats_and_to_trimesh(tmp_path):
 
 
 # ------------------------------------------------------------------------------- bad input
+
+def test_non_finite_values_are_found_anywhere():
+    # The vectorised scan (32 lanes and a remainder; from 2^22 values in parallel chunks)
+    # finds NaN and both infinities at any position, for every method; the error names the
+    # first in C order.
+    for shape in [(5, 6, 7), (162, 162, 163)]:
+        volume = np.ones(shape, np.float32)
+        n = volume.size
+        for at in (0, (n * 5) // 9, n - 1):
+            i, j, k = np.unravel_index(at, shape)
+            for bad in (np.nan, np.inf, -np.inf):
+                volume.flat[at] = bad
+                volume.flat[-1] = volume.flat[-1] if at == n - 1 else np.nan  # a later one
+                for method in ("mt", "mc", "surface-nets"):
+                    with pytest.raises(ValueError,
+                                       match=rf"volume is not finite at index \[{i}, {j}, {k}\]"):
+                        rmt_terrain.extract(volume, method=method, normals="area")
+                volume.flat[at] = volume.flat[-1] = 1.0
+        assert len(rmt_terrain.extract(volume, 0.5).faces) == 0  # all finite again
+
 
 def test_nan_names_the_first_index():
     volume = sphere_volume(10)
