@@ -27,6 +27,8 @@
 //! - [`seeds`]: seed studies, every noise configuration over many seeds, summarised in `seeds.csv`;
 //!   [`topology`]: their topology tallies;
 //! - [`edit`]: chunked terrain (`rmt-terrain`): `extract --chunks` and the `edit` workload;
+//! - [`lod`]: level of detail (`rmt_terrain::lod`): the `lod` workload, a viewer flown over a
+//!   multiresolution world;
 //! - [`studio`]: the studio's backend (page parameters parsed and checked as `extract` options);
 //! - [`bench`](mod@bench): extraction speed against peer crates on pre-sampled values;
 //!   [`bench_python`]: the Python peers (VTK's Flying Edges, scikit-image) on the same values;
@@ -57,6 +59,7 @@ pub mod config;
 pub mod edit;
 pub mod extract_args;
 pub mod finish;
+pub mod lod;
 pub mod manifest;
 pub mod measured;
 pub mod merge;

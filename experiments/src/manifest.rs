@@ -66,6 +66,18 @@
 //! warmup = 20               # untimed strokes first
 //! seed = 1                  # stroke positions and modes
 //! radius = 4.0              # brush radius in cells
+//!
+//! workload = "lod"          # or: a multiresolution world (`crate::lod`), a viewer flown
+//! [lod]                     # along a path, every step re-meshed (every key optional)
+//! levels = 4                # coarsest level L (cells of h 2^L); the object's resolution is
+//!                           # the finest level's cells, a multiple of chunk 2^L per axis
+//! chunk = 16                # chunk edge in cells, at every level
+//! ratio = 2.0               # a chunk is split while the viewer is nearer than ratio x its edge
+//! steps = 200               # viewer steps after the first meshing
+//! path = [[-1, 0.5, -1], [1, 0.5, 1]]   # waypoints (world units), flown at even speed
+//! validate_every = 1        # check the welded world every N steps (and the last); 0: last only
+//! finest_exact_chunks = 4096   # count the finest level's triangles exactly up to this many
+//!                           # finest chunks, else estimate them from the world's levels
 //! ```
 //!
 //! **Naming rule** (reproduces the dissertation's ids): object code, `_`, lattice letter (`b`
@@ -230,6 +242,9 @@ pub struct Manifest {
     /// Parameters of the `edit` workload.
     #[serde(default)]
     pub edit: Option<EditEntry>,
+    /// Parameters of the `lod` workload.
+    #[serde(default)]
+    pub lod: Option<LodEntry>,
     /// The dissertation's benchmark table to compare with.
     #[serde(default)]
     pub paper_benchmark: Option<PathBuf>,
@@ -418,6 +433,53 @@ pub struct EditPlan {
     pub seed: u64,
     /// Brush radius in cells (default 4).
     pub radius: f32,
+}
+
+/// `[lod]`: parameters of the `lod` workload (each optional; defaults in [`LodPlan`]).
+#[derive(Clone, Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LodEntry {
+    /// The coarsest level.
+    #[serde(default)]
+    pub levels: Option<u8>,
+    /// Chunk edge in cells.
+    #[serde(default)]
+    pub chunk: Option<u32>,
+    /// The distance rule's ratio.
+    #[serde(default)]
+    pub ratio: Option<f64>,
+    /// Viewer steps after the first meshing.
+    #[serde(default)]
+    pub steps: Option<usize>,
+    /// The viewer's waypoints, world units.
+    #[serde(default)]
+    pub path: Option<Vec<[f32; 3]>>,
+    /// Validate the welded world every this many steps (0: the last step only).
+    #[serde(default)]
+    pub validate_every: Option<usize>,
+    /// Count the finest level's triangles exactly up to this many finest chunks.
+    #[serde(default)]
+    pub finest_exact_chunks: Option<usize>,
+}
+
+/// The checked `lod` workload of a plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LodPlan {
+    /// Coarsest level (default 4).
+    pub levels: u8,
+    /// Chunk edge in cells (default 16).
+    pub chunk: u32,
+    /// The distance rule's ratio (default 2).
+    pub ratio: f64,
+    /// Viewer steps after the first meshing (default 200).
+    pub steps: usize,
+    /// Waypoints, world units (default: the box's diagonal in x and z, at the top of its
+    /// lowest quarter).
+    pub path: Option<Vec<[f32; 3]>>,
+    /// Validation cadence (default 1: every step).
+    pub validate_every: usize,
+    /// Exact finest-level count up to this many finest chunks (default 4096).
+    pub finest_exact_chunks: usize,
 }
 
 /// `[matrix]`: objects x methods x lattices x clustering.
@@ -617,6 +679,8 @@ pub struct Plan {
     /// `Some` for the `edit` workload: a terrain session per configuration instead of
     /// repeated extractions.
     pub edit: Option<EditPlan>,
+    /// `Some` for the `lod` workload: a multiresolution world flown over per configuration.
+    pub lod: Option<LodPlan>,
 }
 
 /// Reads and parses a manifest file (no expansion yet).

@@ -118,9 +118,9 @@ fn quote(s: &str) -> String {
 pub fn prepare(opts: &SlurmOptions) -> Result<Prepared> {
     let loaded = manifest::load(&opts.manifest, &Overrides::default())?;
     let plan = &loaded.plan;
-    if plan.edit.is_some() {
+    if plan.edit.is_some() || plan.lod.is_some() {
         bail!(
-            "{}: the `edit` workload cannot be sharded; run it with `experiments run`",
+            "{}: the `edit` and `lod` workloads cannot be sharded; run them with `experiments run`",
             opts.manifest.display()
         );
     }

@@ -13,6 +13,7 @@
 //! | [`SEEDS_CSV`] | runner, seed studies | [`schema::SEEDS_PREFIX`](crate::schema::SEEDS_PREFIX), distributions over seeds |
 //! | [`TOPOLOGY_CSV`], [`FAILURES_CSV`] | runner, seed studies | topology tallies and failing fields |
 //! | [`EDITS_CSV`] | runner, `edit` workload | [`schema::EDITS`](crate::schema::EDITS) |
+//! | [`LOD_CSV`] | runner, `lod` workload | [`schema::LOD_STEPS`](crate::schema::LOD_STEPS) (`summary.csv`: [`schema::LOD_SUMMARY`](crate::schema::LOD_SUMMARY)) |
 //!
 //! The study commands (`experiments render`, `questionnaire`) add their own folders beside these
 //! (see `rmt_render::run_folder`).
@@ -43,6 +44,8 @@ pub const TOPOLOGY_CSV: &str = "topology.csv";
 pub const FAILURES_CSV: &str = "topology_failures.csv";
 /// The `edit` workload's strokes, one row each.
 pub const EDITS_CSV: &str = "edits.csv";
+/// The `lod` workload's viewer steps, one row each.
+pub const LOD_CSV: &str = "lod.csv";
 
 /// The mesh file of configuration `id` in run folder `folder`: `<folder>/meshes/<id>.ply`.
 pub fn mesh_file(folder: &Path, id: &str) -> PathBuf {

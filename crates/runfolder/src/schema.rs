@@ -146,6 +146,66 @@ pub const EDIT_SUMMARY: [&str; 25] = [
     "seams",
 ];
 
+/// The columns of `lod.csv` (one row per viewer step of the `lod` workload; step 0 is the first
+/// meshing of the world). Validation and seam columns are empty on steps that were not
+/// validated, pop columns on steps where no chunk changed its level.
+pub const LOD_STEPS: [&str; 18] = [
+    "id",
+    "step",
+    "viewer_x",
+    "viewer_y",
+    "viewer_z",
+    "remesh_s",
+    "chunks",
+    "chunks_remeshed",
+    "chunks_dropped",
+    "triangles",
+    "memory_bytes",
+    "pop_max_cells",
+    "pop_mean_cells",
+    "pop_points",
+    "open_edges",
+    "non_manifold_edges",
+    "orientation_errors",
+    "normal_seam_max_deg",
+];
+
+/// The columns of a `lod` run's `summary.csv` (one row per configuration).
+pub const LOD_SUMMARY: [&str; 32] = [
+    "id",
+    "object",
+    "method",
+    "lattice",
+    "clustering",
+    "rx",
+    "ry",
+    "rz",
+    "levels",
+    "chunk",
+    "ratio",
+    "threads",
+    "steps",
+    "t_initial_s",
+    "remesh_p50_ms",
+    "remesh_p99_ms",
+    "remesh_max_ms",
+    "chunks_remeshed_mean",
+    "chunks_remeshed_max",
+    "triangles_max",
+    "validated_steps",
+    "open_edges",
+    "non_manifold_edges",
+    "orientation_errors",
+    "pop_max_cells",
+    "pop_mean_cells",
+    "normal_seam_max_deg",
+    "finest_triangles",
+    "finest_source",
+    "triangles_over_finest",
+    "memory_max_bytes",
+    "rss_max_bytes",
+];
+
 /// Time columns that are not stages of the extraction, so get no `share_<stage>` column in
 /// `summary.csv`: the extraction's total, the total with the finish steps, and the time the
 /// rendering-cost measures took.

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use rmt_extract::{Clustering, Lattice, Method};
 
 use super::{
-    base_id, finish_suffix, safe_name, shading_suffix, Configuration, EditPlan, Manifest,
+    base_id, finish_suffix, safe_name, shading_suffix, Configuration, EditPlan, LodPlan, Manifest,
     ManifestError, Matrix, Overrides, Plan, SeedOf, SeedRange, Shading,
 };
 use crate::config::{self, Extraction};
@@ -92,6 +92,7 @@ impl Manifest {
         check_seeds(self, &objects, &bases, &invalid)?;
         let configurations = expand(self, &options, &objects, &bases, &sweep, &invalid)?;
         let edit = plan_edits(self, &configurations, &invalid)?;
+        let lod = plan_lod(self, &configurations, &invalid)?;
         Ok(Plan {
             name: self.name.clone(),
             repetitions: options.repetitions,
@@ -108,6 +109,7 @@ impl Manifest {
             sweep_variables: sweep.variables,
             configurations,
             edit,
+            lod,
         })
     }
 }
@@ -541,7 +543,11 @@ fn plan_edits(
     invalid: &Invalid,
 ) -> Result<Option<EditPlan>, ManifestError> {
     match (m.workload.as_deref(), &m.edit) {
-        (None | Some("extract"), None) => Ok(None),
+        (None | Some("extract") | Some("lod"), None) => Ok(None),
+        (Some("lod"), Some(_)) => Err(invalid.at(
+            "edit",
+            "an [edit] table needs `workload = \"edit\"`, not \"lod\"",
+        )),
         (None | Some("extract"), Some(_)) => {
             Err(invalid.at("edit", "an [edit] table needs `workload = \"edit\"`"))
         }
@@ -592,7 +598,102 @@ fn plan_edits(
         }
         (Some(other), _) => Err(invalid.at(
             "workload",
-            format!("unknown workload `{other}` (expected `extract` or `edit`)"),
+            format!("unknown workload `{other}` (expected `extract`, `edit` or `lod`)"),
         )),
     }
+}
+
+/// The `lod` workload of `workload = "lod"` (its `[lod]` table checked, defaults filled in), or
+/// None for the other workloads.
+fn plan_lod(
+    m: &Manifest,
+    configurations: &[Configuration],
+    invalid: &Invalid,
+) -> Result<Option<LodPlan>, ManifestError> {
+    if m.workload.as_deref() != Some("lod") {
+        return match &m.lod {
+            Some(_) => Err(invalid.at("lod", "a [lod] table needs `workload = \"lod\"`")),
+            None => Ok(None),
+        };
+    }
+    let e = m.lod.clone().unwrap_or_default();
+    let plan = LodPlan {
+        levels: e.levels.unwrap_or(4),
+        chunk: e.chunk.unwrap_or(16),
+        ratio: e.ratio.unwrap_or(2.0),
+        steps: e.steps.unwrap_or(200),
+        path: e.path,
+        validate_every: e.validate_every.unwrap_or(1),
+        finest_exact_chunks: e.finest_exact_chunks.unwrap_or(4096),
+    };
+    if plan.levels > 12 {
+        return Err(invalid.at(
+            "lod.levels",
+            format!("must be 0 to 12, got {}", plan.levels),
+        ));
+    }
+    if !(2..=256).contains(&plan.chunk) {
+        return Err(invalid.at(
+            "lod.chunk",
+            format!("must be 2 to 256 cells, got {}", plan.chunk),
+        ));
+    }
+    if !(plan.ratio.is_finite() && plan.ratio >= 0.0) {
+        return Err(invalid.at(
+            "lod.ratio",
+            format!("must be finite and >= 0, got {}", plan.ratio),
+        ));
+    }
+    if plan.steps == 0 || plan.steps > 1_000_000 {
+        return Err(invalid.at(
+            "lod.steps",
+            format!("must be 1 to 1000000, got {}", plan.steps),
+        ));
+    }
+    if let Some(path) = &plan.path {
+        if path.len() < 2 {
+            return Err(invalid.at("lod.path", "needs at least two waypoints"));
+        }
+        if let Some(p) = path.iter().find(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(invalid.at("lod.path", format!("waypoint {p:?} is not finite")));
+        }
+    }
+    for c in configurations {
+        let e = &c.extraction;
+        if e.method != Method::Mt || e.lattice != Lattice::BodyCentred {
+            return Err(invalid.at(
+                &format!("configuration {}", c.id),
+                "the lod workload meshes nested body-centred lattices: method mt, lattice bcdl",
+            ));
+        }
+        if e.clustering != Clustering::None {
+            return Err(invalid.at(
+                &format!("configuration {}", c.id),
+                "the lod workload runs plain marching tetrahedra (clustering none); clustering \
+                 across levels is not built yet",
+            ));
+        }
+        if e.simplify.is_some() || e.vertex_cache {
+            return Err(invalid.at(
+                &format!("configuration {}", c.id),
+                "the lod workload cannot simplify or reorder after extraction",
+            ));
+        }
+        let side = u64::from(plan.chunk) << plan.levels;
+        if let Some(r) = e
+            .resolution
+            .cells()
+            .into_iter()
+            .find(|&r| !(r as u64).is_multiple_of(side))
+        {
+            return Err(invalid.at(
+                &format!("configuration {}", c.id),
+                format!(
+                    "resolution {r} is not a multiple of chunk x 2^levels = {side} (the \
+                     coarsest chunks tile the world)"
+                ),
+            ));
+        }
+    }
+    Ok(Some(plan))
 }

@@ -30,9 +30,10 @@
 //! The roles, in the order a run meets them: this module (start, resume, the loop over work
 //! units, the summaries at the end); [`session`] (options, `run.json` sessions, progress bar,
 //! report); [`repetitions`] (one configuration's timed extractions); the `edit` workload in
-//! `edits`.
+//! `edits`, the `lod` workload in `lod`.
 
 mod edits;
+mod lod;
 pub mod repetitions;
 pub mod session;
 
@@ -106,6 +107,11 @@ pub fn start_shard(
         let record = RunRecord::new(&plan, manifest_path, provenance.clone(), &run_id)?;
         return edits::execute_edits(&folder, &plan, &fields, record, provenance, &edit, opts);
     }
+    if let Some(lod) = &plan.lod {
+        let provenance = Provenance::collect();
+        let record = RunRecord::new(&plan, manifest_path, provenance.clone(), &run_id)?;
+        return lod::execute_lod(&folder, &plan, &fields, record, provenance, lod, opts);
+    }
     let header = csv_bytes(&[raw_header()])?;
     write_atomic(&folder.join(RAW_CSV), &header)?;
     let progress = Progress {
@@ -130,9 +136,9 @@ fn shard_record(
     manifest_path: &Path,
     spec: ShardSpec,
 ) -> Result<ShardRecord> {
-    if plan.edit.is_some() {
+    if plan.edit.is_some() || plan.lod.is_some() {
         bail!(
-            "{}: the `edit` workload cannot be sharded (its runs are short: run it whole)",
+            "{}: the `edit` and `lod` workloads cannot be sharded (run them whole)",
             manifest_path.display()
         );
     }
@@ -186,8 +192,8 @@ pub fn resume(folder: &Path, opts: &RunOptions) -> Result<RunReport> {
     let progress_path = folder.join(PROGRESS_JSON);
     if !progress_path.exists() {
         bail!(
-            "{} has no progress.json: runs of the `edit` workload are not resumable (they are \
-             short; start the run again)",
+            "{} has no progress.json: runs of the `edit` and `lod` workloads are not resumable \
+             (start the run again)",
             folder.display()
         );
     }

@@ -1,0 +1,662 @@
+//! Level of detail in the runner (`rmt_terrain::lod`): the manifest workload `lod` flies a viewer
+//! along a path over a multiresolution world and re-meshes it at every step.
+//!
+//! ```text
+//!   object box + resolution (finest cells, cubic)  ->  LodSettings: roots = cells / (chunk 2^L)
+//!   step 0: the viewer at the path's start, every chunk meshed (t_initial_s)
+//!   step k: viewer moved -> LevelMap::from_viewer -> remesh (timed)
+//!           pop: every chunk that left the map (its level changed) against the surface that
+//!                replaced it, both ways (one-sided distances, rmt_mesh::distance), in cells of
+//!                the finer of the two levels
+//!           every validate_every steps and the last: the welded world checked (edges open
+//!           inside the domain, i.e. not in a boundary face of the world's tetrahedra;
+//!           non-manifold; misoriented) and the normals of every crossing that chunks of two
+//!           levels share compared (the level seam)
+//!   at the end: the most triangles the world had over the finest level everywhere (counted
+//!           when the finest level has at most finest_exact_chunks chunks, meshed at once;
+//!           else estimated as the sum over the last step's chunks of triangles x 4^level)
+//! ```
+//!
+//! Rules: the surfaces, counts, pops and seams are functions of the field, the path and the
+//! settings (not of the thread count); only the times and the process's peak memory vary
+//! between runs. The distances of a pop are measured between the old and new surfaces of the
+//! chunks that changed, each against the other side's surface in and around the changed chunk
+//! (its touching neighbours included, in their state before or after), so a vertex near a chunk
+//! face finds the surface across it.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use glam::Vec3;
+use rmt_fields::ScalarField;
+use rmt_mesh::distance::{one_sided, TriangleGrid};
+use rmt_terrain::lod::check::{check_surface, check_tets};
+use rmt_terrain::lod::{
+    mesh_chunks, thread_pool, world_tets, ChunkKey, ChunkMesh, LevelMap, LodFrame, LodGeometry,
+    LodSettings, LodWorld,
+};
+
+use crate::config::Extraction;
+use crate::manifest::LodPlan;
+
+/// The world of `e` under `plan` on `threads` threads: the box and resolution give the finest
+/// cells (cubic), which the coarsest chunks (`chunk 2^levels` cells) must tile.
+pub fn lod_settings(e: &Extraction, plan: &LodPlan, threads: usize) -> Result<LodSettings> {
+    let cells = e.resolution.cells();
+    let extent = e.bounds.max - e.bounds.min;
+    let spacing = Vec3::new(
+        extent.x / cells[0] as f32,
+        extent.y / cells[1] as f32,
+        extent.z / cells[2] as f32,
+    );
+    let (lo, hi) = (spacing.min_element(), spacing.max_element());
+    if hi > lo * (1.0 + 1e-4) || !(hi.is_finite() && lo > 0.0) {
+        bail!(
+            "a multiresolution world needs cubic cells, but the box and resolution give cell \
+             edges {:.6} x {:.6} x {:.6}: choose bounds proportional to the resolution",
+            spacing.x,
+            spacing.y,
+            spacing.z
+        );
+    }
+    let side = (plan.chunk as usize) << plan.levels;
+    let mut roots = [0u32; 3];
+    for i in 0..3 {
+        if !cells[i].is_multiple_of(side) {
+            bail!(
+                "resolution {} is not a multiple of chunk x 2^levels = {side}",
+                cells[i]
+            );
+        }
+        roots[i] = u32::try_from(cells[i] / side).context("too many root chunks")?;
+    }
+    let geometry = LodGeometry::new(plan.levels, plan.chunk, roots)
+        .context("the multiresolution world's shape")?;
+    Ok(LodSettings {
+        geometry,
+        frame: LodFrame {
+            origin: e.bounds.min,
+            h: spacing.x,
+        },
+        ratio: plan.ratio,
+        threads,
+    })
+}
+
+/// The viewer's position at every step `0..=steps`: the path's waypoints (by default the box's
+/// diagonal in x and z at the top of its lowest quarter) flown at even speed.
+pub fn viewer_path(e: &Extraction, plan: &LodPlan) -> Vec<Vec3> {
+    let (min, max) = (e.bounds.min, e.bounds.max);
+    let y = min.y + 0.25 * (max.y - min.y);
+    let points: Vec<Vec3> = match &plan.path {
+        Some(p) => p.iter().map(|&c| Vec3::from(c)).collect(),
+        None => vec![Vec3::new(min.x, y, min.z), Vec3::new(max.x, y, max.z)],
+    };
+    let lengths: Vec<f32> = points.windows(2).map(|w| w[0].distance(w[1])).collect();
+    let total: f32 = lengths.iter().sum();
+    (0..=plan.steps)
+        .map(|k| {
+            let mut s = total * k as f32 / plan.steps as f32;
+            for (i, &l) in lengths.iter().enumerate() {
+                if s <= l || i + 1 == lengths.len() {
+                    let t = if l > 0.0 { (s / l).min(1.0) } else { 0.0 };
+                    return points[i].lerp(points[i + 1], t);
+                }
+                s -= l;
+            }
+            points[0]
+        })
+        .collect()
+}
+
+/// How far the surface moved where chunks changed level, over one step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pop {
+    /// Largest distance, in cells of the finer of the two levels.
+    pub max_cells: f32,
+    /// Sum of all measured distances, in those cells.
+    pub sum_cells: f64,
+    /// Points measured.
+    pub points: usize,
+}
+
+impl Pop {
+    /// Mean distance in cells (0 without points).
+    pub fn mean_cells(&self) -> f64 {
+        if self.points == 0 {
+            0.0
+        } else {
+            self.sum_cells / self.points as f64
+        }
+    }
+
+    fn add(&mut self, other: Pop) {
+        self.max_cells = self.max_cells.max(other.max_cells);
+        self.sum_cells += other.sum_cells;
+        self.points += other.points;
+    }
+}
+
+/// The checks of the welded world at one step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WorldCheck {
+    /// Boundary edges not on the world box.
+    pub open_edges: usize,
+    /// Edges with more than two triangles.
+    pub non_manifold_edges: usize,
+    /// Edges two triangles traverse in the same direction.
+    pub orientation_errors: usize,
+    /// Largest angle between the normals two chunks of different levels give one shared
+    /// crossing, degrees.
+    pub normal_seam_max_deg: f32,
+}
+
+/// One viewer step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LodStep {
+    /// Step number (0: the first meshing).
+    pub step: usize,
+    /// The viewer, world units.
+    pub viewer: Vec3,
+    /// Wall time of the re-mesh, seconds.
+    pub remesh_s: f64,
+    /// Chunks in the map.
+    pub chunks: usize,
+    /// Chunks meshed at this step.
+    pub remeshed: usize,
+    /// Chunks that left the map.
+    pub dropped: usize,
+    /// Triangles in the world.
+    pub triangles: usize,
+    /// Bytes held by the world ([`LodWorld::memory_bytes`]).
+    pub memory_bytes: usize,
+    /// The pop, when some chunk changed level.
+    pub pop: Option<Pop>,
+    /// The checks, on validated steps.
+    pub check: Option<WorldCheck>,
+}
+
+/// One configuration's flight.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LodSession {
+    /// Step 0 and every viewer step.
+    pub steps: Vec<LodStep>,
+    /// Triangles of the world at the finest level everywhere.
+    pub finest_triangles: f64,
+    /// Whether `finest_triangles` was counted (`exact`) or `estimated`.
+    pub finest_source: &'static str,
+    /// The process's peak resident set after the session, bytes (Linux; 0 elsewhere).
+    pub rss_max_bytes: u64,
+    /// The last step's world, welded, when asked for.
+    pub mesh: Option<rmt_mesh::Mesh>,
+}
+
+/// Flies the viewer of `plan` over the world of `e` (see the module doc); with `keep_mesh`, the
+/// session holds the last step's welded world.
+pub fn run_lod_session<F: ScalarField + Copy>(
+    field: F,
+    e: &Extraction,
+    plan: &LodPlan,
+    threads: usize,
+    keep_mesh: bool,
+) -> Result<LodSession> {
+    let settings = lod_settings(e, plan, threads)?;
+    let geom = settings.geometry;
+    let frame = settings.frame;
+    let mut world = LodWorld::new(field, settings).context("building the multiresolution world")?;
+    let path = viewer_path(e, plan);
+    let mut steps = Vec::with_capacity(path.len());
+    for (k, &viewer) in path.iter().enumerate() {
+        let map = LevelMap::from_viewer(geom, to_lattice(&frame, viewer), plan.ratio);
+        // The old surfaces a pop is measured against: every chunk leaving the map and the
+        // chunks touching it, before the re-mesh replaces them.
+        let (leaving, old_near) = match world.level_map() {
+            Some(old) => {
+                let leaving: Vec<ChunkKey> = old
+                    .chunks()
+                    .iter()
+                    .copied()
+                    .filter(|c| !map.contains(c))
+                    .collect();
+                let mut near: HashMap<ChunkKey, ChunkMesh> = HashMap::new();
+                for c in &leaving {
+                    let (lo, hi) = c.bounds(&geom);
+                    for n in old.leaves_touching(lo, hi) {
+                        if let (false, Some(m)) = (near.contains_key(&n), world.chunk_mesh(&n)) {
+                            near.insert(n, m.clone());
+                        }
+                    }
+                }
+                (leaving, Some((old.clone(), near)))
+            }
+            None => (Vec::new(), None),
+        };
+        world
+            .set_level_map(map)
+            .context("setting the viewer's level map")?;
+        let t = Instant::now();
+        let r = world.remesh().context("re-meshing the world")?;
+        let remesh_s = t.elapsed().as_secs_f64();
+        let pop = match &old_near {
+            Some((old, near)) if !leaving.is_empty() => {
+                Some(measure_pop(&world, old, near, &leaving, &geom, frame.h))
+            }
+            _ => None,
+        };
+        let validate = k + 1 == path.len()
+            || k == 0
+            || (plan.validate_every > 0 && k % plan.validate_every == 0);
+        let check = if validate {
+            Some(check_world(&world)?)
+        } else {
+            None
+        };
+        let chunks = world.level_map().map_or(0, |m| m.chunks().len());
+        steps.push(LodStep {
+            step: k,
+            viewer,
+            remesh_s,
+            chunks,
+            remeshed: r.remeshed.len(),
+            dropped: r.dropped.len(),
+            triangles: r.triangles,
+            memory_bytes: world.memory_bytes(),
+            pop,
+            check,
+        });
+    }
+    let (finest_triangles, finest_source) = finest(&world, field, plan, threads)?;
+    Ok(LodSession {
+        steps,
+        finest_triangles,
+        finest_source,
+        rss_max_bytes: peak_rss_bytes(),
+        mesh: keep_mesh.then(|| world.mesh_welded().0),
+    })
+}
+
+/// A world position in lattice units `u = h / 2` from the frame's origin.
+fn to_lattice(frame: &LodFrame, p: Vec3) -> [f64; 3] {
+    let u = f64::from(frame.h) * 0.5;
+    ((p.as_dvec3() - frame.origin.as_dvec3()) / u).to_array()
+}
+
+/// Whether the closed boxes `a` and `b` share a volume (not only a face, edge or corner).
+fn overlaps(a: ([i64; 3], [i64; 3]), b: ([i64; 3], [i64; 3])) -> bool {
+    (0..3).all(|i| a.0[i] < b.1[i] && b.0[i] < a.1[i])
+}
+
+/// The triangles of `meshes` on a grid of cells of about `cell`.
+fn grid_of<'a>(meshes: impl Iterator<Item = &'a ChunkMesh>, cell: f32) -> TriangleGrid {
+    let mut tris = Vec::new();
+    for m in meshes {
+        for t in m.indices.chunks_exact(3) {
+            tris.push([0, 1, 2].map(|i| m.positions[t[i] as usize]));
+        }
+    }
+    TriangleGrid::new(tris, cell)
+}
+
+/// The pop of one step: every chunk that left the map against the new surface around it, and
+/// every chunk that entered against the old surface around it.
+fn measure_pop<F: ScalarField>(
+    world: &LodWorld<F>,
+    old: &LevelMap,
+    old_meshes: &HashMap<ChunkKey, ChunkMesh>,
+    leaving: &[ChunkKey],
+    geom: &LodGeometry,
+    h: f32,
+) -> Pop {
+    let mut pop = Pop::default();
+    let Some(new) = world.level_map() else {
+        return pop;
+    };
+    let mut side = |points: &[[f32; 3]], target: &TriangleGrid, level: u8| {
+        let cell = h * (1u32 << level) as f32;
+        if let Some((max, mean)) = one_sided(points, target) {
+            pop.add(Pop {
+                max_cells: max / cell,
+                sum_cells: f64::from(mean) / f64::from(cell) * points.len() as f64,
+                points: points.len(),
+            });
+        }
+    };
+    // Old surface -> new surface.
+    for k in leaving {
+        let b = k.bounds(geom);
+        let Some(mesh) = old_meshes.get(k) else {
+            continue;
+        };
+        let around = new.leaves_touching(b.0, b.1);
+        let finer = around
+            .iter()
+            .filter(|n| overlaps(n.bounds(geom), b))
+            .map(|n| n.level)
+            .chain([k.level])
+            .min()
+            .unwrap_or(k.level);
+        let cell = h * (1u32 << finer) as f32;
+        let target = grid_of(
+            around.iter().filter_map(|n| world.chunk_mesh(n)),
+            2.0 * cell,
+        );
+        side(&mesh.positions, &target, finer);
+    }
+    // New surface -> old surface.
+    for k in new.chunks().iter().filter(|c| !old.contains(c)) {
+        let b = k.bounds(geom);
+        let Some(mesh) = world.chunk_mesh(k) else {
+            continue;
+        };
+        let around = old.leaves_touching(b.0, b.1);
+        let finer = around
+            .iter()
+            .filter(|n| overlaps(n.bounds(geom), b))
+            .map(|n| n.level)
+            .chain([k.level])
+            .min()
+            .unwrap_or(k.level);
+        let cell = h * (1u32 << finer) as f32;
+        let target = grid_of(around.iter().filter_map(|n| old_meshes.get(n)), 2.0 * cell);
+        side(&mesh.positions, &target, finer);
+    }
+    pop
+}
+
+/// The welded world checked against the domain's boundary (the boundary faces of the whole
+/// world's tetrahedra: the surface may only be open there), and the level seams' normals
+/// compared.
+fn check_world<F: ScalarField>(world: &LodWorld<F>) -> Result<WorldCheck> {
+    let (mesh, keys) = world.mesh_welded();
+    let map = world
+        .level_map()
+        .context("checking a world that was never meshed")?;
+    let tets: Vec<_> = world_tets(map)
+        .context("the world's tetrahedra")?
+        .into_iter()
+        .map(|(_, t)| t.tet)
+        .collect();
+    let (_, boundary) = check_tets(&tets);
+    let surface = check_surface(&keys, &mesh.indices, &boundary);
+    // Every crossing some chunk meshes, with the level and normal it got there first.
+    let mut seen: HashMap<_, (u8, [f32; 3])> = HashMap::new();
+    let mut seam_max = 0.0f32;
+    for (key, m) in world.chunk_meshes() {
+        for (v, crossing) in m.keys.iter().enumerate() {
+            let normal = m.normals[v];
+            match seen.get(crossing) {
+                Some(&(level, first)) if level != key.level => {
+                    let dot = Vec3::from(first).dot(Vec3::from(normal)).clamp(-1.0, 1.0);
+                    seam_max = seam_max.max(dot.acos().to_degrees());
+                }
+                Some(_) => {}
+                None => {
+                    seen.insert(*crossing, (key.level, normal));
+                }
+            }
+        }
+    }
+    Ok(WorldCheck {
+        open_edges: surface.open_inside,
+        non_manifold_edges: surface.non_manifold,
+        orientation_errors: surface.misoriented,
+        normal_seam_max_deg: seam_max,
+    })
+}
+
+/// Triangles of the world at the finest level everywhere: counted when the finest level has at
+/// most `plan.finest_exact_chunks` chunks (all meshed at once), else estimated from the world's
+/// chunks as triangles x 4^level (a surface meshed at half the spacing has about 4 times the
+/// triangles).
+fn finest<F: ScalarField + Copy>(
+    world: &LodWorld<F>,
+    field: F,
+    plan: &LodPlan,
+    threads: usize,
+) -> Result<(f64, &'static str)> {
+    let geom = world.settings().geometry;
+    let finest_chunks: u64 = geom
+        .roots
+        .iter()
+        .map(|&r| u64::from(r) << plan.levels)
+        .product();
+    if finest_chunks as usize <= plan.finest_exact_chunks {
+        let map = LevelMap::uniform(geom, 0);
+        let pool = thread_pool(threads).context("threads for the finest level")?;
+        let meshes = mesh_chunks(&map, &field, &world.settings().frame, &pool)
+            .context("meshing the finest level")?;
+        let total: usize = meshes.iter().map(ChunkMesh::triangles).sum();
+        return Ok((total as f64, "exact"));
+    }
+    let estimate: f64 = world
+        .chunk_meshes()
+        .iter()
+        .map(|(k, m)| m.triangles() as f64 * 4f64.powi(i32::from(k.level)))
+        .sum();
+    Ok((estimate, "estimated"))
+}
+
+/// The process's peak resident set (VmHWM), bytes; 0 where unknown.
+fn peak_rss_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+            let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kb * 1024)
+        })
+        .unwrap_or(0)
+}
+
+/// The rows of `lod.csv` for one session (columns of
+/// [`LOD_STEPS`](rmt_runfolder::schema::LOD_STEPS)).
+pub fn lod_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
+    s.steps
+        .iter()
+        .map(|st| {
+            let opt = |v: Option<String>| v.unwrap_or_default();
+            vec![
+                id.to_string(),
+                st.step.to_string(),
+                format!("{:.6}", st.viewer.x),
+                format!("{:.6}", st.viewer.y),
+                format!("{:.6}", st.viewer.z),
+                format!("{:.9}", st.remesh_s),
+                st.chunks.to_string(),
+                st.remeshed.to_string(),
+                st.dropped.to_string(),
+                st.triangles.to_string(),
+                st.memory_bytes.to_string(),
+                opt(st.pop.map(|p| format!("{:.4}", p.max_cells))),
+                opt(st.pop.map(|p| format!("{:.4}", p.mean_cells()))),
+                opt(st.pop.map(|p| p.points.to_string())),
+                opt(st.check.map(|c| c.open_edges.to_string())),
+                opt(st.check.map(|c| c.non_manifold_edges.to_string())),
+                opt(st.check.map(|c| c.orientation_errors.to_string())),
+                opt(st.check.map(|c| format!("{:.4}", c.normal_seam_max_deg))),
+            ]
+        })
+        .collect()
+}
+
+/// Quantile `q` of `values` (nearest rank); 0 when empty.
+fn quantile(values: &[f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let rank = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len());
+    v[rank - 1]
+}
+
+/// The summary row of one session (columns of
+/// [`LOD_SUMMARY`](rmt_runfolder::schema::LOD_SUMMARY)); the re-mesh times are the viewer
+/// steps' (step 0, the first meshing, is `t_initial_s`).
+pub fn lod_summary_row(
+    id: &str,
+    e: &Extraction,
+    plan: &LodPlan,
+    threads: usize,
+    s: &LodSession,
+) -> Vec<String> {
+    let moves: Vec<&LodStep> = s.steps.iter().filter(|st| st.step > 0).collect();
+    let times: Vec<f64> = moves.iter().map(|st| st.remesh_s * 1e3).collect();
+    let remeshed: Vec<usize> = moves.iter().map(|st| st.remeshed).collect();
+    let mut pop = Pop::default();
+    for p in s.steps.iter().filter_map(|st| st.pop) {
+        pop.add(p);
+    }
+    let checks: Vec<WorldCheck> = s.steps.iter().filter_map(|st| st.check).collect();
+    let max_of = |f: fn(&WorldCheck) -> usize| checks.iter().map(f).max().unwrap_or(0);
+    let seam = checks
+        .iter()
+        .map(|c| c.normal_seam_max_deg)
+        .fold(0.0f32, f32::max);
+    let most_triangles = s.steps.iter().map(|st| st.triangles).max().unwrap_or(0);
+    let [rx, ry, rz] = e.resolution.cells();
+    vec![
+        id.to_string(),
+        e.object.kind.name().to_string(),
+        crate::config::method_name(e.method).to_string(),
+        crate::config::lattice_name(e.method, e.lattice).to_string(),
+        e.clustering.name().to_string(),
+        rx.to_string(),
+        ry.to_string(),
+        rz.to_string(),
+        plan.levels.to_string(),
+        plan.chunk.to_string(),
+        plan.ratio.to_string(),
+        threads.to_string(),
+        moves.len().to_string(),
+        format!("{:.6}", s.steps.first().map_or(0.0, |st| st.remesh_s)),
+        format!("{:.4}", quantile(&times, 0.5)),
+        format!("{:.4}", quantile(&times, 0.99)),
+        format!("{:.4}", quantile(&times, 1.0)),
+        format!(
+            "{:.3}",
+            remeshed.iter().sum::<usize>() as f64 / remeshed.len().max(1) as f64
+        ),
+        remeshed.iter().max().copied().unwrap_or(0).to_string(),
+        most_triangles.to_string(),
+        checks.len().to_string(),
+        max_of(|c| c.open_edges).to_string(),
+        max_of(|c| c.non_manifold_edges).to_string(),
+        max_of(|c| c.orientation_errors).to_string(),
+        format!("{:.4}", pop.max_cells),
+        format!("{:.4}", pop.mean_cells()),
+        format!("{seam:.4}"),
+        format!("{:.0}", s.finest_triangles),
+        s.finest_source.to_string(),
+        format!(
+            "{:.5}",
+            if s.finest_triangles > 0.0 {
+                most_triangles as f64 / s.finest_triangles
+            } else {
+                0.0
+            }
+        ),
+        s.steps
+            .iter()
+            .map(|st| st.memory_bytes)
+            .max()
+            .unwrap_or(0)
+            .to_string(),
+        s.rss_max_bytes.to_string(),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Normals;
+    use crate::objects::{Bounds, ObjectKind, ObjectParams, ObjectSpec, Resolution};
+    use rmt_extract::{Clustering, Lattice, Method};
+
+    fn extraction(cells: [usize; 3], bounds: [f32; 6]) -> Extraction {
+        Extraction {
+            object: ObjectSpec::new(ObjectKind::Caves, ObjectParams::default()).unwrap(),
+            bounds: Bounds::try_from(bounds).unwrap(),
+            resolution: Resolution::Axes(cells),
+            method: Method::Mt,
+            lattice: Lattice::BodyCentred,
+            clustering: Clustering::None,
+            collapse_threshold: 0.5,
+            iso: 0.0,
+            normals: Normals::Area,
+            simplify: None,
+            vertex_cache: false,
+        }
+    }
+
+    fn plan(path: Option<Vec<[f32; 3]>>, steps: usize) -> LodPlan {
+        LodPlan {
+            levels: 2,
+            chunk: 4,
+            ratio: 1.0,
+            steps,
+            path,
+            validate_every: 1,
+            finest_exact_chunks: 4096,
+        }
+    }
+
+    #[test]
+    fn the_path_is_flown_at_even_speed_through_every_waypoint() {
+        let e = extraction([32, 16, 32], [-1.0, -0.5, -1.0, 1.0, 0.5, 1.0]);
+        // Two legs of length 1 and 3: 4 steps of length 1.
+        let p = plan(Some(vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 3.0, 0.0]]), 4);
+        let v = viewer_path(&e, &p);
+        assert_eq!(v.len(), 5);
+        let expect = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [1.0, 2.0, 0.0],
+            [1.0, 3.0, 0.0],
+        ];
+        for (a, b) in v.iter().zip(expect) {
+            assert!(a.distance(Vec3::from(b)) < 1e-5, "{a} vs {b:?}");
+        }
+        // Default: the box's x-z diagonal at the top of its lowest quarter.
+        let d = viewer_path(&e, &plan(None, 2));
+        assert!(d[0].distance(Vec3::new(-1.0, -0.25, -1.0)) < 1e-6);
+        assert!(d[2].distance(Vec3::new(1.0, -0.25, 1.0)) < 1e-6);
+    }
+
+    #[test]
+    fn the_world_shape_comes_from_the_resolution() {
+        let e = extraction([32, 16, 32], [-1.0, -0.5, -1.0, 1.0, 0.5, 1.0]);
+        let s = lod_settings(&e, &plan(None, 1), 2).unwrap();
+        assert_eq!(s.geometry.roots, [2, 1, 2]);
+        assert_eq!(s.frame.origin, Vec3::new(-1.0, -0.5, -1.0));
+        assert!((s.frame.h - 1.0 / 16.0).abs() < 1e-7);
+        let flat = extraction([32, 16, 32], [-1.0, -1.0, -1.0, 1.0, 1.0, 1.0]);
+        let err = lod_settings(&flat, &plan(None, 1), 2)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("cubic cells"), "{err}");
+        let uneven = extraction([40, 16, 32], [-1.25, -0.5, -1.0, 1.25, 0.5, 1.0]);
+        let err = lod_settings(&uneven, &plan(None, 1), 2)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("40") && err.contains("16"), "{err}");
+    }
+
+    #[test]
+    fn quantiles_are_nearest_rank() {
+        let v = [5.0, 1.0, 4.0, 2.0, 3.0];
+        assert_eq!(quantile(&v, 0.5), 3.0);
+        assert_eq!(quantile(&v, 0.99), 5.0);
+        assert_eq!(quantile(&v, 0.0), 1.0);
+        assert_eq!(quantile(&[], 0.5), 0.0);
+        let p = Pop {
+            max_cells: 1.0,
+            sum_cells: 3.0,
+            points: 4,
+        };
+        assert_eq!(p.mean_cells(), 0.75);
+        assert_eq!(Pop::default().mean_cells(), 0.0);
+    }
+}

@@ -1,0 +1,165 @@
+//! The `lod` workload end to end: a small multiresolution cave world flown over, its files and
+//! columns, and the manifest's refusals.
+
+use std::fs;
+use std::path::Path;
+
+use experiments::manifest::{self, Overrides};
+use experiments::run_record::Status;
+use experiments::runner::{self, RunOptions};
+use rmt_runfolder::schema::{LOD_STEPS, LOD_SUMMARY};
+use rmt_runfolder::Table;
+
+const WORLD: &str = r#"
+name = "lod-test"
+workload = "lod"
+threads = 2
+save_meshes = true
+
+[[objects]]
+name = "caves"
+resolution = [32, 16, 32]
+bounds = [-1.0, -0.5, -1.0, 1.0, 0.5, 1.0]
+
+[matrix]
+methods = ["mt"]
+lattices = ["bcdl"]
+clustering = ["none"]
+
+[lod]
+levels = 2
+chunk = 4
+ratio = 1.0
+steps = 4
+path = [[-0.9, 0.2, -0.9], [0.9, 0.2, 0.9]]
+"#;
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn a_flight_writes_one_row_per_step_a_closed_world_and_a_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = write(dir.path(), "lod.toml", WORLD);
+    let folder = dir.path().join("run");
+    let opts = RunOptions {
+        quiet: true,
+        stop_after: None,
+    };
+    let report = runner::start(&manifest, &Overrides::default(), Some(&folder), &opts).unwrap();
+    assert_eq!(report.status, Status::Finished);
+    let steps = Table::read(&folder.join("lod.csv")).unwrap();
+    assert_eq!(steps.header, LOD_STEPS);
+    assert_eq!(steps.rows.len(), 5, "step 0 and 4 viewer steps");
+    for r in 0..5 {
+        // Every step validated (validate_every defaults to 1): closed inside the domain,
+        // manifold, oriented.
+        for col in ["open_edges", "non_manifold_edges", "orientation_errors"] {
+            assert_eq!(steps.get(r, col), Some("0"), "step {r} {col}");
+        }
+        let seam: f64 = steps
+            .get(r, "normal_seam_max_deg")
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(seam < 5.0, "step {r}: seam {seam}");
+    }
+    // The viewer crosses the world, so some chunk changes level and its pop is measured.
+    assert!((1..5).any(|r| !steps.get(r, "pop_max_cells").unwrap().is_empty()));
+    let summary = Table::read(&folder.join("summary.csv")).unwrap();
+    assert_eq!(summary.header, LOD_SUMMARY);
+    assert_eq!(summary.rows.len(), 1);
+    assert_eq!(summary.get(0, "steps"), Some("4"));
+    assert_eq!(summary.get(0, "validated_steps"), Some("5"));
+    assert_eq!(summary.get(0, "open_edges"), Some("0"));
+    assert_eq!(summary.get(0, "finest_source"), Some("exact"));
+    let over: f64 = summary
+        .get(0, "triangles_over_finest")
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(over > 0.0 && over < 1.5, "{over}");
+    let p50: f64 = summary.get(0, "remesh_p50_ms").unwrap().parse().unwrap();
+    let p99: f64 = summary.get(0, "remesh_p99_ms").unwrap().parse().unwrap();
+    assert!(p50 >= 0.0 && p50 <= p99);
+    assert!(folder.join("meshes/cs_bu.ply").is_file());
+    assert!(!folder.join("raw.csv").exists());
+}
+
+/// The same flight twice gives the same CSVs outside the time and memory columns.
+#[test]
+fn a_flight_is_deterministic_outside_times() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = write(
+        dir.path(),
+        "lod.toml",
+        &WORLD.replace("threads = 2", "threads = 1"),
+    );
+    let opts = RunOptions {
+        quiet: true,
+        stop_after: None,
+    };
+    let mut tables = Vec::new();
+    for (name, threads) in [("a", 1), ("b", 2)] {
+        let folder = dir.path().join(name);
+        let overrides = Overrides {
+            threads: Some(threads),
+            ..Overrides::default()
+        };
+        runner::start(&manifest, &overrides, Some(&folder), &opts).unwrap();
+        let t = Table::read(&folder.join("lod.csv")).unwrap();
+        let keep: Vec<usize> = (0..t.header.len())
+            .filter(|&i| !matches!(t.header[i].as_str(), "remesh_s"))
+            .collect();
+        tables.push(
+            t.rows
+                .iter()
+                .map(|r| keep.iter().map(|&i| r[i].clone()).collect::<Vec<_>>())
+                .collect::<Vec<_>>(),
+        );
+    }
+    assert_eq!(tables[0], tables[1], "1 and 2 threads differ");
+}
+
+#[test]
+fn the_lod_workload_refuses_what_it_cannot_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = |name: &str, text: &str| {
+        let p = write(dir.path(), name, text);
+        manifest::load(&p, &Overrides::default())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    let clustered = err(
+        "clustered.toml",
+        &WORLD.replace("clustering = [\"none\"]", "clustering = [\"integrated\"]"),
+    );
+    assert!(clustered.contains("clustering none"), "{clustered}");
+    let uneven = err(
+        "uneven.toml",
+        &WORLD.replace("resolution = [32, 16, 32]", "resolution = [40, 16, 32]"),
+    );
+    assert!(uneven.contains("40") && uneven.contains("16"), "{uneven}");
+    let path = err(
+        "path.toml",
+        &WORLD.replace(
+            "path = [[-0.9, 0.2, -0.9], [0.9, 0.2, 0.9]]",
+            "path = [[0.0, 0.0, 0.0]]",
+        ),
+    );
+    assert!(path.contains("lod.path"), "{path}");
+    let stray = err(
+        "stray.toml",
+        &WORLD.replace("workload = \"lod\"", "workload = \"extract\""),
+    );
+    assert!(stray.contains("[lod]"), "{stray}");
+    let simple = err(
+        "simple.toml",
+        &WORLD.replace("lattices = [\"bcdl\"]", "lattices = [\"simple\"]"),
+    );
+    assert!(simple.contains("bcdl"), "{simple}");
+}
