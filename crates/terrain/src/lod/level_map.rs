@@ -203,36 +203,38 @@ impl LevelMap {
     /// (`None` when the box misses the world).
     pub fn min_level_touching(&self, lo: [i64; 3], hi: [i64; 3]) -> Option<u8> {
         let mut best: Option<u8> = None;
-        let g = &self.geom;
-        for x in 0..g.roots[0] as i32 {
-            for y in 0..g.roots[1] as i32 {
-                for z in 0..g.roots[2] as i32 {
-                    let root = ChunkKey {
-                        level: g.levels,
-                        at: [x, y, z],
-                    };
-                    self.descend(root, lo, hi, &mut best);
-                }
-            }
+        for root in self.roots_touching(lo, hi) {
+            self.descend(root, lo, hi, &mut best);
         }
         best
+    }
+
+    /// The roots whose closed box may meet the closed box `[lo, hi]`.
+    fn roots_touching(&self, lo: [i64; 3], hi: [i64; 3]) -> impl Iterator<Item = ChunkKey> {
+        let g = self.geom;
+        let s = g.chunk_size(g.levels);
+        let r = |i: usize| {
+            let a = (lo[i].div_euclid(s) - 1).max(0);
+            let b = hi[i].div_euclid(s).min(i64::from(g.roots[i]) - 1);
+            a as i32..=b as i32
+        };
+        let (rx, ry, rz) = (r(0), r(1), r(2));
+        rx.flat_map(move |x| {
+            let rz = rz.clone();
+            ry.clone()
+                .flat_map(move |y| rz.clone().map(move |z| [x, y, z]))
+        })
+        .map(move |at| ChunkKey {
+            level: g.levels,
+            at,
+        })
     }
 
     /// The leaves whose closed box meets the closed box `[lo, hi]`, sorted.
     pub fn leaves_touching(&self, lo: [i64; 3], hi: [i64; 3]) -> Vec<ChunkKey> {
         let mut out = Vec::new();
-        let mut stack: Vec<ChunkKey> = Vec::new();
         let g = &self.geom;
-        for x in 0..g.roots[0] as i32 {
-            for y in 0..g.roots[1] as i32 {
-                for z in 0..g.roots[2] as i32 {
-                    stack.push(ChunkKey {
-                        level: g.levels,
-                        at: [x, y, z],
-                    });
-                }
-            }
-        }
+        let mut stack: Vec<ChunkKey> = self.roots_touching(lo, hi).collect();
         while let Some(k) = stack.pop() {
             let (a, b) = k.bounds(g);
             if (0..3).any(|i| a[i] > hi[i] || b[i] < lo[i]) {

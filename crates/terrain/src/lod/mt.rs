@@ -9,6 +9,7 @@
 //!   crossing key = its edge's two lattice points (lo, hi) sorted;  position from (lo, hi,
 //!   f(lo), f(hi)) alone:  t = f(lo) / (f(lo) - f(hi)),  p = lo + t (hi - lo)   (f64)
 //!   normal = the field's gradient at p by central differences (step h / 4), normalised
+//!            (where those differences vanish: the edge's direction lo -> hi towards f >= 0)
 //! ```
 //!
 //! A crossing's position and normal are functions of its key and the field only, so any
@@ -56,7 +57,8 @@ pub struct ChunkMesh {
     pub keys: Vec<[Point; 2]>,
     /// Per vertex, its world position.
     pub positions: Vec<[f32; 3]>,
-    /// Per vertex, the unit normal (the field's gradient; zero where the gradient vanishes).
+    /// Per vertex, the unit normal (the field's gradient, or the crossed edge's direction
+    /// where the central differences vanish).
     pub normals: Vec<[f32; 3]>,
     /// Three vertex indices per triangle, facing the outside (`f >= 0`).
     pub indices: Vec<u32>,
@@ -180,6 +182,13 @@ pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> Chu
                         probe_values[2] - probe_values[3],
                         probe_values[4] - probe_values[5],
                     );
+                    // Where the differences vanish (flat, quantised fields), the edge's own
+                    // direction towards the outside: still a function of the key alone.
+                    let g = if g.length_squared() > 0.0 && g.is_finite() {
+                        g
+                    } else {
+                        (dh - dl).as_vec3() * (fhi - flo).signum()
+                    };
                     mesh.keys.push(key);
                     mesh.positions.push(p.to_array());
                     mesh.normals.push(g.normalize_or_zero().to_array());
