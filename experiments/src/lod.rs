@@ -8,10 +8,11 @@
 //!           pop: every chunk that left the map (its level changed) against the surface that
 //!                replaced it, both ways (one-sided distances, rmt_mesh::distance), in cells of
 //!                the finer of the two levels
-//!           every validate_every steps and the last: the welded world checked (edges open
-//!           inside the domain, i.e. not in a boundary face of the world's tetrahedra;
-//!           non-manifold; misoriented) and the normals of every crossing that chunks of two
-//!           levels share compared (the level seam)
+//!           every validate_every steps and the last: the surface around the chunks meshed
+//!           at that step (they and their touching leaves, up to validate_max_chunks chunks)
+//!           checked: edges open inside the domain (not in a boundary face of the region's
+//!           tetrahedra), non-manifold, misoriented; and the normals of every crossing that
+//!           chunks of two levels share compared (the level seam)
 //!   at the end: the most triangles the world had over the finest level everywhere (counted
 //!           when the finest level has at most finest_exact_chunks chunks, meshed at once;
 //!           else estimated as the sum over the last step's chunks of triangles x 4^level)
@@ -29,12 +30,13 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
+use rayon::prelude::*;
 use rmt_fields::ScalarField;
 use rmt_mesh::distance::{one_sided, TriangleGrid};
 use rmt_terrain::lod::check::{check_surface, check_tets};
 use rmt_terrain::lod::{
-    mesh_chunks, thread_pool, world_tets, ChunkKey, ChunkMesh, LevelMap, LodFrame, LodGeometry,
-    LodSettings, LodWorld,
+    chunk_tets, mesh_chunks, thread_pool, weld, ChunkKey, ChunkMesh, LevelMap, LodFrame,
+    LodGeometry, LodSettings, LodWorld,
 };
 
 use crate::config::Extraction;
@@ -248,7 +250,7 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             || k == 0
             || (plan.validate_every > 0 && k % plan.validate_every == 0);
         let check = if validate {
-            Some(check_world(&world)?)
+            check_world(&world, &r.remeshed, plan.validate_max_chunks)?
         } else {
             None
         };
@@ -364,25 +366,51 @@ fn measure_pop<F: ScalarField>(
     pop
 }
 
-/// The welded world checked against the domain's boundary (the boundary faces of the whole
-/// world's tetrahedra: the surface may only be open there), and the level seams' normals
-/// compared.
-fn check_world<F: ScalarField>(world: &LodWorld<F>) -> Result<WorldCheck> {
-    let (mesh, keys) = world.mesh_welded();
+/// The surface around the chunks meshed at this step checked: `region` = those chunks and the
+/// leaves touching them, its tetrahedra built chunk by chunk, its chunks' surfaces welded. An
+/// edge may be open only in a boundary face of the region's tetrahedra (the domain's boundary,
+/// or the region's own, which no meshed chunk reaches: every meshed chunk's neighbours are in
+/// the region), so a crack at any face of a meshed chunk is found. `None` when the region has
+/// more than `max_chunks` chunks. The normals of every crossing that chunks of two levels in
+/// the region share are compared (the level seam).
+fn check_world<F: ScalarField>(
+    world: &LodWorld<F>,
+    meshed: &[ChunkKey],
+    max_chunks: usize,
+) -> Result<Option<WorldCheck>> {
     let map = world
         .level_map()
         .context("checking a world that was never meshed")?;
-    let tets: Vec<_> = world_tets(map)
-        .context("the world's tetrahedra")?
-        .into_iter()
-        .map(|(_, t)| t.tet)
+    let geom = map.geometry();
+    let mut region: Vec<ChunkKey> = meshed.to_vec();
+    for k in meshed {
+        let (lo, hi) = k.bounds(geom);
+        region.extend(map.leaves_touching(lo, hi));
+        if region.len() > 64 * max_chunks.max(1) {
+            return Ok(None);
+        }
+    }
+    region.sort_unstable();
+    region.dedup();
+    if region.len() > max_chunks {
+        return Ok(None);
+    }
+    let tets: Vec<Vec<_>> = region
+        .par_iter()
+        .map(|k| chunk_tets(map, k))
+        .collect::<Result<_, _>>()
+        .context("the region's tetrahedra")?;
+    let (_, boundary) = check_tets(tets.iter().flatten().map(|t| &t.tet));
+    let meshes: Vec<(ChunkKey, &ChunkMesh)> = region
+        .iter()
+        .filter_map(|k| world.chunk_mesh(k).map(|m| (*k, m)))
         .collect();
-    let (_, boundary) = check_tets(&tets);
+    let (mesh, keys) = weld(meshes.iter().map(|(_, m)| *m));
     let surface = check_surface(&keys, &mesh.indices, &boundary);
     // Every crossing some chunk meshes, with the level and normal it got there first.
     let mut seen: HashMap<_, (u8, [f32; 3])> = HashMap::new();
     let mut seam_max = 0.0f32;
-    for (key, m) in world.chunk_meshes() {
+    for (key, m) in meshes {
         for (v, crossing) in m.keys.iter().enumerate() {
             let normal = m.normals[v];
             match seen.get(crossing) {
@@ -397,12 +425,12 @@ fn check_world<F: ScalarField>(world: &LodWorld<F>) -> Result<WorldCheck> {
             }
         }
     }
-    Ok(WorldCheck {
+    Ok(Some(WorldCheck {
         open_edges: surface.open_inside,
         non_manifold_edges: surface.non_manifold,
         orientation_errors: surface.misoriented,
         normal_seam_max_deg: seam_max,
-    })
+    }))
 }
 
 /// Triangles of the world at the finest level everywhere: counted when the finest level has at
@@ -598,6 +626,7 @@ mod tests {
             steps,
             path,
             validate_every: 1,
+            validate_max_chunks: 4096,
             finest_exact_chunks: 4096,
         }
     }

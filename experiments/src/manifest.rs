@@ -75,7 +75,9 @@
 //! ratio = 2.0               # a chunk is split while the viewer is nearer than ratio x its edge
 //! steps = 200               # viewer steps after the first meshing
 //! path = [[-1, 0.5, -1], [1, 0.5, 1]]   # waypoints (world units), flown at even speed
-//! validate_every = 1        # check the welded world every N steps (and the last); 0: last only
+//! validate_every = 1        # check the surface around the re-meshed chunks every N steps
+//!                           # (and the first and last); 0: first and last only
+//! validate_max_chunks = 4096   # skip a check whose region has more chunks than this
 //! finest_exact_chunks = 4096   # count the finest level's triangles exactly up to this many
 //!                           # finest chunks, else estimate them from the world's levels
 //! ```
@@ -454,9 +456,12 @@ pub struct LodEntry {
     /// The viewer's waypoints, world units.
     #[serde(default)]
     pub path: Option<Vec<[f32; 3]>>,
-    /// Validate the welded world every this many steps (0: the last step only).
+    /// Check the surface every this many steps (0: the first and last only).
     #[serde(default)]
     pub validate_every: Option<usize>,
+    /// Skip a check whose region has more chunks than this.
+    #[serde(default)]
+    pub validate_max_chunks: Option<usize>,
     /// Count the finest level's triangles exactly up to this many finest chunks.
     #[serde(default)]
     pub finest_exact_chunks: Option<usize>,
@@ -478,6 +483,8 @@ pub struct LodPlan {
     pub path: Option<Vec<[f32; 3]>>,
     /// Validation cadence (default 1: every step).
     pub validate_every: usize,
+    /// The largest region a check builds the tetrahedra of, in chunks (default 4096).
+    pub validate_max_chunks: usize,
     /// Exact finest-level count up to this many finest chunks (default 4096).
     pub finest_exact_chunks: usize,
 }

@@ -148,7 +148,8 @@ pub const EDIT_SUMMARY: [&str; 25] = [
 
 /// The columns of `lod.csv` (one row per viewer step of the `lod` workload; step 0 is the first
 /// meshing of the world). Validation and seam columns are empty on steps that were not
-/// validated, pop columns on steps where no chunk changed its level.
+/// validated, pop columns on steps where no chunk changed its level. Like `remesh_s`,
+/// `memory_bytes` is a measurement of the run (it follows the world's hash tables' history).
 pub const LOD_STEPS: [&str; 18] = [
     "id",
     "step",

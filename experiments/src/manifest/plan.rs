@@ -624,6 +624,7 @@ fn plan_lod(
         steps: e.steps.unwrap_or(200),
         path: e.path,
         validate_every: e.validate_every.unwrap_or(1),
+        validate_max_chunks: e.validate_max_chunks.unwrap_or(4096),
         finest_exact_chunks: e.finest_exact_chunks.unwrap_or(4096),
     };
     if plan.levels > 12 {
