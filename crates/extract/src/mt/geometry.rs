@@ -10,14 +10,16 @@
 //! ```
 //!
 //! The writing reads no sample value beyond the anchor's own: a group whose table gives no
-//! triangle is skipped, each tetrahedron's case comes from the anchor's side and its crossed
-//! edges (`TetGroup::cases`), and the crossing on an edge belongs to the end whose owned bit
-//! the vertex pass set (it decided that from the same two values).
+//! triangle is skipped, the crossing on each of the group's crossed edges is found once (it
+//! belongs to the end whose owned bit the vertex pass set: it decided that from the same two
+//! values), and the triangles are read off the group's cycle table by the anchor's side and
+//! crossed edges (`TetGroup::cycles`: each tetrahedron's case table cycle, in template order,
+//! naming group edges). Plain MT writes each id straight into place.
 
 use rayon::prelude::*;
 
 use super::crossings::{CrossedIndex, CrossedPoint};
-use super::layout::{case_triangles_of, Layout, TetTemplate};
+use super::layout::{case_triangles_of, split_quad, Layout, MAX_GROUP_EDGES};
 use crate::lattice::Offset;
 use crate::util::for_each_bit;
 use crate::{CellRange, Lattice};
@@ -239,85 +241,46 @@ pub(crate) fn geometry_in_window(
         .as_ref()
         .and_then(|list| list.kept.as_ref().map(|k| k.0));
     let cells_wanted = cells.is_some();
+    let plain = map.is_none() && !listing && !cells_wanted;
     let [nx, ny, _] = l.s.cells;
-    // One tetrahedron in `case` (bit i: corner i inside, known from the anchor's side and its
-    // crossed edges): no sample value is read; the owner of a crossing is the end whose owned
-    // bit is set (the vertex pass decided it from the same values as [`tet_triangles`] would).
-    let mut tet = |anchor: usize,
-                   ti: usize,
-                   tpl: &TetTemplate,
-                   case: usize,
-                   inner: bool,
-                   kept: bool,
-                   cell: u32| {
-        if case == 0 || case == 15 {
+    // The window starts at slot 0 of plane z0.
+    let base = z0 * plane;
+    for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
+        // The group's points on the other side from the anchor, as in [`count_layer`].
+        let group = &l.groups[g];
+        let at = anchor - base;
+        let code = group.code(window[at].crossed);
+        if group.triangles[code] == 0 {
             return;
         }
-        let mut tris = [[0u32; 3]; 2];
-        // The window starts at slot 0 of plane z0.
-        let entry = |o: usize| {
-            let slot = (anchor as isize + tpl.delta[o]) as usize;
-            let entry = window[slot - z0 * plane];
-            debug_assert_eq!(entry, crossed.get(slot));
-            entry
-        };
-        let edge = |a: usize, b: usize| {
-            let (ea, d) = (entry(a), tpl.dir[a][b]);
-            debug_assert_ne!(ea.crossed >> d & 1, 0, "edge {a}-{b} not crossed");
-            if ea.owned >> d & 1 != 0 {
-                ea.id(d)
+        // The crossing on each crossed edge of the group, once: the end whose owned bit the
+        // vertex pass set (it decided that from the same two values the case would read), as
+        // `case_triangles_of` would ask for it, edge (a, b) of a tetrahedron with a < b.
+        let mut ids = [0u32; MAX_GROUP_EDGES];
+        let mut todo = group.crossed_edges[code];
+        while todo != 0 {
+            let e = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
+            let edge = group.edges[e];
+            let entry = |i: u8| window[(at as isize + group.points[usize::from(i)]) as usize];
+            let a = entry(edge.from);
+            debug_assert_eq!(
+                a,
+                crossed.get((anchor as isize + group.points[usize::from(edge.from)]) as usize)
+            );
+            debug_assert_ne!(a.crossed >> edge.dir[0] & 1, 0, "edge {edge:?} not crossed");
+            let (owner, d) = if a.owned >> edge.dir[0] & 1 != 0 {
+                (a, edge.dir[0])
             } else {
-                entry(b).id(tpl.dir[b][a])
-            }
-        };
-        let n = case_triangles_of(case, edge, positions, &mut tris);
-        debug_assert_eq!(
-            case,
-            (0..4).fold(0, |c, i| c | usize::from(
-                v[(anchor as isize + tpl.delta[i]) as usize] < iso
-            ) << i),
-            "case of tetrahedron {ti}"
-        );
-        processed += usize::from(n > 0 && kept);
-        match map {
-            None => {
-                // The gradient of the tetrahedron, for the quotient test's (c).
-                let g = if n > 0 && list.is_some() {
-                    l.gradient(anchor, ti, inner)
-                } else {
-                    [0.0; 3]
-                };
-                for t in &tris[..n] {
-                    if let Some(list) = list.as_mut() {
-                        list.grad[w / 3] = g;
-                        if let Some((_, flags)) = list.kept.as_mut() {
-                            flags[w / 3] = u8::from(kept);
-                        }
-                    }
-                    if let Some(cells) = cells.as_deref_mut() {
-                        cells[w / 3] = cell;
-                    }
-                    out[w..w + 3].copy_from_slice(t);
-                    w += 3;
-                }
-            }
-            Some(map) => {
-                // Clustered: the vertices of the groups' quotient; a triangle with two corners
-                // in one group collapsed and is dropped.
-                for t in &tris[..n] {
-                    let q = t.map(|i| map[i as usize]);
-                    if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
-                        if let Some(cells) = cells.as_deref_mut() {
-                            cells[w / 3] = cell;
-                        }
-                        out[w..w + 3].copy_from_slice(&q);
-                        w += 3;
-                    }
-                }
-            }
+                (entry(edge.to), edge.dir[1])
+            };
+            ids[e] = owner.id(d);
         }
-    };
-    for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
+        // Each tetrahedron's case (bit i: corner i inside) is known from the anchor's side and
+        // its crossed edges: no other sample value is read.
+        let side = usize::from(v[anchor] < iso);
+        let range = usize::from(group.cycle_start[2 * code + side])
+            ..usize::from(group.cycle_start[2 * code + side + 1]);
         // Only the listing reads these: whether no corner is a ghost (for the gradient), and in
         // a chunk whether the anchor's cell is kept.
         let inner = listing && l.inner_anchor(p);
@@ -332,28 +295,108 @@ pub(crate) fn geometry_in_window(
             Lattice::BodyCentred => 4 * g,
             Lattice::Simple => 0,
         };
-        // The group's points on the other side from the anchor, as in [`count_layer`].
-        let group = &l.groups[g];
-        let code = group.code(window[anchor - z0 * plane].crossed);
-        if group.triangles[code] == 0 {
+        processed += if kept { range.len() } else { 0 };
+        if plain {
+            // Plain MT: the ids straight into place, each value stored once (an array of
+            // triangles copied over would be read back across its stores), the write
+            // position in a register.
+            let mut at = w;
+            for cycle in &group.cycles[range] {
+                let e = cycle.edges.map(usize::from);
+                let (a, b, c) = (ids[e[0]], ids[e[1]], ids[e[2]]);
+                if cycle.edges[3] == u8::MAX {
+                    out[at..at + 3].copy_from_slice(&[a, b, c]);
+                    at += 3;
+                } else {
+                    let d = ids[e[3]];
+                    let p = |i: u32| glam::Vec3::from(positions[i as usize]);
+                    // As [`split_quad`]: along 0-2 when it is not the longer diagonal.
+                    let t = if p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d)) {
+                        [a, b, c, a, c, d]
+                    } else {
+                        [b, c, d, b, d, a]
+                    };
+                    out[at..at + 6].copy_from_slice(&t);
+                    at += 6;
+                }
+            }
+            w = at;
             return;
         }
-        let flip = if v[anchor] < iso { 15 } else { 0 };
-        let tets = group.cases.len() >> group.len;
-        for (j, &rel) in group.cases[code * tets..(code + 1) * tets]
-            .iter()
-            .enumerate()
-        {
-            let ti = first + j;
-            tet(
-                anchor,
-                ti,
-                &l.tets[ti],
-                usize::from(rel) ^ flip,
-                inner,
-                kept,
-                cell,
+        for cycle in &group.cycles[range] {
+            let e = cycle.edges;
+            let mut tris = [[0u32; 3]; 2];
+            let n = if e[3] == u8::MAX {
+                tris[0] = [
+                    ids[usize::from(e[0])],
+                    ids[usize::from(e[1])],
+                    ids[usize::from(e[2])],
+                ];
+                1
+            } else {
+                tris = split_quad(e.map(|e| ids[usize::from(e)]), positions);
+                2
+            };
+            debug_assert_eq!(
+                {
+                    let ti = first + usize::from(cycle.tet);
+                    let tpl = &l.tets[ti];
+                    let case = (0..4).fold(0, |c, i| {
+                        c | usize::from(v[(anchor as isize + tpl.delta[i]) as usize] < iso) << i
+                    });
+                    let edge = |a: usize, b: usize| {
+                        let at = |o: usize| crossed.get((anchor as isize + tpl.delta[o]) as usize);
+                        if at(a).owned >> tpl.dir[a][b] & 1 != 0 {
+                            at(a).id(tpl.dir[a][b])
+                        } else {
+                            at(b).id(tpl.dir[b][a])
+                        }
+                    };
+                    let mut reference = [[0u32; 3]; 2];
+                    let m = case_triangles_of(case, edge, positions, &mut reference);
+                    reference[..m].to_vec()
+                },
+                tris[..n].to_vec(),
+                "tetrahedron {} of anchor {anchor}",
+                cycle.tet
             );
+            match map {
+                None => {
+                    // The gradient of the tetrahedron, for the quotient test's (c).
+                    let grad = if list.is_some() {
+                        l.gradient(anchor, first + usize::from(cycle.tet), inner)
+                    } else {
+                        [0.0; 3]
+                    };
+                    for t in &tris[..n] {
+                        if let Some(list) = list.as_mut() {
+                            list.grad[w / 3] = grad;
+                            if let Some((_, flags)) = list.kept.as_mut() {
+                                flags[w / 3] = u8::from(kept);
+                            }
+                        }
+                        if let Some(cells) = cells.as_deref_mut() {
+                            cells[w / 3] = cell;
+                        }
+                        out[w..w + 3].copy_from_slice(t);
+                        w += 3;
+                    }
+                }
+                Some(map) => {
+                    // Clustered: the vertices of the groups' quotient; a triangle with two
+                    // corners in one group collapsed and is dropped.
+                    for t in &tris[..n] {
+                        let q = t.map(|i| map[i as usize]);
+                        if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
+                            if let Some(cells) = cells.as_deref_mut() {
+                                cells[w / 3] = cell;
+                            }
+                            out[w..w + 3].copy_from_slice(&q);
+                            w += 3;
+                        }
+                    }
+                }
+            }
         }
     });
     debug_assert!(
