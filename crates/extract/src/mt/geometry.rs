@@ -296,29 +296,51 @@ pub(crate) fn geometry_in_window(
             Lattice::Simple => 0,
         };
         processed += if kept { range.len() } else { 0 };
-        if plain {
-            // Plain MT: the ids straight into place, each value stored once (an array of
-            // triangles copied over would be read back across its stores), the write
-            // position in a register.
+        if map.is_none() {
+            // Plain MT's triangles: the ids straight into place, each value stored once (an
+            // array of triangles copied over would be read back across its stores), the write
+            // position in a register; the listing's gradient, flags and cells beside them.
             let mut at = w;
             for cycle in &group.cycles[range] {
                 let e = cycle.edges.map(usize::from);
-                let (a, b, c) = (ids[e[0]], ids[e[1]], ids[e[2]]);
-                if cycle.edges[3] == u8::MAX {
-                    out[at..at + 3].copy_from_slice(&[a, b, c]);
-                    at += 3;
+                let q = [ids[e[0]], ids[e[1]], ids[e[2]], 0];
+                let n = if cycle.edges[3] == u8::MAX {
+                    out[at..at + 3].copy_from_slice(&q[..3]);
+                    1
                 } else {
-                    let d = ids[e[3]];
+                    let q = [q[0], q[1], q[2], ids[e[3]]];
+                    // As [`split_quad`], by an index rather than a branch (the choice is
+                    // data-dependent): along 0-2 unless it is the longer diagonal, else the
+                    // cycle turned by one.
                     let p = |i: u32| glam::Vec3::from(positions[i as usize]);
-                    // As [`split_quad`]: along 0-2 when it is not the longer diagonal.
-                    let t = if p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d)) {
-                        [a, b, c, a, c, d]
-                    } else {
-                        [b, c, d, b, d, a]
-                    };
-                    out[at..at + 6].copy_from_slice(&t);
-                    at += 6;
+                    let short02 =
+                        p(q[0]).distance_squared(p(q[2])) <= p(q[1]).distance_squared(p(q[3]));
+                    let r = usize::from(!short02);
+                    out[at..at + 6].copy_from_slice(&[
+                        q[r],
+                        q[r + 1],
+                        q[r + 2],
+                        q[r],
+                        q[r + 2],
+                        q[(r + 3) & 3],
+                    ]);
+                    2
+                };
+                if !plain {
+                    let t = at / 3;
+                    if let Some(list) = list.as_mut() {
+                        // The gradient of the tetrahedron, for the quotient test's (c).
+                        let grad = l.gradient(anchor, first + usize::from(cycle.tet), inner);
+                        list.grad[t..t + n].fill(grad);
+                        if let Some((_, flags)) = list.kept.as_mut() {
+                            flags[t..t + n].fill(u8::from(kept));
+                        }
+                    }
+                    if let Some(cells) = cells.as_deref_mut() {
+                        cells[t..t + n].fill(cell);
+                    }
                 }
+                at += 3 * n;
             }
             w = at;
             return;
@@ -361,27 +383,7 @@ pub(crate) fn geometry_in_window(
                 cycle.tet
             );
             match map {
-                None => {
-                    // The gradient of the tetrahedron, for the quotient test's (c).
-                    let grad = if list.is_some() {
-                        l.gradient(anchor, first + usize::from(cycle.tet), inner)
-                    } else {
-                        [0.0; 3]
-                    };
-                    for t in &tris[..n] {
-                        if let Some(list) = list.as_mut() {
-                            list.grad[w / 3] = grad;
-                            if let Some((_, flags)) = list.kept.as_mut() {
-                                flags[w / 3] = u8::from(kept);
-                            }
-                        }
-                        if let Some(cells) = cells.as_deref_mut() {
-                            cells[w / 3] = cell;
-                        }
-                        out[w..w + 3].copy_from_slice(t);
-                        w += 3;
-                    }
-                }
+                None => unreachable!("plain MT's triangles are written above"),
                 Some(map) => {
                     // Clustered: the vertices of the groups' quotient; a triangle with two
                     // corners in one group collapsed and is dropped.

@@ -177,9 +177,10 @@ pub(crate) struct TetGroup {
     pub(crate) cycles: Vec<GroupCycle>,
 }
 
-/// The most edges a [`TetGroup`] has (a cube's 6 tetrahedra name 36, counting each as often
-/// as it is named in another direction).
-pub(crate) const MAX_GROUP_EDGES: usize = 36;
+/// The most edges a [`TetGroup`] has: a cube's 6 tetrahedra have 19 (its 12 edges, 6 face
+/// diagonals and the main diagonal; each named in one direction only), a body-centred face's 4
+/// have 13.
+pub(crate) const MAX_GROUP_EDGES: usize = 19;
 
 /// An edge of a [`TetGroup`]: from point `from` to point `to` (indices into the group's
 /// points), with the neighbour index of each end seen from the other.
