@@ -55,9 +55,10 @@ pub(crate) struct LayerOut<'s> {
 /// Calls `visit(anchor, rank, group, p)` for each body-centred face (group: its axis) or cube
 /// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot, at
 /// lattice coordinates `p`) has a crossed edge and, in a chunk, its cell
-/// ([`Layout::anchor_cell`]) is kept. The anchor's entry is `crossed.points[rank]`. The count and
-/// the geometry pass both walk the layer with it, so they see the same groups.
-pub(crate) fn for_each_group(
+/// ([`Layout::anchor_cell`]) is kept. The anchor's entry is `crossed.points[rank]` when `RANK`
+/// (else `rank` is 0: the geometry pass reads its window, not the ranks). The count and the
+/// geometry pass both walk the layer with it, so they see the same groups.
+pub(crate) fn for_each_group<const RANK: bool>(
     l: &Layout,
     k: usize,
     keep: Option<CellRange>,
@@ -70,7 +71,7 @@ pub(crate) fn for_each_group(
     // 0, 0)`: scan their bits, visit only the crossed ones.
     let mut row = |start: usize, z: usize, len: usize, g: usize, first: Offset, step: i32| {
         let local = start - z * plane;
-        let mut rank = crossed.rank_in(z, local);
+        let mut rank = if RANK { crossed.rank_in(z, local) } else { 0 };
         for_each_bit(crossed.plane_bits(z), local, len, |n| {
             let r = rank;
             rank += 1;
@@ -150,7 +151,7 @@ pub(crate) fn count_layer(
     crossed: &CrossedIndex,
 ) -> usize {
     let mut n = 0;
-    for_each_group(l, k, keep, crossed, |_, rank, g, _| {
+    for_each_group::<true>(l, k, keep, crossed, |_, rank, g, _| {
         let group = &l.groups[g];
         n += usize::from(group.triangles[group.code(crossed.points[rank].crossed)]);
     });
@@ -245,7 +246,7 @@ pub(crate) fn geometry_in_window(
     let [nx, ny, _] = l.s.cells;
     // The window starts at slot 0 of plane z0.
     let base = z0 * plane;
-    for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
+    for_each_group::<false>(l, k, keep, crossed, |anchor, _, g, p| {
         // The group's points on the other side from the anchor, as in [`count_layer`].
         let group = &l.groups[g];
         let at = anchor - base;
@@ -269,10 +270,13 @@ pub(crate) fn geometry_in_window(
                 crossed.get((anchor as isize + group.points[usize::from(edge.from)]) as usize)
             );
             debug_assert_ne!(a.crossed >> edge.dir[0] & 1, 0, "edge {edge:?} not crossed");
+            // Both ends read, then one picked: which end owns the crossing is data, and a
+            // branch on it mispredicts about half the time.
+            let b = entry(edge.to);
             let (owner, d) = if a.owned >> edge.dir[0] & 1 != 0 {
                 (a, edge.dir[0])
             } else {
-                (entry(edge.to), edge.dir[1])
+                (b, edge.dir[1])
             };
             ids[e] = owner.id(d);
         }
@@ -459,32 +463,39 @@ mod tests {
                     let mut total = 0;
                     for k in 0..layers {
                         let mut direct = 0;
-                        for_each_group(&l, k, keep, &buf.vertices.crossed, |anchor, _, g, q| {
-                            let tets = match lattice {
-                                Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
-                                Lattice::Simple => &l.tets[..],
-                            };
-                            // The walk's coordinates are the anchor's, and `inner_anchor`
-                            // promises every corner in the box (no ghost).
-                            let p = l.coords_of(anchor);
-                            assert_eq!(q, p, "{lattice:?} {cells:?}");
-                            let inner = l.inner_anchor(p);
-                            let in_box = tets.iter().all(|tpl| {
-                                tpl.off.iter().all(|o| {
-                                    (0..3)
-                                        .all(|a| p[a] + o[a] >= 0 && p[a] + o[a] <= l.max_coord(a))
-                                })
-                            });
-                            assert!(!inner || in_box, "{lattice:?} {cells:?} anchor {p:?}");
-                            flags[usize::from(inner)] += 1;
-                            for tpl in tets {
-                                let case = (0..4).fold(0, |case, i| {
-                                    let slot = (anchor as isize + tpl.delta[i]) as usize;
-                                    case | usize::from(samples.values[slot] < settings.iso) << i
+                        for_each_group::<false>(
+                            &l,
+                            k,
+                            keep,
+                            &buf.vertices.crossed,
+                            |anchor, _, g, q| {
+                                let tets = match lattice {
+                                    Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
+                                    Lattice::Simple => &l.tets[..],
+                                };
+                                // The walk's coordinates are the anchor's, and `inner_anchor`
+                                // promises every corner in the box (no ghost).
+                                let p = l.coords_of(anchor);
+                                assert_eq!(q, p, "{lattice:?} {cells:?}");
+                                let inner = l.inner_anchor(p);
+                                let in_box = tets.iter().all(|tpl| {
+                                    tpl.off.iter().all(|o| {
+                                        (0..3).all(|a| {
+                                            p[a] + o[a] >= 0 && p[a] + o[a] <= l.max_coord(a)
+                                        })
+                                    })
                                 });
-                                direct += usize::from(case_triangles(case));
-                            }
-                        });
+                                assert!(!inner || in_box, "{lattice:?} {cells:?} anchor {p:?}");
+                                flags[usize::from(inner)] += 1;
+                                for tpl in tets {
+                                    let case = (0..4).fold(0, |case, i| {
+                                        let slot = (anchor as isize + tpl.delta[i]) as usize;
+                                        case | usize::from(samples.values[slot] < settings.iso) << i
+                                    });
+                                    direct += usize::from(case_triangles(case));
+                                }
+                            },
+                        );
                         let counted = count_layer(&l, k, keep, &buf.vertices.crossed);
                         assert_eq!(counted, direct, "{lattice:?} {cells:?} layer {k} {keep:?}");
                         total += counted;
