@@ -142,6 +142,10 @@ pub(crate) struct CrossedIndex {
     /// `ceil(2^64 / plane)`: `slot / plane == (slot * div) >> 64` for every slot below 2^32
     /// (Lemire, Kaser and Kurz 2019); 0 when a plane has one slot.
     pub(crate) div: u64,
+    /// Per storage plane and group (face axis, or the cube), the triangles of the groups its
+    /// crossed points anchor, counted by the numbering ([`number_plane`]): the geometry
+    /// layers' counts without a walk ([`crate::mt::geometry::layer_counts`]).
+    pub(crate) plane_triangles: Vec<[u32; 3]>,
 }
 
 impl CrossedIndex {
@@ -450,7 +454,9 @@ pub(crate) fn vertex_plane(
 /// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points' entries
 /// (`out.entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the crossings'
 /// positions (`out.positions`). Returns how many crossings lie within `WELD` of their owner
-/// (surfaces through sample points).
+/// (surfaces through sample points), and per group (face axis, or the cube) the triangles of
+/// the groups whose anchors are this plane's crossed points
+/// ([`CrossedIndex::plane_triangles`]).
 pub(crate) fn number_plane(
     l: &Layout,
     z: usize,
@@ -459,52 +465,84 @@ pub(crate) fn number_plane(
     crossed: &[u64],
     start: u32,
     out: PlaneOut<'_>,
-) -> usize {
+) -> (usize, [u32; 3]) {
     let PlaneOut {
         entries,
         positions: out,
     } = out;
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
+    let [nx, ny, nz] = l.s.cells;
     let plane = dx * dy;
     let mut next = start;
     let (mut w, mut r) = (0, 0);
     let mut near_points = 0;
-    for_each_bit(crossed, 0, plane, |local| {
-        let own = owned[r] as u16;
-        entries[r] = CrossedPoint {
-            first: next,
-            owned: own,
-            crossed: (owned[r] >> 16) as u16,
-        };
-        r += 1;
-        if own == 0 {
-            return;
+    let mut triangles = [0u32; 3];
+    // The groups this plane's points anchor, as `geometry::for_each_group` walks them: per
+    // group, its rows (`sy`) and the slots of each row (`sx`), empty when the plane has none.
+    let none = (1, 0, 1, 0);
+    let anchors: [(usize, usize, usize, usize); 3] = match l.lattice {
+        Lattice::Simple if z < nz => [(0, ny - 1, 0, nx - 1), none, none],
+        Lattice::Simple => [none; 3],
+        Lattice::BodyCentred => {
+            let faces = z.is_multiple_of(2) && z >= 2 && z <= 2 * nz;
+            [
+                // Faces perpendicular to x (layer z / 2 - 1), to y, then to z (layer z / 2).
+                if faces { (1, ny, 0, nx) } else { none },
+                if faces { (0, ny, 1, nx) } else { none },
+                if z.is_multiple_of(2) && z <= 2 * nz {
+                    (1, ny, 1, nx)
+                } else {
+                    none
+                },
+            ]
         }
-        next += own.count_ones();
-        let (sy, sx) = (local / dx, local % dx);
-        let p = l.coords(sx, sy, z);
-        let i = z * plane + local;
-        let f = v[i];
-        let pp = l.position(p);
-        let mut bits = own;
-        while bits != 0 {
-            let d = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let q = add(p, l.t.offsets[d]);
-            let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
-            let t = (iso - f) / (g - f);
-            near_points += (t < WELD) as usize;
-            out[w] = pp.lerp(l.position(q), t).to_array();
-            w += 1;
-        }
-    });
+    };
+    for sy in 0..dy {
+        for_each_bit(crossed, sy * dx, dx, |sx| {
+            let local = sy * dx + sx;
+            let word = owned[r];
+            let own = word as u16;
+            let crossed = (word >> 16) as u16;
+            entries[r] = CrossedPoint {
+                first: next,
+                owned: own,
+                crossed,
+            };
+            r += 1;
+            for (g, &(y0, y1, x0, x1)) in anchors.iter().enumerate() {
+                if sy >= y0 && sy <= y1 && sx >= x0 && sx <= x1 {
+                    let group = &l.groups[g.min(l.groups.len() - 1)];
+                    triangles[g] += u32::from(group.triangles[group.code(crossed)]);
+                }
+            }
+            if own == 0 {
+                return;
+            }
+            next += own.count_ones();
+            let p = l.coords(sx, sy, z);
+            let i = z * plane + local;
+            let f = v[i];
+            let pp = l.position(p);
+            let mut bits = own;
+            while bits != 0 {
+                let d = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let q = add(p, l.t.offsets[d]);
+                let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
+                let t = (iso - f) / (g - f);
+                near_points += (t < WELD) as usize;
+                out[w] = pp.lerp(l.position(q), t).to_array();
+                w += 1;
+            }
+        });
+    }
     debug_assert_eq!(
         r,
         owned.len(),
         "plane {z}: crossed bits and points disagree"
     );
-    near_points
+    (near_points, triangles)
 }
 
 /// The vertex pass, after [`VertexTables::allocate`]: step 0, the inside bit of every sample point;
@@ -617,7 +655,7 @@ pub(crate) fn vertex_pass(
             rest = tail;
         }
         let (bits, plane_points) = (&*bits, &buf.plane_points);
-        near_points = pool.install(|| {
+        let numbered: Vec<(usize, [u32; 3])> = pool.install(|| {
             entries
                 .into_par_iter()
                 .zip(chunks.into_par_iter())
@@ -633,8 +671,13 @@ pub(crate) fn vertex_pass(
                         PlaneOut { entries, positions },
                     )
                 })
-                .sum::<usize>()
+                .collect()
         });
+        near_points = numbered.iter().map(|n| n.0).sum();
+        buf.crossed.plane_triangles.clear();
+        buf.crossed
+            .plane_triangles
+            .extend(numbered.iter().map(|n| n.1));
     }
     // The per-plane proposals were copied into `out.proposals`: free them before the geometry
     // pass and the clustering allocate.

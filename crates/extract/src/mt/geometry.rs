@@ -1,8 +1,9 @@
 //! The walk over the tetrahedra of one geometry layer, shared by the emission and by the
 //! listing of plain MT's triangles (integrated clustering): the anchors of a layer's faces or
 //! cubes that can hold surface ([`for_each_group`]), the count of a layer's triangles from the
-//! anchors' crossed edges alone ([`count_layer`]), and the writing of its triangles from the
-//! case table ([`geometry_layer`]).
+//! anchors' crossed edges alone ([`layer_counts`]: over the whole box from the per-plane counts
+//! of the vertex pass's numbering, in a chunk by [`count_layer`]'s walk), and the writing of
+//! its triangles from the case table ([`geometry_layer`]).
 //!
 //! ```text
 //!   layer k:  count (anchors' crossed edges -> triangles)  ->  slice k of the output
@@ -123,7 +124,11 @@ pub(crate) fn for_each_group<const RANK: bool>(
     }
 }
 
-/// Triangles of every geometry layer (those of the cells `keep`), in layer order.
+/// Triangles of every geometry layer (those of the cells `keep`), in layer order: over the
+/// whole box from the counts the numbering kept per storage plane
+/// ([`CrossedIndex::plane_triangles`]: a body-centred layer k holds the faces perpendicular
+/// to z of plane 2k and the others of plane 2k + 2, a simple one the cubes of plane k), in a
+/// chunk by a walk over the kept anchors ([`count_layer`]).
 pub(crate) fn layer_counts(
     l: &Layout,
     keep: Option<CellRange>,
@@ -134,6 +139,26 @@ pub(crate) fn layer_counts(
         Lattice::BodyCentred => l.s.cells[2] + 1,
         Lattice::Simple => l.s.cells[2],
     };
+    let planes = &crossed.plane_triangles;
+    if keep.is_none() && planes.len() == l.s.dims[2] {
+        let counts: Vec<usize> = (0..layers)
+            .map(|k| match l.lattice {
+                Lattice::BodyCentred => {
+                    let others = planes.get(2 * k + 2).filter(|_| k + 1 < layers);
+                    (planes[2 * k][2] + others.map_or(0, |p| p[0] + p[1])) as usize
+                }
+                Lattice::Simple => planes[k][0] as usize,
+            })
+            .collect();
+        debug_assert_eq!(
+            counts,
+            (0..layers)
+                .map(|k| count_layer(l, k, None, crossed))
+                .collect::<Vec<_>>(),
+            "the numbering's counts and the walk's differ"
+        );
+        return counts;
+    }
     pool.install(|| {
         (0..layers)
             .into_par_iter()
@@ -461,6 +486,7 @@ mod tests {
                 ];
                 for keep in keeps {
                     let mut total = 0;
+                    let mut per_layer = Vec::new();
                     for k in 0..layers {
                         let mut direct = 0;
                         for_each_group::<false>(
@@ -499,9 +525,15 @@ mod tests {
                         let counted = count_layer(&l, k, keep, &buf.vertices.crossed);
                         assert_eq!(counted, direct, "{lattice:?} {cells:?} layer {k} {keep:?}");
                         total += counted;
+                        per_layer.push(counted);
                     }
                     if keep.is_none() {
                         assert_eq!(total * 3, mesh.indices.len(), "{lattice:?} {cells:?}");
+                        // The counts the numbering kept per plane give the same layers.
+                        let planes = buf.vertices.crossed.plane_triangles.len();
+                        assert_eq!(planes, samples.dims[2], "{lattice:?} {cells:?}");
+                        let numbered = layer_counts(&l, None, &buf.vertices.crossed, &pool);
+                        assert_eq!(numbered, per_layer, "{lattice:?} {cells:?}");
                     }
                     triangles += total;
                 }
