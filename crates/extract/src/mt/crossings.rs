@@ -27,7 +27,7 @@ use rayon::prelude::*;
 use super::clustering::proposal::{self, Candidate, PointEdges, ProposalCounts, Rules};
 use super::layout::{add, owns, Layout};
 use crate::lattice::FULL;
-use crate::util::{bits_at, bits_at_signed, for_each_bit, inside_word};
+use crate::util::{bits_at_signed, for_each_bit, inside_word};
 use crate::{ExtractError, Lattice, Stats};
 
 /// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
@@ -142,6 +142,10 @@ pub(crate) struct CrossedIndex {
     /// `ceil(2^64 / plane)`: `slot / plane == (slot * div) >> 64` for every slot below 2^32
     /// (Lemire, Kaser and Kurz 2019); 0 when a plane has one slot.
     pub(crate) div: u64,
+    /// Per storage plane and group (face axis, or the cube), the triangles of the groups its
+    /// crossed points anchor, counted by the numbering ([`number_plane`]): the geometry
+    /// layers' counts without a walk ([`crate::mt::geometry::layer_counts`]).
+    pub(crate) plane_triangles: Vec<[u32; 3]>,
 }
 
 impl CrossedIndex {
@@ -225,6 +229,42 @@ impl CrossedIndex {
 
     pub(crate) fn bytes(&self) -> usize {
         self.bits.len() * 8 + self.rank.len() * 4 + self.points.len() * 8
+    }
+}
+
+/// The 64 bits of `words` from bit `pos` (as [`crate::util::bits_at`], without its branch on
+/// an aligned `pos`): `words` holds a word past the one of `pos`.
+#[inline(always)]
+fn bits_from(words: &[u64], pos: usize) -> u64 {
+    let (w, s) = (pos >> 6, pos & 63);
+    // The higher word first: its bounds check covers the lower one's.
+    let hi = words[w + 1];
+    (words[w] >> s) | ((hi << 1) << (63 - s))
+}
+
+/// The inside bits of 64 values (bit k set when `values[k] < iso`), as
+/// [`crate::util::inside_word`] gives them: four values per comparison and mask on x86-64 (an
+/// ordered less-than: NaN is outside, as with `<`).
+#[inline]
+fn inside_word64(values: &[f32; 64], iso: f32) -> u64 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cmplt_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps};
+        let mut word = 0u64;
+        // SAFETY: SSE2 is in the x86-64 baseline; each load reads the 4 values of its chunk
+        // (unaligned).
+        unsafe {
+            let t = _mm_set1_ps(iso);
+            for (i, four) in values.as_chunks::<4>().0.iter().enumerate() {
+                let mask = _mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(four.as_ptr()), t)) as u64;
+                word |= mask << (4 * i);
+            }
+        }
+        word
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        inside_word(values, iso)
     }
 }
 
@@ -367,10 +407,10 @@ pub(crate) fn vertex_plane(
         while sx < dx {
             let len = (dx - sx).min(64);
             // Per neighbour, which of the 64 points differ from it.
-            let own_bits = bits_at(inside_bits, row + sx);
+            let own_bits = bits_from(inside_bits, row + sx);
             let at = (row + sx) as isize;
             let differ: [u64; 14] = if safe {
-                std::array::from_fn(|d| own_bits ^ bits_at(inside_bits, (at + delta[d]) as usize))
+                std::array::from_fn(|d| own_bits ^ bits_from(inside_bits, (at + delta[d]) as usize))
             } else {
                 std::array::from_fn(|d| own_bits ^ bits_at_signed(inside_bits, at + delta[d]))
             };
@@ -414,7 +454,9 @@ pub(crate) fn vertex_plane(
 /// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points' entries
 /// (`out.entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the crossings'
 /// positions (`out.positions`). Returns how many crossings lie within `WELD` of their owner
-/// (surfaces through sample points).
+/// (surfaces through sample points), and per group (face axis, or the cube) the triangles of
+/// the groups whose anchors are this plane's crossed points
+/// ([`CrossedIndex::plane_triangles`]).
 pub(crate) fn number_plane(
     l: &Layout,
     z: usize,
@@ -423,52 +465,84 @@ pub(crate) fn number_plane(
     crossed: &[u64],
     start: u32,
     out: PlaneOut<'_>,
-) -> usize {
+) -> (usize, [u32; 3]) {
     let PlaneOut {
         entries,
         positions: out,
     } = out;
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
+    let [nx, ny, nz] = l.s.cells;
     let plane = dx * dy;
     let mut next = start;
     let (mut w, mut r) = (0, 0);
     let mut near_points = 0;
-    for_each_bit(crossed, 0, plane, |local| {
-        let own = owned[r] as u16;
-        entries[r] = CrossedPoint {
-            first: next,
-            owned: own,
-            crossed: (owned[r] >> 16) as u16,
-        };
-        r += 1;
-        if own == 0 {
-            return;
+    let mut triangles = [0u32; 3];
+    // The groups this plane's points anchor, as `geometry::for_each_group` walks them: per
+    // group, its rows (`sy`) and the slots of each row (`sx`), empty when the plane has none.
+    let none = (1, 0, 1, 0);
+    let anchors: [(usize, usize, usize, usize); 3] = match l.lattice {
+        Lattice::Simple if z < nz => [(0, ny - 1, 0, nx - 1), none, none],
+        Lattice::Simple => [none; 3],
+        Lattice::BodyCentred => {
+            let faces = z.is_multiple_of(2) && z >= 2 && z <= 2 * nz;
+            [
+                // Faces perpendicular to x (layer z / 2 - 1), to y, then to z (layer z / 2).
+                if faces { (1, ny, 0, nx) } else { none },
+                if faces { (0, ny, 1, nx) } else { none },
+                if z.is_multiple_of(2) && z <= 2 * nz {
+                    (1, ny, 1, nx)
+                } else {
+                    none
+                },
+            ]
         }
-        next += own.count_ones();
-        let (sy, sx) = (local / dx, local % dx);
-        let p = l.coords(sx, sy, z);
-        let i = z * plane + local;
-        let f = v[i];
-        let pp = l.position(p);
-        let mut bits = own;
-        while bits != 0 {
-            let d = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let q = add(p, l.t.offsets[d]);
-            let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
-            let t = (iso - f) / (g - f);
-            near_points += (t < WELD) as usize;
-            out[w] = pp.lerp(l.position(q), t).to_array();
-            w += 1;
-        }
-    });
+    };
+    for sy in 0..dy {
+        for_each_bit(crossed, sy * dx, dx, |sx| {
+            let local = sy * dx + sx;
+            let word = owned[r];
+            let own = word as u16;
+            let crossed = (word >> 16) as u16;
+            entries[r] = CrossedPoint {
+                first: next,
+                owned: own,
+                crossed,
+            };
+            r += 1;
+            for (g, &(y0, y1, x0, x1)) in anchors.iter().enumerate() {
+                if sy >= y0 && sy <= y1 && sx >= x0 && sx <= x1 {
+                    let group = &l.groups[g.min(l.groups.len() - 1)];
+                    triangles[g] += u32::from(group.triangles[group.code(crossed)]);
+                }
+            }
+            if own == 0 {
+                return;
+            }
+            next += own.count_ones();
+            let p = l.coords(sx, sy, z);
+            let i = z * plane + local;
+            let f = v[i];
+            let pp = l.position(p);
+            let mut bits = own;
+            while bits != 0 {
+                let d = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let q = add(p, l.t.offsets[d]);
+                let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
+                let t = (iso - f) / (g - f);
+                near_points += (t < WELD) as usize;
+                out[w] = pp.lerp(l.position(q), t).to_array();
+                w += 1;
+            }
+        });
+    }
     debug_assert_eq!(
         r,
         owned.len(),
         "plane {z}: crossed bits and points disagree"
     );
-    near_points
+    (near_points, triangles)
 }
 
 /// The vertex pass, after [`VertexTables::allocate`]: step 0, the inside bit of every sample point;
@@ -507,7 +581,10 @@ pub(crate) fn vertex_pass(
                     for (j, word) in chunk.iter_mut().enumerate() {
                         let start = (c * 1024 + j) * 64;
                         let end = (start + 64).min(slots);
-                        *word = inside_word(&values[start..end], iso);
+                        *word = match <&[f32; 64]>::try_from(&values[start..end]) {
+                            Ok(block) => inside_word64(block, iso),
+                            Err(_) => inside_word(&values[start..end], iso),
+                        };
                     }
                 });
         });
@@ -578,7 +655,7 @@ pub(crate) fn vertex_pass(
             rest = tail;
         }
         let (bits, plane_points) = (&*bits, &buf.plane_points);
-        near_points = pool.install(|| {
+        let numbered: Vec<(usize, [u32; 3])> = pool.install(|| {
             entries
                 .into_par_iter()
                 .zip(chunks.into_par_iter())
@@ -594,8 +671,13 @@ pub(crate) fn vertex_pass(
                         PlaneOut { entries, positions },
                     )
                 })
-                .sum::<usize>()
+                .collect()
         });
+        near_points = numbered.iter().map(|n| n.0).sum();
+        buf.crossed.plane_triangles.clear();
+        buf.crossed
+            .plane_triangles
+            .extend(numbered.iter().map(|n| n.1));
     }
     // The per-plane proposals were copied into `out.proposals`: free them before the geometry
     // pass and the clustering allocate.
@@ -720,6 +802,40 @@ mod tests {
             }
         }
         assert!(checked > 100, "only {checked} points own crossings");
+    }
+
+    #[test]
+    fn the_vertex_pass_reads_inside_bits_as_the_shared_helpers_do() {
+        // 64 values at a time (SIMD on x86-64) against `inside_word`, NaN, signed zeros and
+        // values equal to the isovalue included; `bits_from` against `bits_at` at every offset.
+        let mut state = 11u64;
+        for iso in [0.0f32, 0.25, -0.5] {
+            for _ in 0..200 {
+                let values: [f32; 64] =
+                    std::array::from_fn(|k| match (k * 7 + state as usize) % 9 {
+                        0 => iso,
+                        1 => f32::NAN,
+                        2 => -0.0,
+                        3 => 0.0,
+                        _ => lcg(&mut state) * 2.0 - 1.0,
+                    });
+                assert_eq!(
+                    inside_word64(&values, iso),
+                    inside_word(&values, iso),
+                    "iso {iso}"
+                );
+            }
+        }
+        let words: Vec<u64> = (0..5)
+            .map(|_| (lcg(&mut state) * 1e18) as u64 ^ 0xA5A5_5A5A_0F0F_F0F0)
+            .collect();
+        for pos in 0..64 * 4 {
+            assert_eq!(
+                bits_from(&words, pos),
+                crate::util::bits_at(&words, pos),
+                "pos {pos}"
+            );
+        }
     }
 
     #[test]

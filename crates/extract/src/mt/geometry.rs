@@ -1,8 +1,9 @@
 //! The walk over the tetrahedra of one geometry layer, shared by the emission and by the
 //! listing of plain MT's triangles (integrated clustering): the anchors of a layer's faces or
 //! cubes that can hold surface ([`for_each_group`]), the count of a layer's triangles from the
-//! anchors' crossed edges alone ([`count_layer`]), and the writing of its triangles from the
-//! case table ([`geometry_layer`]).
+//! anchors' crossed edges alone ([`layer_counts`]: over the whole box from the per-plane counts
+//! of the vertex pass's numbering, in a chunk by [`count_layer`]'s walk), and the writing of
+//! its triangles from the case table ([`geometry_layer`]).
 //!
 //! ```text
 //!   layer k:  count (anchors' crossed edges -> triangles)  ->  slice k of the output
@@ -10,14 +11,16 @@
 //! ```
 //!
 //! The writing reads no sample value beyond the anchor's own: a group whose table gives no
-//! triangle is skipped, each tetrahedron's case comes from the anchor's side and its crossed
-//! edges (`TetGroup::cases`), and the crossing on an edge belongs to the end whose owned bit
-//! the vertex pass set (it decided that from the same two values).
+//! triangle is skipped, the crossing on each of the group's crossed edges is found once (it
+//! belongs to the end whose owned bit the vertex pass set: it decided that from the same two
+//! values), and the triangles are read off the group's cycle table by the anchor's side and
+//! crossed edges (`TetGroup::cycles`: each tetrahedron's case table cycle, in template order,
+//! naming group edges). Plain MT writes each id straight into place.
 
 use rayon::prelude::*;
 
 use super::crossings::{CrossedIndex, CrossedPoint};
-use super::layout::{case_triangles_of, Layout, TetTemplate};
+use super::layout::{case_triangles_of, split_quad, Layout, MAX_GROUP_EDGES};
 use crate::lattice::Offset;
 use crate::util::for_each_bit;
 use crate::{CellRange, Lattice};
@@ -53,9 +56,10 @@ pub(crate) struct LayerOut<'s> {
 /// Calls `visit(anchor, rank, group, p)` for each body-centred face (group: its axis) or cube
 /// (group 0) of geometry layer `k` that can hold surface: its anchor point (a storage slot, at
 /// lattice coordinates `p`) has a crossed edge and, in a chunk, its cell
-/// ([`Layout::anchor_cell`]) is kept. The anchor's entry is `crossed.points[rank]`. The count and
-/// the geometry pass both walk the layer with it, so they see the same groups.
-pub(crate) fn for_each_group(
+/// ([`Layout::anchor_cell`]) is kept. The anchor's entry is `crossed.points[rank]` when `RANK`
+/// (else `rank` is 0: the geometry pass reads its window, not the ranks). The count and the
+/// geometry pass both walk the layer with it, so they see the same groups.
+pub(crate) fn for_each_group<const RANK: bool>(
     l: &Layout,
     k: usize,
     keep: Option<CellRange>,
@@ -68,7 +72,7 @@ pub(crate) fn for_each_group(
     // 0, 0)`: scan their bits, visit only the crossed ones.
     let mut row = |start: usize, z: usize, len: usize, g: usize, first: Offset, step: i32| {
         let local = start - z * plane;
-        let mut rank = crossed.rank_in(z, local);
+        let mut rank = if RANK { crossed.rank_in(z, local) } else { 0 };
         for_each_bit(crossed.plane_bits(z), local, len, |n| {
             let r = rank;
             rank += 1;
@@ -120,7 +124,11 @@ pub(crate) fn for_each_group(
     }
 }
 
-/// Triangles of every geometry layer (those of the cells `keep`), in layer order.
+/// Triangles of every geometry layer (those of the cells `keep`), in layer order: over the
+/// whole box from the counts the numbering kept per storage plane
+/// ([`CrossedIndex::plane_triangles`]: a body-centred layer k holds the faces perpendicular
+/// to z of plane 2k and the others of plane 2k + 2, a simple one the cubes of plane k), in a
+/// chunk by a walk over the kept anchors ([`count_layer`]).
 pub(crate) fn layer_counts(
     l: &Layout,
     keep: Option<CellRange>,
@@ -131,6 +139,26 @@ pub(crate) fn layer_counts(
         Lattice::BodyCentred => l.s.cells[2] + 1,
         Lattice::Simple => l.s.cells[2],
     };
+    let planes = &crossed.plane_triangles;
+    if keep.is_none() && planes.len() == l.s.dims[2] {
+        let counts: Vec<usize> = (0..layers)
+            .map(|k| match l.lattice {
+                Lattice::BodyCentred => {
+                    let others = planes.get(2 * k + 2).filter(|_| k + 1 < layers);
+                    (planes[2 * k][2] + others.map_or(0, |p| p[0] + p[1])) as usize
+                }
+                Lattice::Simple => planes[k][0] as usize,
+            })
+            .collect();
+        debug_assert_eq!(
+            counts,
+            (0..layers)
+                .map(|k| count_layer(l, k, None, crossed))
+                .collect::<Vec<_>>(),
+            "the numbering's counts and the walk's differ"
+        );
+        return counts;
+    }
     pool.install(|| {
         (0..layers)
             .into_par_iter()
@@ -148,7 +176,7 @@ pub(crate) fn count_layer(
     crossed: &CrossedIndex,
 ) -> usize {
     let mut n = 0;
-    for_each_group(l, k, keep, crossed, |_, rank, g, _| {
+    for_each_group::<true>(l, k, keep, crossed, |_, rank, g, _| {
         let group = &l.groups[g];
         n += usize::from(group.triangles[group.code(crossed.points[rank].crossed)]);
     });
@@ -239,85 +267,49 @@ pub(crate) fn geometry_in_window(
         .as_ref()
         .and_then(|list| list.kept.as_ref().map(|k| k.0));
     let cells_wanted = cells.is_some();
+    let plain = map.is_none() && !listing && !cells_wanted;
     let [nx, ny, _] = l.s.cells;
-    // One tetrahedron in `case` (bit i: corner i inside, known from the anchor's side and its
-    // crossed edges): no sample value is read; the owner of a crossing is the end whose owned
-    // bit is set (the vertex pass decided it from the same values as [`tet_triangles`] would).
-    let mut tet = |anchor: usize,
-                   ti: usize,
-                   tpl: &TetTemplate,
-                   case: usize,
-                   inner: bool,
-                   kept: bool,
-                   cell: u32| {
-        if case == 0 || case == 15 {
+    // The window starts at slot 0 of plane z0.
+    let base = z0 * plane;
+    for_each_group::<false>(l, k, keep, crossed, |anchor, _, g, p| {
+        // The group's points on the other side from the anchor, as in [`count_layer`].
+        let group = &l.groups[g];
+        let at = anchor - base;
+        let code = group.code(window[at].crossed);
+        if group.triangles[code] == 0 {
             return;
         }
-        let mut tris = [[0u32; 3]; 2];
-        // The window starts at slot 0 of plane z0.
-        let entry = |o: usize| {
-            let slot = (anchor as isize + tpl.delta[o]) as usize;
-            let entry = window[slot - z0 * plane];
-            debug_assert_eq!(entry, crossed.get(slot));
-            entry
-        };
-        let edge = |a: usize, b: usize| {
-            let (ea, d) = (entry(a), tpl.dir[a][b]);
-            debug_assert_ne!(ea.crossed >> d & 1, 0, "edge {a}-{b} not crossed");
-            if ea.owned >> d & 1 != 0 {
-                ea.id(d)
+        // The crossing on each crossed edge of the group, once: the end whose owned bit the
+        // vertex pass set (it decided that from the same two values the case would read), as
+        // `case_triangles_of` would ask for it, edge (a, b) of a tetrahedron with a < b.
+        let mut ids = [0u32; MAX_GROUP_EDGES];
+        let mut todo = group.crossed_edges[code];
+        while todo != 0 {
+            let e = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
+            let edge = group.edges[e];
+            let entry = |i: u8| window[(at as isize + group.points[usize::from(i)]) as usize];
+            let a = entry(edge.from);
+            debug_assert_eq!(
+                a,
+                crossed.get((anchor as isize + group.points[usize::from(edge.from)]) as usize)
+            );
+            debug_assert_ne!(a.crossed >> edge.dir[0] & 1, 0, "edge {edge:?} not crossed");
+            // Both ends read, then one picked: which end owns the crossing is data, and a
+            // branch on it mispredicts about half the time.
+            let b = entry(edge.to);
+            let (owner, d) = if a.owned >> edge.dir[0] & 1 != 0 {
+                (a, edge.dir[0])
             } else {
-                entry(b).id(tpl.dir[b][a])
-            }
-        };
-        let n = case_triangles_of(case, edge, positions, &mut tris);
-        debug_assert_eq!(
-            case,
-            (0..4).fold(0, |c, i| c | usize::from(
-                v[(anchor as isize + tpl.delta[i]) as usize] < iso
-            ) << i),
-            "case of tetrahedron {ti}"
-        );
-        processed += usize::from(n > 0 && kept);
-        match map {
-            None => {
-                // The gradient of the tetrahedron, for the quotient test's (c).
-                let g = if n > 0 && list.is_some() {
-                    l.gradient(anchor, ti, inner)
-                } else {
-                    [0.0; 3]
-                };
-                for t in &tris[..n] {
-                    if let Some(list) = list.as_mut() {
-                        list.grad[w / 3] = g;
-                        if let Some((_, flags)) = list.kept.as_mut() {
-                            flags[w / 3] = u8::from(kept);
-                        }
-                    }
-                    if let Some(cells) = cells.as_deref_mut() {
-                        cells[w / 3] = cell;
-                    }
-                    out[w..w + 3].copy_from_slice(t);
-                    w += 3;
-                }
-            }
-            Some(map) => {
-                // Clustered: the vertices of the groups' quotient; a triangle with two corners
-                // in one group collapsed and is dropped.
-                for t in &tris[..n] {
-                    let q = t.map(|i| map[i as usize]);
-                    if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
-                        if let Some(cells) = cells.as_deref_mut() {
-                            cells[w / 3] = cell;
-                        }
-                        out[w..w + 3].copy_from_slice(&q);
-                        w += 3;
-                    }
-                }
-            }
+                (b, edge.dir[1])
+            };
+            ids[e] = owner.id(d);
         }
-    };
-    for_each_group(l, k, keep, crossed, |anchor, _, g, p| {
+        // Each tetrahedron's case (bit i: corner i inside) is known from the anchor's side and
+        // its crossed edges: no other sample value is read.
+        let side = usize::from(v[anchor] < iso);
+        let range = usize::from(group.cycle_start[2 * code + side])
+            ..usize::from(group.cycle_start[2 * code + side + 1]);
         // Only the listing reads these: whether no corner is a ghost (for the gradient), and in
         // a chunk whether the anchor's cell is kept.
         let inner = listing && l.inner_anchor(p);
@@ -332,28 +324,110 @@ pub(crate) fn geometry_in_window(
             Lattice::BodyCentred => 4 * g,
             Lattice::Simple => 0,
         };
-        // The group's points on the other side from the anchor, as in [`count_layer`].
-        let group = &l.groups[g];
-        let code = group.code(window[anchor - z0 * plane].crossed);
-        if group.triangles[code] == 0 {
+        processed += if kept { range.len() } else { 0 };
+        if map.is_none() {
+            // Plain MT's triangles: the ids straight into place, each value stored once (an
+            // array of triangles copied over would be read back across its stores), the write
+            // position in a register; the listing's gradient, flags and cells beside them.
+            let mut at = w;
+            for cycle in &group.cycles[range] {
+                let e = cycle.edges.map(usize::from);
+                let q = [ids[e[0]], ids[e[1]], ids[e[2]], 0];
+                let n = if cycle.edges[3] == u8::MAX {
+                    out[at..at + 3].copy_from_slice(&q[..3]);
+                    1
+                } else {
+                    let q = [q[0], q[1], q[2], ids[e[3]]];
+                    // As [`split_quad`], by an index rather than a branch (the choice is
+                    // data-dependent): along 0-2 unless it is the longer diagonal, else the
+                    // cycle turned by one.
+                    let p = |i: u32| glam::Vec3::from(positions[i as usize]);
+                    let short02 =
+                        p(q[0]).distance_squared(p(q[2])) <= p(q[1]).distance_squared(p(q[3]));
+                    let r = usize::from(!short02);
+                    out[at..at + 6].copy_from_slice(&[
+                        q[r],
+                        q[r + 1],
+                        q[r + 2],
+                        q[r],
+                        q[r + 2],
+                        q[(r + 3) & 3],
+                    ]);
+                    2
+                };
+                if !plain {
+                    let t = at / 3;
+                    if let Some(list) = list.as_mut() {
+                        // The gradient of the tetrahedron, for the quotient test's (c).
+                        let grad = l.gradient(anchor, first + usize::from(cycle.tet), inner);
+                        list.grad[t..t + n].fill(grad);
+                        if let Some((_, flags)) = list.kept.as_mut() {
+                            flags[t..t + n].fill(u8::from(kept));
+                        }
+                    }
+                    if let Some(cells) = cells.as_deref_mut() {
+                        cells[t..t + n].fill(cell);
+                    }
+                }
+                at += 3 * n;
+            }
+            w = at;
             return;
         }
-        let flip = if v[anchor] < iso { 15 } else { 0 };
-        let tets = group.cases.len() >> group.len;
-        for (j, &rel) in group.cases[code * tets..(code + 1) * tets]
-            .iter()
-            .enumerate()
-        {
-            let ti = first + j;
-            tet(
-                anchor,
-                ti,
-                &l.tets[ti],
-                usize::from(rel) ^ flip,
-                inner,
-                kept,
-                cell,
+        for cycle in &group.cycles[range] {
+            let e = cycle.edges;
+            let mut tris = [[0u32; 3]; 2];
+            let n = if e[3] == u8::MAX {
+                tris[0] = [
+                    ids[usize::from(e[0])],
+                    ids[usize::from(e[1])],
+                    ids[usize::from(e[2])],
+                ];
+                1
+            } else {
+                tris = split_quad(e.map(|e| ids[usize::from(e)]), positions);
+                2
+            };
+            debug_assert_eq!(
+                {
+                    let ti = first + usize::from(cycle.tet);
+                    let tpl = &l.tets[ti];
+                    let case = (0..4).fold(0, |c, i| {
+                        c | usize::from(v[(anchor as isize + tpl.delta[i]) as usize] < iso) << i
+                    });
+                    let edge = |a: usize, b: usize| {
+                        let at = |o: usize| crossed.get((anchor as isize + tpl.delta[o]) as usize);
+                        if at(a).owned >> tpl.dir[a][b] & 1 != 0 {
+                            at(a).id(tpl.dir[a][b])
+                        } else {
+                            at(b).id(tpl.dir[b][a])
+                        }
+                    };
+                    let mut reference = [[0u32; 3]; 2];
+                    let m = case_triangles_of(case, edge, positions, &mut reference);
+                    reference[..m].to_vec()
+                },
+                tris[..n].to_vec(),
+                "tetrahedron {} of anchor {anchor}",
+                cycle.tet
             );
+            match map {
+                None => unreachable!("plain MT's triangles are written above"),
+                Some(map) => {
+                    // Clustered: the vertices of the groups' quotient; a triangle with two
+                    // corners in one group collapsed and is dropped.
+                    for t in &tris[..n] {
+                        let q = t.map(|i| map[i as usize]);
+                        if q[0] != q[1] && q[1] != q[2] && q[0] != q[2] {
+                            if let Some(cells) = cells.as_deref_mut() {
+                                cells[w / 3] = cell;
+                            }
+                            out[w..w + 3].copy_from_slice(&q);
+                            w += 3;
+                        }
+                    }
+                }
+            }
         }
     });
     debug_assert!(
@@ -412,40 +486,54 @@ mod tests {
                 ];
                 for keep in keeps {
                     let mut total = 0;
+                    let mut per_layer = Vec::new();
                     for k in 0..layers {
                         let mut direct = 0;
-                        for_each_group(&l, k, keep, &buf.vertices.crossed, |anchor, _, g, q| {
-                            let tets = match lattice {
-                                Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
-                                Lattice::Simple => &l.tets[..],
-                            };
-                            // The walk's coordinates are the anchor's, and `inner_anchor`
-                            // promises every corner in the box (no ghost).
-                            let p = l.coords_of(anchor);
-                            assert_eq!(q, p, "{lattice:?} {cells:?}");
-                            let inner = l.inner_anchor(p);
-                            let in_box = tets.iter().all(|tpl| {
-                                tpl.off.iter().all(|o| {
-                                    (0..3)
-                                        .all(|a| p[a] + o[a] >= 0 && p[a] + o[a] <= l.max_coord(a))
-                                })
-                            });
-                            assert!(!inner || in_box, "{lattice:?} {cells:?} anchor {p:?}");
-                            flags[usize::from(inner)] += 1;
-                            for tpl in tets {
-                                let case = (0..4).fold(0, |case, i| {
-                                    let slot = (anchor as isize + tpl.delta[i]) as usize;
-                                    case | usize::from(samples.values[slot] < settings.iso) << i
+                        for_each_group::<false>(
+                            &l,
+                            k,
+                            keep,
+                            &buf.vertices.crossed,
+                            |anchor, _, g, q| {
+                                let tets = match lattice {
+                                    Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
+                                    Lattice::Simple => &l.tets[..],
+                                };
+                                // The walk's coordinates are the anchor's, and `inner_anchor`
+                                // promises every corner in the box (no ghost).
+                                let p = l.coords_of(anchor);
+                                assert_eq!(q, p, "{lattice:?} {cells:?}");
+                                let inner = l.inner_anchor(p);
+                                let in_box = tets.iter().all(|tpl| {
+                                    tpl.off.iter().all(|o| {
+                                        (0..3).all(|a| {
+                                            p[a] + o[a] >= 0 && p[a] + o[a] <= l.max_coord(a)
+                                        })
+                                    })
                                 });
-                                direct += usize::from(case_triangles(case));
-                            }
-                        });
+                                assert!(!inner || in_box, "{lattice:?} {cells:?} anchor {p:?}");
+                                flags[usize::from(inner)] += 1;
+                                for tpl in tets {
+                                    let case = (0..4).fold(0, |case, i| {
+                                        let slot = (anchor as isize + tpl.delta[i]) as usize;
+                                        case | usize::from(samples.values[slot] < settings.iso) << i
+                                    });
+                                    direct += usize::from(case_triangles(case));
+                                }
+                            },
+                        );
                         let counted = count_layer(&l, k, keep, &buf.vertices.crossed);
                         assert_eq!(counted, direct, "{lattice:?} {cells:?} layer {k} {keep:?}");
                         total += counted;
+                        per_layer.push(counted);
                     }
                     if keep.is_none() {
                         assert_eq!(total * 3, mesh.indices.len(), "{lattice:?} {cells:?}");
+                        // The counts the numbering kept per plane give the same layers.
+                        let planes = buf.vertices.crossed.plane_triangles.len();
+                        assert_eq!(planes, samples.dims[2], "{lattice:?} {cells:?}");
+                        let numbered = layer_counts(&l, None, &buf.vertices.crossed, &pool);
+                        assert_eq!(numbered, per_layer, "{lattice:?} {cells:?}");
                     }
                     triangles += total;
                 }

@@ -99,24 +99,34 @@ pub(crate) fn case_triangles_of(
         out[0] = [ids[0], ids[1], ids[2]];
         1
     } else {
-        // Split along the shorter diagonal, chosen by a table index rather than a branch (the
-        // choice is data-dependent and mispredicts half the time).
-        const SPLITS: [[usize; 6]; 2] = [[1, 2, 3, 1, 3, 0], [0, 1, 2, 0, 2, 3]];
-        let p = |i: u32| glam::Vec3::from(positions[i as usize]);
-        let short02 =
-            p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
-        let s = &SPLITS[usize::from(short02)];
-        out[0] = [ids[s[0] & 3], ids[s[1] & 3], ids[s[2] & 3]];
-        out[1] = [ids[s[3] & 3], ids[s[4] & 3], ids[s[5] & 3]];
+        *out = split_quad(ids, positions);
         2
     }
+}
+
+/// The two triangles of the quad of crossings `ids` (a case table cycle), split along its
+/// shorter diagonal (0-2 on a tie).
+#[inline(always)]
+pub(crate) fn split_quad(ids: [u32; 4], positions: &[[f32; 3]]) -> [[u32; 3]; 2] {
+    // The diagonal chosen by a table index rather than a branch (the choice is data-dependent
+    // and mispredicts half the time).
+    const SPLITS: [[usize; 6]; 2] = [[1, 2, 3, 1, 3, 0], [0, 1, 2, 0, 2, 3]];
+    let p = |i: u32| glam::Vec3::from(positions[i as usize]);
+    let short02 = p(ids[0]).distance_squared(p(ids[2])) <= p(ids[1]).distance_squared(p(ids[3]));
+    let s = &SPLITS[usize::from(short02)];
+    [
+        [ids[s[0] & 3], ids[s[1] & 3], ids[s[2] & 3]],
+        [ids[s[3] & 3], ids[s[4] & 3], ids[s[5] & 3]],
+    ]
 }
 
 /// Whether the end with value `f` (inside iff `f < iso`) owns the crossing shared with `g`.
 #[inline(always)]
 pub(crate) fn owns(f: f32, g: f32, iso: f32) -> bool {
     let (df, dg) = ((f - iso).abs(), (g - iso).abs());
-    df < dg || (df == dg && f < iso)
+    // Without short-circuits: three comparisons and no branch (the outcome is data, and the
+    // vertex pass asks once per crossed edge).
+    (df < dg) | ((df == dg) & (f < iso))
 }
 
 /// A tetrahedron with storage-index deltas from a reference point and edge directions.
@@ -154,6 +164,42 @@ pub(crate) struct TetGroup {
     /// The index into `triangles` and `cases` from the anchor's crossed edges, by their low 7
     /// and high 7 neighbour bits (or'ed): bit i set when point i's edge is crossed.
     code_parts: [[u8; 128]; 2],
+    /// The group's edges as its tetrahedra name them (corner a to corner b, a < b in the
+    /// tetrahedron, the order [`case_triangles_of`] asks for them), each once: the geometry
+    /// pass finds the crossing on each crossed one once per group, not once per triangle corner.
+    pub(crate) edges: Vec<GroupEdge>,
+    /// Per index (as in `triangles`): the edges of `edges` that the group's cycles name (bit k:
+    /// edge k), all crossed.
+    pub(crate) crossed_edges: Vec<u64>,
+    /// Per index and anchor side (entry `2 * code + inside`), the range of `cycles` holding its
+    /// tetrahedra's cycles (`cycle_start[i]..cycle_start[i + 1]`).
+    pub(crate) cycle_start: Vec<u16>,
+    /// The cycles of crossed edges of the group's tetrahedra, in template order, each the
+    /// case table's cycle ([`CASES`]) with its tetrahedron's edges replaced by the group's.
+    pub(crate) cycles: Vec<GroupCycle>,
+}
+
+/// The most edges a [`TetGroup`] has: a cube's 6 tetrahedra have 19 (its 12 edges, 6 face
+/// diagonals and the main diagonal; each named in one direction only), a body-centred face's 4
+/// have 13.
+pub(crate) const MAX_GROUP_EDGES: usize = 19;
+
+/// An edge of a [`TetGroup`]: from point `from` to point `to` (indices into the group's
+/// points), with the neighbour index of each end seen from the other.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct GroupEdge {
+    pub(crate) from: u8,
+    pub(crate) to: u8,
+    /// Neighbour index of `to` seen from `from`, and of `from` seen from `to`.
+    pub(crate) dir: [u8; 2],
+}
+
+/// One tetrahedron's cycle of crossed edges ([`CASES`]) in a group: indices into the group's
+/// edges (the fourth `u8::MAX` for a triangle), and the tetrahedron (its index in the group).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct GroupCycle {
+    pub(crate) edges: [u8; 4],
+    pub(crate) tet: u8,
 }
 
 impl TetGroup {
@@ -176,6 +222,10 @@ impl TetGroup {
             triangles: Vec::new(),
             cases: Vec::new(),
             code_parts: [[0; 128]; 2],
+            edges: Vec::new(),
+            crossed_edges: Vec::new(),
+            cycle_start: Vec::new(),
+            cycles: Vec::new(),
         };
         let mut corners = Vec::with_capacity(tets.len());
         for tpl in tets {
@@ -210,6 +260,58 @@ impl TetGroup {
                 })
             })
             .collect();
+        // Each tetrahedron's edges as group edges (first use numbers them).
+        let tet_edges: Vec<[u8; 6]> = tets
+            .iter()
+            .zip(&corners)
+            .map(|(tpl, c)| {
+                TET_EDGES.map(|(a, b)| {
+                    let e = GroupEdge {
+                        from: c[a] as u8,
+                        to: c[b] as u8,
+                        dir: [tpl.dir[a][b], tpl.dir[b][a]],
+                    };
+                    let k = match group.edges.iter().position(|&x| x == e) {
+                        Some(k) => k,
+                        None => {
+                            group.edges.push(e);
+                            group.edges.len() - 1
+                        }
+                    };
+                    k as u8
+                })
+            })
+            .collect();
+        assert!(
+            group.edges.len() <= MAX_GROUP_EDGES,
+            "a group's edges fit the geometry pass's array"
+        );
+        for code in 0..1usize << group.len {
+            let mut crossed = 0u64;
+            for flip in [0, 15] {
+                group.cycle_start.push(group.cycles.len() as u16);
+                for (j, c) in corners.iter().enumerate() {
+                    let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i) ^ flip;
+                    if case == 0 || case == 15 {
+                        continue;
+                    }
+                    let edges = CASES[case].map(|e| {
+                        if e == u8::MAX {
+                            u8::MAX
+                        } else {
+                            crossed |= 1 << tet_edges[j][e as usize];
+                            tet_edges[j][e as usize]
+                        }
+                    });
+                    group.cycles.push(GroupCycle {
+                        edges,
+                        tet: j as u8,
+                    });
+                }
+            }
+            group.crossed_edges.push(crossed);
+        }
+        group.cycle_start.push(group.cycles.len() as u16);
         group.triangles = (0..1usize << group.len)
             .map(|code| {
                 corners
@@ -799,6 +901,68 @@ pub(crate) fn add(a: Offset, b: Offset) -> Offset {
 mod tests {
     use super::*;
     use crate::mt::testing::{lcg, plain_mt, test_pool};
+
+    #[test]
+    fn group_cycles_are_the_case_tables_cycles_of_each_tetrahedron_in_template_order() {
+        // For every group, code and anchor side, the group's cycles name, tetrahedron by
+        // tetrahedron, the case table's crossed edges (corner a to corner b, a < b, and their
+        // directions), and the crossed-edge mask holds exactly the edges they name.
+        let pool = test_pool(1);
+        let field = crate::mt::testing::wavy();
+        let mut cycles = 0;
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            let (_, samples, _, _) = plain_mt(&field, lattice, [4, 4, 4], &pool);
+            let l = Layout::new(&samples, lattice);
+            for (g, group) in l.groups.iter().enumerate() {
+                let tets = match lattice {
+                    Lattice::BodyCentred => &l.tets[4 * g..4 * g + 4],
+                    Lattice::Simple => &l.tets[..],
+                };
+                assert!(group.edges.len() <= MAX_GROUP_EDGES, "{lattice:?}");
+                let point = |d: isize| group.points[..group.len].iter().position(|&p| p == d);
+                for code in 0..1usize << group.len {
+                    let mut named = 0u64;
+                    for side in 0..2 {
+                        let mut expected = Vec::new();
+                        for (j, tpl) in tets.iter().enumerate() {
+                            let corner = tpl.delta.map(|d| point(d).expect("a group point"));
+                            let case = (0..4).fold(0, |c, i| c | ((code >> corner[i]) & 1) << i)
+                                ^ (15 * side);
+                            for &e in CASES[case].iter().filter(|&&e| e != u8::MAX) {
+                                let (a, b) = TET_EDGES[e as usize];
+                                let edge = GroupEdge {
+                                    from: corner[a] as u8,
+                                    to: corner[b] as u8,
+                                    dir: [tpl.dir[a][b], tpl.dir[b][a]],
+                                };
+                                expected.push((j, CASES[case][3] == u8::MAX, edge));
+                            }
+                        }
+                        let range = usize::from(group.cycle_start[2 * code + side])
+                            ..usize::from(group.cycle_start[2 * code + side + 1]);
+                        let mut got = Vec::new();
+                        for cycle in &group.cycles[range] {
+                            cycles += 1;
+                            for &e in cycle.edges.iter().filter(|&&e| e != u8::MAX) {
+                                named |= 1 << e;
+                                got.push((
+                                    usize::from(cycle.tet),
+                                    cycle.edges[3] == u8::MAX,
+                                    group.edges[usize::from(e)],
+                                ));
+                            }
+                        }
+                        assert_eq!(
+                            got, expected,
+                            "{lattice:?} group {g} code {code} side {side}"
+                        );
+                    }
+                    assert_eq!(group.crossed_edges[code], named, "{lattice:?} group {g}");
+                }
+            }
+        }
+        assert!(cycles > 1000, "only {cycles} cycles");
+    }
 
     #[test]
     fn positions_from_the_axis_tables_are_the_samples_positions_bit_for_bit() {
