@@ -81,17 +81,21 @@ pub fn red(t: &Tet) -> [Tet; 8] {
     let len = |k: usize| super::lattice::d2(m[DIAG[k].0], m[DIAG[k].1]);
     let best = (0..3).min_by_key(|&k| (len(k), k)).unwrap_or(0);
     let (p, q) = DIAG[best];
-    // The other four edges in a ring (consecutive ones share a vertex).
-    let mut rest: Vec<usize> = (0..6).filter(|&e| e != p && e != q).collect();
-    let mut ring = vec![rest.remove(0)];
-    while !rest.is_empty() {
-        let last = EDGES[ring[ring.len() - 1]];
+    // The other four edges in a ring (consecutive ones share a vertex); no allocation.
+    let mut ring = [0usize; 4];
+    let mut used = [false; 6];
+    used[p] = true;
+    used[q] = true;
+    ring[0] = (0..6).find(|&e| !used[e]).unwrap_or(0);
+    used[ring[0]] = true;
+    for r in 1..4 {
+        let last = EDGES[ring[r - 1]];
         let shares = |e: usize| {
             let (a, b) = EDGES[e];
             a == last.0 || a == last.1 || b == last.0 || b == last.1
         };
-        let i = rest.iter().position(|&e| shares(e)).unwrap_or(0);
-        ring.push(rest.remove(i));
+        ring[r] = (0..6).find(|&e| !used[e] && shares(e)).unwrap_or(0);
+        used[ring[r]] = true;
     }
     let e = |a: usize, b: usize| {
         let k = EDGES
