@@ -47,6 +47,7 @@ echo "-- render (18 small turntables)"
 "$bin" render "$run" --width 120 --height 90 --frames 12 --supersampling 2 --seed 7 > "$out/render.log" 2>&1
 
 echo "-- serve"
+: > "$out/serve.log"  # exists before the server opens it, for the sed below
 "$bin" survey serve "$run" --addr 127.0.0.1:0 --controls 2 > "$out/serve.log" 2>&1 &
 server=$!
 trap 'kill "$server" 2>/dev/null || true' EXIT
@@ -83,6 +84,7 @@ done
 grep -q '^participants,1$' "$out/analysis/summary.csv" || { echo "analysis is not of one participant"; cat "$out/analysis/summary.csv"; exit 1; }
 echo "-- serve a balanced subset: --per-participant $per (own database)"
 rm -f "$out/subset.sqlite"*
+: > "$out/subset-serve.log"
 "$bin" survey serve "$run" --addr 127.0.0.1:0 --controls 2 --per-participant "$per" \
   --db "$out/subset.sqlite" > "$out/subset-serve.log" 2>&1 &
 server=$!
@@ -108,43 +110,6 @@ trap - EXIT
 
 echo "-- export: exactly that participant's $per answers, with the sides the screen showed"
 "$bin" survey export "$out/subset.sqlite" --out "$out/subset-export"
-/usr/bin/python3 - "$run" "$out/subset-export" "$out/subset-screens.json" "$per" <<'PY'
-import csv, json, os, sys
-run, export, screens, per = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
-def rows(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-name_of = {r["id"]: r["name"] for r in rows(os.path.join(run, "key.csv"))}
-canonical = {r["question"]: (name_of[r["left"]], name_of[r["right"]])
-             for r in rows(os.path.join(export, "questions.csv"))}
-seen = {s["position"]: s for s in json.load(open(screens))}
-responses = rows(os.path.join(export, "responses.csv"))
-controls = rows(os.path.join(export, "controls.csv"))
-participants = rows(os.path.join(export, "participants.csv"))
-# One participant, who answered the N real questions of the subset and the 2 controls.
-assert len(participants) == 1, participants
-p = participants[0]
-assert (p["answered"], p["total"], p["completed"]) == (str(per + 2),) * 2 + ("1",), p
-assert len(seen) == per + 2, f"the browser answered {len(seen)} screens, not {per + 2}"
-assert len(responses) == per, f"{len(responses)} answers exported, not {per}"
-assert len({r["question"] for r in responses}) == per, "a question answered twice"
-assert len(canonical) > per, f"the subset is the whole questionnaire ({len(canonical)} questions)"
-flip = {"L": "R", "R": "L", "N": "N"}
-for r in responses:
-    assert r["participant"] == p["participant"], r
-    screen = seen[int(r["order"])]
-    left, right = canonical[r["question"]]
-    shown = (right, left) if r["swapped"] == "1" else (left, right)
-    assert (screen["left"], screen["right"]) == shown, (r, screen, (left, right))
-    want = flip[screen["clicked"]] if r["swapped"] == "1" else screen["clicked"]
-    assert r["response"] == want, (r, screen)
-assert len(controls) == 2, controls
-for c in controls:
-    screen = seen[int(c["order"])]
-    assert screen["left"] == screen["right"] == c["name"], (c, screen)
-    assert c["response"] == screen["clicked"], (c, screen)
-swapped = sum(r["swapped"] == "1" for r in responses)
-print(f"   {per} answers of {len(canonical)} questions, {swapped} shown swapped, "
-      f"2 controls: every answer as its screen showed it")
-PY
+/usr/bin/python3 crates/server/tests/browser/check_subset.py "$run" "$out/subset-export" \
+  "$out/subset-screens.json" "$per" 2
 echo "survey end to end: ok ($out)"
