@@ -12,7 +12,7 @@
 
 use std::collections::HashSet;
 
-use super::LodError;
+use super::error::LodError;
 
 /// The shape of a multiresolution world: levels `0..=levels` (0 finest), chunks of `chunk^3`
 /// cells at every level, `roots` chunks of the coarsest level along each axis.

@@ -27,10 +27,10 @@
 //! level maps, chunk by chunk against one window over the whole world, tet for tet (a margin
 //! of one cell of level `k + 1` also passed 100 maps; two are used).
 
+use super::error::LodError;
 use super::lattice::{bbox, bcc_tet, canonical, cell_size, centroid4, Tet};
 use super::level_map::{ChunkKey, LevelMap};
 use super::refine::{closure, green, split_mask, vertices, Leaf, TetKind};
-use super::LodError;
 
 /// One tetrahedron of the multiresolution mesh.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -61,7 +61,10 @@ pub fn dependency_box(map: &LevelMap, chunk: &ChunkKey) -> ([i64; 3], [i64; 3]) 
 /// The tets of `chunk` (a leaf of `map`), sorted.
 pub fn chunk_tets(map: &LevelMap, chunk: &ChunkKey) -> Result<Vec<MeshTet>, LodError> {
     if !map.contains(chunk) {
-        return Err(LodError::NoSuchChunk(*chunk));
+        return Err(LodError::NoSuchChunk {
+            level: chunk.level,
+            at: chunk.at,
+        });
     }
     let g = map.geometry();
     let (lo, hi) = chunk.bounds(g);
@@ -127,7 +130,10 @@ pub fn world_tets(map: &LevelMap) -> Result<Vec<(usize, MeshTet)>, LodError> {
         let i = map
             .chunks()
             .binary_search(&k)
-            .map_err(|_| LodError::NoSuchChunk(k))?;
+            .map_err(|_| LodError::NoSuchChunk {
+                level: k.level,
+                at: k.at,
+            })?;
         out.push((i, t));
     }
     out.sort_unstable();

@@ -24,6 +24,7 @@
 //! Not here (yet): clustering across levels (plain marching tetrahedra only), edits, morphing.
 
 pub mod check;
+pub mod error;
 pub mod lattice;
 pub mod level_map;
 pub mod mesh;
@@ -31,22 +32,9 @@ pub mod mt;
 pub mod refine;
 pub mod world;
 
+pub use error::LodError;
 pub use level_map::{ChunkKey, LevelMap, LodGeometry};
 pub use mesh::{chunk_tets, world_tets, MeshTet};
 pub use mt::{march, weld, ChunkMesh, LodFrame};
 pub use refine::TetKind;
 pub use world::{mesh_chunks, mesh_whole, thread_pool, LodRemesh, LodSettings, LodWorld};
-
-/// Why a multiresolution mesh could not be built.
-#[derive(Debug, thiserror::Error)]
-pub enum LodError {
-    /// Bad geometry or settings.
-    #[error("invalid level-of-detail settings: {0}")]
-    Invalid(String),
-    /// A chunk that is not a leaf of the level map.
-    #[error("chunk {0:?} is not in the level map")]
-    NoSuchChunk(ChunkKey),
-    /// The closure left a pattern no green template handles (a bug, never expected).
-    #[error("closure incomplete: {0}")]
-    Closure(String),
-}

@@ -27,8 +27,8 @@
 
 use foldhash::HashSet;
 
+use super::error::LodError;
 use super::lattice::{mid, orient, Point, Tet, EDGES, FACES};
-use super::LodError;
 
 /// The edges (indices into [`EDGES`]) of each face of [`FACES`].
 pub const FACE_EDGES: [[usize; 3]; 4] = [[3, 4, 5], [1, 2, 5], [0, 2, 4], [0, 1, 3]];

@@ -22,11 +22,11 @@ use rayon::prelude::*;
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
 
+use super::error::LodError;
 use super::lattice::Point;
 use super::level_map::{ChunkKey, LevelMap, LodGeometry};
 use super::mesh::{chunk_tets, dependency_box, world_tets, MeshTet};
 use super::mt::{march, weld, ChunkMesh, LodFrame};
-use super::LodError;
 
 /// What a multiresolution world is.
 #[derive(Clone, Copy, Debug, PartialEq)]
