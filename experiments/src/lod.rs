@@ -300,6 +300,37 @@ fn grid_of<'a>(meshes: impl Iterator<Item = &'a ChunkMesh>, cell: f32) -> Triang
     TriangleGrid::new(tris, cell)
 }
 
+/// One side of a pop: chunk `k`'s surface `mesh` against the other side's surfaces
+/// (`other_mesh`) of the leaves of `other` touching it, in cells of the finer level among `k`
+/// and the leaves overlapping it.
+fn pop_side<'a>(
+    k: &ChunkKey,
+    mesh: &ChunkMesh,
+    other: &LevelMap,
+    other_mesh: impl Fn(&ChunkKey) -> Option<&'a ChunkMesh>,
+    geom: &LodGeometry,
+    h: f32,
+) -> Pop {
+    let b = k.bounds(geom);
+    let around = other.leaves_touching(b.0, b.1);
+    let finer = around
+        .iter()
+        .filter(|n| overlaps(n.bounds(geom), b))
+        .map(|n| n.level)
+        .fold(k.level, u8::min);
+    let cell = h * (1u32 << finer) as f32;
+    let target = grid_of(around.iter().filter_map(other_mesh), 2.0 * cell);
+    let points = &mesh.positions;
+    match one_sided(points, &target) {
+        Some((max, mean)) => Pop {
+            max_cells: max / cell,
+            sum_cells: f64::from(mean) / f64::from(cell) * points.len() as f64,
+            points: points.len(),
+        },
+        None => Pop::default(),
+    }
+}
+
 /// The pop of one step: every chunk that left the map against the new surface around it, and
 /// every chunk that entered against the old surface around it.
 fn measure_pop<F: ScalarField>(
@@ -314,54 +345,17 @@ fn measure_pop<F: ScalarField>(
     let Some(new) = world.level_map() else {
         return pop;
     };
-    let mut side = |points: &[[f32; 3]], target: &TriangleGrid, level: u8| {
-        let cell = h * (1u32 << level) as f32;
-        if let Some((max, mean)) = one_sided(points, target) {
-            pop.add(Pop {
-                max_cells: max / cell,
-                sum_cells: f64::from(mean) / f64::from(cell) * points.len() as f64,
-                points: points.len(),
-            });
-        }
-    };
     // Old surface -> new surface.
     for k in leaving {
-        let b = k.bounds(geom);
-        let Some(mesh) = old_meshes.get(k) else {
-            continue;
-        };
-        let around = new.leaves_touching(b.0, b.1);
-        let finer = around
-            .iter()
-            .filter(|n| overlaps(n.bounds(geom), b))
-            .map(|n| n.level)
-            .chain([k.level])
-            .min()
-            .unwrap_or(k.level);
-        let cell = h * (1u32 << finer) as f32;
-        let target = grid_of(
-            around.iter().filter_map(|n| world.chunk_mesh(n)),
-            2.0 * cell,
-        );
-        side(&mesh.positions, &target, finer);
+        if let Some(mesh) = old_meshes.get(k) {
+            pop.add(pop_side(k, mesh, new, |n| world.chunk_mesh(n), geom, h));
+        }
     }
     // New surface -> old surface.
     for k in new.chunks().iter().filter(|c| !old.contains(c)) {
-        let b = k.bounds(geom);
-        let Some(mesh) = world.chunk_mesh(k) else {
-            continue;
-        };
-        let around = old.leaves_touching(b.0, b.1);
-        let finer = around
-            .iter()
-            .filter(|n| overlaps(n.bounds(geom), b))
-            .map(|n| n.level)
-            .chain([k.level])
-            .min()
-            .unwrap_or(k.level);
-        let cell = h * (1u32 << finer) as f32;
-        let target = grid_of(around.iter().filter_map(|n| old_meshes.get(n)), 2.0 * cell);
-        side(&mesh.positions, &target, finer);
+        if let Some(mesh) = world.chunk_mesh(k) {
+            pop.add(pop_side(k, mesh, old, |n| old_meshes.get(n), geom, h));
+        }
     }
     pop
 }
