@@ -1,17 +1,19 @@
 """The Python overhead of rmt_terrain.extract over the Rust extraction it runs, on a 64^3
 float32 volume (a sphere's signed distance): the wall time of the Python call against the
 extractor's own ``stats["t_total_s"]`` (Rust, ``Extractor::extract_borrowed`` plus gradient
-normals), median of interleaved repetitions. The overhead is the argument checks, the scan of
-the volume for non-finite values (``stats["t_input_s"]``; the volume itself is read in place,
-not copied), turning the mesh into array order (z, y, x), and wrapping the result.
+normals), median of interleaved repetitions. The overhead is the argument checks, turning the
+mesh into array order (z, y, x) (``stats["t_reorder_s"]``; marching cubes writes its mesh in
+that order itself, so it needs no such pass), and wrapping the result (``stats["t_input_s"]``, the binding's
+own input work, is about 0 here: the volume is read in place, not copied, and the extractor's
+first pass refuses NaN and infinities as it classifies the values, for any Rust caller too, so
+that check is inside ``t_total_s``).
 ``t_total_s`` is the time of the Rust call as a Rust program makes it: the extractor, called
 from the caller's thread, hands its work to a pool of ``threads`` workers (the wake-up and the
 hand-back are inside it, as they are for a Rust caller) and fills a fresh ``Mesh``; timed from
 outside in a Rust program, that call takes ``t_total_s`` to within a few microseconds. The
-binding's own work (the scan, the reordering) runs on the calling thread, outside that call
-(the scan on the pool only from 2^22 values), so the Rust call's pool wake-up is not counted
-as overhead, and none of the binding's work is inside ``t_total_s`` except gradient normals
-(Rust work the library does itself when it has a field).
+binding's own work (the reordering of marching tetrahedra's mesh) runs on the calling thread, outside that call, so the Rust
+call's pool wake-up is not counted as overhead, and none of the binding's work is inside
+``t_total_s`` except gradient normals (Rust work the library does itself when it has a field).
 Then the cost of ``extract_field``'s callable beyond the callable's own work, per lattice point
 (64^3 cells, body-centred: 561,345 points).
 

@@ -30,8 +30,8 @@ Conventions
   Our ``normals`` also point toward increasing values; scikit-image's point the other way.
 * ``volume`` may be any floating-point array. A C-contiguous float32 array is used without a
   copy: on the simple lattice (and for ``method="mc"`` and ``"surface-nets"``) the extractor
-  reads it in place, after a vectorised scan for non-finite values (``stats["t_input_s"]``;
-  ``stats["input_copied"]`` is False). Other float arrays are converted to C-contiguous float32
+  reads it in place and refuses non-finite values in its first pass over them, which reads
+  every value anyway (no scan of its own; ``stats["input_copied"]`` is False). Other float arrays are converted to C-contiguous float32
   first (one copy, by numpy). The body-centred lattice interleaves corner and centre planes in
   its sample array, so there the values are copied into it (``stats["input_copied"]`` True).
   Do not write to the volume from another thread during the call.
@@ -87,8 +87,11 @@ class Mesh:
         Counters and stage times of the extraction (the command line's ``--json`` keys:
         ``vertices``, ``triangles``, ``crossings``, ``clusters_committed``, ``t_total_s``,
         ``t_sampling_s``, ``t_vertex_s``, ``t_geometry_s``, ``t_normals_s``, ...).
-        ``t_total_s`` is the Rust extraction (with gradient normals), ``t_input_s`` the copy
-        and check of the input before it, ``t_call_s`` the whole compiled call (input, extraction
+        ``t_total_s`` is the Rust extraction (with gradient normals; on the simple lattice
+        its first pass also checks the values for NaN and infinities), ``t_input_s`` the copy
+        and check of the input before it (body-centred lattice; about 0 otherwise),
+        ``t_reorder_s`` turning the mesh into array order after it (0 for marching cubes,
+        which writes it in that order), ``t_call_s`` the whole compiled call (input, extraction
         and conversion of the result; the rest of a call's time is the Python wrapper).
         ``input_copied`` (from :func:`extract`) says whether the volume was copied into the
         extractor's sample array (body-centred lattice) or read in place.

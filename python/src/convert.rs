@@ -31,9 +31,10 @@ fn reverse_triples(v: &mut [[f32; 3]]) {
 /// coordinates of every position and normal swapped, and every triangle's last two corners,
 /// since swapping two axes mirrors the mesh: so its triangles stay counter-clockwise seen from
 /// increasing values in the new frame. Exact (no arithmetic); doing it twice gives the mesh
-/// back. One pass at memory speed (about 15 us for the 38k triples of a 64^3 sphere by
-/// marching cubes, 60 us for the 113k of plain marching tetrahedra): not worth waking the
-/// worker pool for.
+/// back. One pass at memory speed (about 90 us for the 28k vertices and 57k triangles of a 64^3
+/// sphere by plain marching tetrahedra, under load): not worth waking the worker pool for.
+/// Marching cubes needs none: it writes its mesh in array order itself
+/// (`Extractor::set_array_order`).
 pub fn to_array_order(mesh: &mut Mesh) {
     reverse_triples(&mut mesh.positions);
     reverse_triples(&mut mesh.normals);

@@ -233,17 +233,22 @@ fn extract_volume<'py>(
         centres: centres_slice,
     };
     let gradient = options.normals == "gradient";
-    let (mesh, stats, t_input, copied) =
-        py.detach(|| -> Result<(Mesh, Stats, f64, bool), errors::Error> {
+    let (mesh, stats, t_input, t_reorder, copied) =
+        py.detach(|| -> Result<(Mesh, Stats, f64, f64, bool), errors::Error> {
             let mut ex = pool::take();
             let result = (|| {
                 let t = std::time::Instant::now();
                 let workers = pool::workers(settings.threads)?;
                 ex.set_pool(workers.clone());
-                // In place when the storage is the volume's own (simple lattice); the
-                // body-centred lattice interleaves corner and centre planes: a copy. Checked
-                // on this thread (the pool only for a large volume): the extractor hands its
-                // work to the pool itself, as it does for a caller in Rust.
+                // Marching cubes writes the mesh in array order itself (no pass of its own);
+                // the other methods' meshes are turned below.
+                let array_order = settings.method == Method::Mc;
+                ex.set_array_order(array_order);
+                // In place when the storage is the volume's own (simple lattice), checked for
+                // non-finite values by the extractor's first pass; the body-centred lattice
+                // interleaves corner and centre planes: a copy, checked here on this thread
+                // (the pool only for a large volume). The extractor hands its work to the
+                // pool itself, as it does for a caller in Rust.
                 let in_place = input.check_or_fill(&settings, ex.samples_mut(), &workers)?;
                 let t_input = t.elapsed().as_secs_f64();
                 let mut mesh = Mesh::default();
@@ -252,16 +257,19 @@ fn extract_volume<'py>(
                 } else {
                     ex.extract_presampled(&settings, &mut mesh)
                 };
-                let mut stats = extracted.map_err(|e| errors::Error::Library(e.to_string()))?;
+                let mut stats = extracted.map_err(|e| input.library_error(e))?;
                 if gradient {
                     let t = std::time::Instant::now();
-                    normals::from_volume(&input, &settings.grid, &mut mesh);
+                    normals::from_volume(&input, &settings.grid, array_order, &mut mesh);
                     stats.t_normals_s += t.elapsed().as_secs_f64();
                     stats.t_total_s += stats.t_normals_s;
                 }
                 // Array order before the GIL is taken back.
-                convert::to_array_order(&mut mesh);
-                Ok((mesh, stats, t_input, !in_place))
+                let t = std::time::Instant::now();
+                if !array_order {
+                    convert::to_array_order(&mut mesh);
+                }
+                Ok((mesh, stats, t_input, t.elapsed().as_secs_f64(), !in_place))
             })();
             pool::give_back(ex);
             result
@@ -271,7 +279,7 @@ fn extract_volume<'py>(
         mesh,
         &stats,
         &settings.grid,
-        &[("t_input_s", t_input)],
+        &[("t_input_s", t_input), ("t_reorder_s", t_reorder)],
         &[("input_copied", copied)],
         convert::Axes::Array,
         started,
@@ -346,6 +354,7 @@ fn extract_field<'py>(
     let workers = pool::workers(options.threads)?;
     let mut ex = pool::take();
     ex.set_pool(workers);
+    ex.set_array_order(false);
     let t_sampling = match field::sample(f, &settings, ex.samples_mut(), batch.max(1)) {
         Ok(t) => t,
         Err(e) => {

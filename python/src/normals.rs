@@ -8,8 +8,9 @@ use rmt_mesh::Mesh;
 
 use crate::volume::Input;
 
-/// Sets `mesh.normals` from the gradient of `input`'s corner values on `grid`.
-pub fn from_volume(input: &Input<'_>, grid: &Grid, mesh: &mut Mesh) {
+/// Sets `mesh.normals` from the gradient of `input`'s corner values on `grid`; with
+/// `array_order`, the mesh's positions are `[z, y, x]` and the normals are written so.
+pub fn from_volume(input: &Input<'_>, grid: &Grid, array_order: bool, mesh: &mut Mesh) {
     let [nx, ny, nz] = grid.cells;
     let n = [nx, ny, nz];
     let s = grid.spacing();
@@ -29,7 +30,8 @@ pub fn from_volume(input: &Input<'_>, grid: &Grid, mesh: &mut Mesh) {
     mesh.normals.clear();
     mesh.normals.reserve(mesh.positions.len());
     for p in &mesh.positions {
-        let u = (Vec3::from(*p) - grid.min) / s;
+        let p = if array_order { [p[2], p[1], p[0]] } else { *p };
+        let u = (Vec3::from(p) - grid.min) / s;
         let mut c0 = [0usize; 3];
         let mut t = [0.0f32; 3];
         for a in 0..3 {
@@ -53,6 +55,8 @@ pub fn from_volume(input: &Input<'_>, grid: &Grid, mesh: &mut Mesh) {
                 g += grad(c) * w;
             }
         }
-        mesh.normals.push(g.normalize_or_zero().to_array());
+        let n = g.normalize_or_zero().to_array();
+        mesh.normals
+            .push(if array_order { [n[2], n[1], n[0]] } else { n });
     }
 }

@@ -1,8 +1,9 @@
 //! A numpy volume (and cube centres) for the extractor.
 //!
 //! The volume is indexed `volume[z, y, x]` (C order, x fastest), which is exactly the storage
-//! of the simple lattice: it is checked for finiteness and read in place
-//! (`Extractor::extract_borrowed`), no copy. On the body-centred lattice, corner planes and
+//! of the simple lattice: it is read in place (`Extractor::extract_borrowed`), no copy, and
+//! checked for finiteness by the extractor's first pass over it (which reads every value
+//! anyway), not by a scan here. On the body-centred lattice, corner planes and
 //! centre planes alternate in storage (see `rmt_extract::samples`), so the values are copied
 //! into the extractor's sample array, the centres from `centres` of shape
 //! `(nz + 2, ny + 2, nx + 2)`: the ghost layer included (index 0 and the last along an axis are
@@ -111,9 +112,10 @@ fn non_finite(name: &str, at: usize, value: f32, shape: [usize; 3]) -> Error {
 
 impl Input<'_> {
     /// Readies the volume (and centres) for `settings`: on the simple lattice (and for marching
-    /// cubes and surface nets) the storage is the volume's own C order, so the values are only
-    /// checked, and read in place (returns `true`); on the body-centred lattice they are
-    /// copied into `samples` with the centres (returns `false`).
+    /// cubes and surface nets) the storage is the volume's own C order, so the values are read
+    /// in place and checked by the extractor (returns `true`; see [`Input::library_error`]);
+    /// on the body-centred lattice they are checked and copied into `samples` with the centres
+    /// (returns `false`).
     pub fn check_or_fill(
         &self,
         settings: &ExtractSettings,
@@ -124,10 +126,10 @@ impl Input<'_> {
         if self.values.len() != self.shape.iter().product::<usize>() {
             return Err(Error::Value("volume: data and shape disagree".into()));
         }
-        if let Some((i, v)) = first_non_finite(self.values, pool) {
-            return Err(non_finite("volume", i, v, self.shape));
-        }
         match lattice {
+            // Checked by the extractor's first pass, which reads every value anyway
+            // (`ExtractError::NonFiniteValue`, turned into the same message by
+            // [`Input::library_error`]): no scan of its own.
             Lattice::Simple => {
                 if self.centres.is_some() {
                     return Err(Error::Value(
@@ -138,7 +140,26 @@ impl Input<'_> {
                 }
                 Ok(true)
             }
-            Lattice::BodyCentred => self.fill_bcdl(settings, samples).map(|()| false),
+            Lattice::BodyCentred => {
+                if let Some((i, v)) = first_non_finite(self.values, pool) {
+                    return Err(non_finite("volume", i, v, self.shape));
+                }
+                self.fill_bcdl(settings, samples).map(|()| false)
+            }
+        }
+    }
+
+    /// The extractor's error for this volume: a non-finite value (found by the extractor's
+    /// first pass on the simple lattice, where slots are the volume's C order) named by its
+    /// index as [`first_non_finite`]'s is; any other with the library's message.
+    pub fn library_error(&self, e: rmt_extract::ExtractError) -> Error {
+        match e {
+            rmt_extract::ExtractError::NonFiniteValue { slot, value, .. }
+                if slot < self.values.len() =>
+            {
+                non_finite("volume", slot, value, self.shape)
+            }
+            other => Error::Library(other.to_string()),
         }
     }
 

@@ -520,9 +520,10 @@ def test_write_formats_and_to_trimesh(tmp_path):
 # ------------------------------------------------------------------------------- bad input
 
 def test_non_finite_values_are_found_anywhere():
-    # The vectorised scan (32 lanes and a remainder; from 2^22 values in parallel chunks)
-    # finds NaN and both infinities at any position, for every method; the error names the
-    # first in C order.
+    # The extractor's first pass (marching cubes and plain MT classify 64 values at a time,
+    # rows or chunks in parallel, with a partial last word; surface nets scans in 32 lanes and
+    # a remainder) finds NaN and both infinities at any position, for every method; the error
+    # names the first in C order.
     for shape in [(5, 6, 7), (162, 162, 163)]:
         volume = np.ones(shape, np.float32)
         n = volume.size

@@ -31,6 +31,26 @@ pub enum ExtractError {
         /// The value returned.
         value: f32,
     },
+    /// A value given to extract from (not sampled from a field) is NaN or infinite: the first
+    /// such slot of the sample array. Found by the first pass over the values of marching
+    /// cubes, surface nets and marching tetrahedra on the simple lattice, where the slot is
+    /// lattice point `(x, y, z)` at `x + (nx + 1) * (y + (ny + 1) * z)`: the C order of a
+    /// `(z, y, x)` volume.
+    #[error(
+        "the sample array is not finite at lattice point (x, y, z) = ({}, {}, {}), slot {slot}: \
+         got {value}",
+        point[0],
+        point[1],
+        point[2]
+    )]
+    NonFiniteValue {
+        /// The slot of the sample array (the first non-finite one in storage order).
+        slot: usize,
+        /// Its lattice point `(x, y, z)`.
+        point: [usize; 3],
+        /// The value.
+        value: f32,
+    },
     /// The requested combination is not available (e.g. a clustering mode for marching cubes).
     #[error("unsupported: {0}")]
     Unsupported(String),

@@ -132,6 +132,8 @@ pub struct Extractor {
     pub(crate) placement: ThreadPlacement,
     /// Edge collapse's candidates and outcomes, when recording ([`Extractor::collapse_log`]).
     pub(crate) collapse_log: Vec<CollapseAttempt>,
+    /// Marching cubes writes its mesh in array order ([`Extractor::set_array_order`]).
+    pub(crate) array_order: bool,
 }
 
 impl Extractor {
@@ -350,6 +352,35 @@ impl Extractor {
         self.mt.record = record;
     }
 
+    /// Sets whether marching cubes ([`Method::Mc`]) writes its mesh in the array order of a
+    /// C-ordered `(z, y, x)` volume (see [`Extractor::extract_borrowed`]), as scikit-image's
+    /// `marching_cubes` returns it: every position and normal as `[z, y, x]` and every
+    /// triangle's last two corners swapped (swapping two axes mirrors the mesh; the swap keeps
+    /// triangles counter-clockwise seen from increasing values). Off by default. The positions
+    /// and triangles are written that way by the passes that write them, and normals are
+    /// computed as in world order, so the mesh is exactly the world-order one reordered, with
+    /// no pass of its own. Other methods ignore it: their meshes are in world order `(x, y, z)`.
+    ///
+    /// ```
+    /// use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, Method};
+    /// let mut s = ExtractSettings::new(Grid::cube(12, 1.0), Lattice::Simple, Clustering::None);
+    /// s.method = Method::Mc;
+    /// let sphere = rmt_fields::Sphere::new(glam::Vec3::new(0.1, 0.0, -0.2), 0.6);
+    /// let (mut world, mut array) = (rmt_mesh::Mesh::default(), rmt_mesh::Mesh::default());
+    /// Extractor::new().extract(&sphere, &s, &mut world).unwrap();
+    /// let mut ex = Extractor::new();
+    /// ex.set_array_order(true);
+    /// ex.extract(&sphere, &s, &mut array).unwrap();
+    /// let rev = |v: &[[f32; 3]]| v.iter().map(|p| [p[2], p[1], p[0]]).collect::<Vec<_>>();
+    /// assert_eq!(rev(&array.positions), world.positions);
+    /// assert_eq!(rev(&array.normals), world.normals);
+    /// let swap = |i: &[u32]| i.chunks(3).flat_map(|t| [t[0], t[2], t[1]]).collect::<Vec<_>>();
+    /// assert_eq!(swap(&array.indices), world.indices);
+    /// ```
+    pub fn set_array_order(&mut self, array_order: bool) {
+        self.array_order = array_order;
+    }
+
     /// Recorded by the last extraction ([`Extractor::set_recording`]): the anchor cell of each
     /// output triangle ([`CellRange`]'s anchors), as a linear index `x + nx * (y + ny * z)` over
     /// the grid's cells; empty when nothing was recorded.
@@ -402,7 +433,15 @@ impl Extractor {
                         settings.clustering.name()
                     )));
                 }
-                mc::extract(&self.samples, settings, &pool, &mut self.mc, mesh, stats);
+                mc::extract(
+                    &self.samples,
+                    settings,
+                    &pool,
+                    &mut self.mc,
+                    self.array_order,
+                    mesh,
+                    stats,
+                )?;
                 if self.mt.lean {
                     self.mc = mc::McBuffers::default();
                 }
@@ -414,7 +453,13 @@ impl Extractor {
                         settings.clustering.name()
                     )));
                 }
-                surface_nets::extract(&self.samples, settings, &mut self.surface_nets, mesh, stats);
+                surface_nets::extract(
+                    &self.samples,
+                    settings,
+                    &mut self.surface_nets,
+                    mesh,
+                    stats,
+                )?;
                 stats.bytes_edges = self.surface_nets.bytes();
                 if self.mt.lean {
                     self.surface_nets = surface_nets::SurfaceNetsBuffers::default();
@@ -456,9 +501,11 @@ impl Extractor {
             }
         }
         let t = std::time::Instant::now();
+        let array_order = self.array_order && settings.method == settings::Method::Mc;
         match (settings.normals, field) {
             (NormalMode::Skip, _) => mesh.normals.clear(),
-            (NormalMode::Gradient, Some(f)) => gradient_normals(f, settings, mesh),
+            (NormalMode::Gradient, Some(f)) => gradient_normals(f, settings, array_order, mesh),
+            _ if array_order => area_normals_array_order(mesh),
             _ => mesh.compute_area_weighted_normals(),
         }
         stats.t_normals_s = t.elapsed().as_secs_f64();
@@ -471,17 +518,49 @@ impl Extractor {
     }
 }
 
-/// Normals from central differences of the field (step h / 4), pointing toward increasing f.
-fn gradient_normals(field: &dyn ScalarField, settings: &ExtractSettings, mesh: &mut Mesh) {
+/// `[z, y, x]` for `[x, y, z]` and back.
+fn reversed(p: [f32; 3]) -> [f32; 3] {
+    [p[2], p[1], p[0]]
+}
+
+/// Normals from central differences of the field (step h / 4), pointing toward increasing f;
+/// positions and normals in array order with `array_order`.
+fn gradient_normals(
+    field: &dyn ScalarField,
+    settings: &ExtractSettings,
+    array_order: bool,
+    mesh: &mut Mesh,
+) {
     let e = settings.grid.h() * 0.25;
     mesh.normals.clear();
     for p in &mesh.positions {
-        let p = glam::Vec3::from(*p);
+        let p = glam::Vec3::from(if array_order { reversed(*p) } else { *p });
         let g = glam::Vec3::new(
             field.sample(p + glam::Vec3::X * e) - field.sample(p - glam::Vec3::X * e),
             field.sample(p + glam::Vec3::Y * e) - field.sample(p - glam::Vec3::Y * e),
             field.sample(p + glam::Vec3::Z * e) - field.sample(p - glam::Vec3::Z * e),
         );
-        mesh.normals.push(g.normalize_or_zero().to_array());
+        let n = g.normalize_or_zero().to_array();
+        mesh.normals.push(if array_order { reversed(n) } else { n });
     }
+}
+
+/// [`Mesh::compute_area_weighted_normals`] of a mesh in array order (positions `[z, y, x]`,
+/// triangles' last two corners swapped): computed on the world-order mesh, the same operations
+/// in the same order, so the normals are exactly the world-order ones, reversed.
+fn area_normals_array_order(mesh: &mut Mesh) {
+    let mut acc = vec![glam::Vec3::ZERO; mesh.positions.len()];
+    for t in mesh.indices.chunks_exact(3) {
+        let world = [t[0], t[2], t[1]];
+        let [a, b, c] = world.map(|i| glam::Vec3::from(reversed(mesh.positions[i as usize])));
+        let n = (b - a).cross(c - a);
+        for i in world {
+            acc[i as usize] += n;
+        }
+    }
+    mesh.normals.clear();
+    mesh.normals.extend(
+        acc.into_iter()
+            .map(|n| reversed(n.normalize_or_zero().to_array())),
+    );
 }

@@ -59,7 +59,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use rmt_mesh::Mesh;
 
-use crate::{ExtractSettings, Samples, Stats};
+use crate::{ExtractError, ExtractSettings, Samples, Stats};
 
 /// Marching cubes' working tables, kept between extractions by the [`crate::Extractor`] (each
 /// pass overwrites what it reads, so nothing is cleared between calls).
@@ -166,7 +166,11 @@ const EDGE_IN_ROWS: [(u8, u8, u8); 12] = {
 /// and timings of `stats`: `tetrahedra_total = 0`, `tetrahedra_processed` = cubes with a crossing,
 /// `edges` = grid edges, `crossings` = vertices on grid edges (all vertices but the rare loop
 /// centres), `bytes_edges` = the bit rows and their crossing words, `t_vertex_s`,
-/// `t_geometry_s`.
+/// `t_geometry_s`. With `array_order`, positions are written `[z, y, x]` and triangles with
+/// their last two corners swapped (see `Extractor::set_array_order`; the caller computes the
+/// normals). Errors with [`ExtractError::NonFiniteValue`] (the first in storage order)
+/// when a value is NaN or infinite: the first pass reads every value, and checks it as it
+/// classifies it.
 ///
 /// The passes, each parallel over planes (Flying Edges' order: classify, count, prefix-sum,
 /// write in place): the inside bits of every row; per row word the crossed edges along each
@@ -179,9 +183,10 @@ pub fn extract(
     settings: &ExtractSettings,
     pool: &rayon::ThreadPool,
     buf: &mut McBuffers,
+    array_order: bool,
     mesh: &mut Mesh,
     stats: &mut Stats,
-) {
+) -> Result<(), ExtractError> {
     let tables = CaseTables::get();
     let [nx, ny, nz] = samples.cells;
     let dims = [nx + 1, ny + 1, nz + 1];
@@ -191,30 +196,41 @@ pub fn extract(
     stats.edges = nx * (ny + 1) * (nz + 1) + (nx + 1) * ny * (nz + 1) + (nx + 1) * (ny + 1) * nz;
     if samples.values.len() < plane * dims[2] {
         // Not laid out for these settings (the extractor checks this first); nothing to mesh.
-        return;
+        return Ok(());
     }
     let rows = Rows::new(samples);
     let pw = rows.plane_words();
 
-    // Vertex pass, step 1: the inside bits of every row.
+    // Vertex pass, step 1: the inside bits of every row, and whether a value is not finite
+    // (from the same read of the values).
     let t = std::time::Instant::now();
     crate::util::overwritten(&mut buf.inside, pw * rows.planes, 0, pool);
     crate::util::overwritten(&mut buf.crossed, pw * rows.planes, RowWord::default(), pool);
     let values = &samples.values;
-    pool.install(|| {
+    let non_finite = pool.install(|| {
         buf.inside
             .par_chunks_mut(pw)
             .enumerate()
-            .for_each(|(z, bits)| {
+            .map(|(z, bits)| {
+                let mut bad = false;
                 for (y, row) in bits.chunks_exact_mut(rows.words).enumerate() {
                     let start = samples.simple_index(0, y, z);
                     let row_values = &values[start..start + rows.points];
                     for (word, chunk) in row.iter_mut().zip(row_values.chunks(64)) {
-                        *word = crate::util::inside_word(chunk, iso);
+                        let (w, b) = crate::util::inside_word_finite(chunk, iso);
+                        *word = w;
+                        bad |= b;
                     }
                 }
+                bad
             })
+            .reduce(|| false, |a, b| a | b)
     });
+    if non_finite {
+        if let Some(e) = samples.non_finite_error() {
+            return Err(e);
+        }
+    }
 
     // Step 2: crossed edges per row word, counted; ids first within the plane.
     let inside = &buf.inside;
@@ -249,7 +265,16 @@ pub fn extract(
                 .zip(parts)
                 .enumerate()
                 .for_each(|(z, (words, out))| {
-                    place_plane(samples, rows, iso, z, plane_first[z], words, out)
+                    place_plane(
+                        samples,
+                        rows,
+                        iso,
+                        z,
+                        plane_first[z],
+                        array_order,
+                        words,
+                        out,
+                    )
                 })
         });
     }
@@ -275,6 +300,7 @@ pub fn extract(
                     inside,
                     crossed,
                     positions,
+                    array_order,
                 )
             })
             .collect()
@@ -301,6 +327,7 @@ pub fn extract(
     }
     stats.tetrahedra_processed = processed;
     stats.t_geometry_s = t.elapsed().as_secs_f64();
+    Ok(())
 }
 
 /// Marks a slab-local loop-centre number in a slab's indices (renumbered when slabs are joined).
@@ -370,13 +397,15 @@ fn crossed_plane(inside: &[u64], rows: Rows, z: usize, words: &mut [RowWord]) ->
 
 /// Adds `first` (the plane's first vertex id) to the ids of plane `z`'s row words and writes
 /// the positions of its crossings (`out`, in edge order), interpolated from the lower end of
-/// each edge.
+/// each edge; `(z, y, x)` with `array_order`.
+#[allow(clippy::too_many_arguments)]
 fn place_plane(
     samples: &Samples,
     rows: Rows,
     iso: f32,
     z: usize,
     first: u32,
+    array_order: bool,
     words: &mut [RowWord],
     out: &mut [[f32; 3]],
 ) {
@@ -404,7 +433,11 @@ fn place_plane(
                     let t = (iso - v0) / (v1 - v0);
                     let mut p = samples.simple_position(x, y, z);
                     p[axis] += t * samples.spacing[axis];
-                    out[k] = p.to_array();
+                    out[k] = if array_order {
+                        [p.z, p.y, p.x]
+                    } else {
+                        p.to_array()
+                    };
                     k += 1;
                 }
             }
@@ -431,6 +464,7 @@ fn slab_triangles(
     inside: &[u64],
     crossed: &[RowWord],
     positions: &[[f32; 3]],
+    array_order: bool,
 ) -> Slab {
     let [nx, ny, _] = samples.cells;
     let values = &samples.values;
@@ -533,7 +567,10 @@ fn slab_triangles(
                     centres.push((sum / polygon.len() as f32).to_array());
                 }
                 for t in &entry.triangles {
-                    for &e in t {
+                    // Swapping x and z mirrors the mesh: the last two corners swap with it,
+                    // so triangles stay counter-clockwise seen from increasing values.
+                    let t = if array_order { [t[0], t[2], t[1]] } else { *t };
+                    for e in t {
                         if e >= 12 {
                             indices.push(CENTRE_FLAG | (first_centre + u32::from(e - 12)));
                         } else {
@@ -1704,6 +1741,55 @@ mod tests {
         let r = rmt_mesh::validate(mesh, &|p| on_box_boundary(grid, p));
         assert!(r.is_watertight_manifold(), "{what}: {r:?}");
         assert_eq!(r.boundary_edges_interior, 0, "{what}");
+    }
+
+    #[test]
+    fn array_order_is_the_world_order_mesh_reordered_bit_for_bit() {
+        // White noise (many ambiguous faces, so loop centres too) on anisotropic grids, area
+        // normals; and a field with gradient normals. Positions and normals reversed, the last
+        // two corners of every triangle swapped, nothing else different.
+        let rev = |v: &[[f32; 3]]| v.iter().map(|p| [p[2], p[1], p[0]]).collect::<Vec<_>>();
+        let swap = |i: &[u32]| {
+            i.chunks(3)
+                .flat_map(|t| [t[0], t[2], t[1]])
+                .collect::<Vec<_>>()
+        };
+        let mut centres = 0;
+        for seed in 0..12u64 {
+            let mut rng = SplitMix(seed);
+            let cells = [5 + seed as usize % 4, 4 + seed as usize % 3, 6];
+            let len = (cells[0] + 1) * (cells[1] + 1) * (cells[2] + 1);
+            let values: Vec<f32> = (0..len).map(|_| rng.unit() * 2.0 - 1.0).collect();
+            let grid = Grid::new(cells, Vec3::new(-1.0, -0.5, 0.0), Vec3::new(1.0, 0.7, 2.5));
+            let mut s = settings(grid, 1 + seed as usize % 2);
+            s.normals = crate::NormalMode::AreaWeighted;
+            let (mut world, mut array) = (Mesh::default(), Mesh::default());
+            let mut ex = Extractor::new();
+            let stats = ex.extract_borrowed(&values, &s, &mut world).unwrap();
+            ex.set_array_order(true);
+            ex.extract_borrowed(&values, &s, &mut array).unwrap();
+            centres += world.positions.len() - stats.crossings;
+            assert_eq!(rev(&array.positions), world.positions, "seed {seed}");
+            assert_eq!(swap(&array.indices), world.indices, "seed {seed}");
+            assert_eq!(rev(&array.normals), world.normals, "seed {seed}");
+            assert!(!world.normals.is_empty());
+        }
+        assert!(centres > 0, "no loop centre was made");
+        let sphere = Sphere::new(Vec3::new(0.1, -0.2, 0.05), 0.7);
+        let mut s = settings(
+            Grid::new([13, 17, 11], Vec3::splat(-1.0), Vec3::splat(1.0)),
+            2,
+        );
+        s.normals = crate::NormalMode::Gradient;
+        let (mut world, mut array) = (Mesh::default(), Mesh::default());
+        let mut ex = Extractor::new();
+        ex.extract(&sphere, &s, &mut world).unwrap();
+        ex.set_array_order(true);
+        ex.extract(&sphere, &s, &mut array).unwrap();
+        assert_eq!(rev(&array.positions), world.positions);
+        assert_eq!(swap(&array.indices), world.indices);
+        assert_eq!(rev(&array.normals), world.normals);
+        assert!(!world.normals.is_empty());
     }
 
     #[test]

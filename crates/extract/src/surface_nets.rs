@@ -45,7 +45,7 @@ use fast_surface_nets::{surface_nets, SurfaceNetsBuffer};
 use glam::Vec3;
 use rmt_mesh::Mesh;
 
-use crate::{ExtractSettings, Samples, Stats};
+use crate::{ExtractError, ExtractSettings, Samples, Stats};
 
 /// The working memory of surface nets, kept by the [`crate::Extractor`] between calls: the
 /// crate's own buffer and, for a nonzero isovalue, the shifted copy of the samples.
@@ -80,14 +80,16 @@ impl SurfaceNetsBuffers {
 /// `edges` = grid edges, `crossings` = crossed grid edges that got a quad (those not lying in a
 /// box face), `t_vertex_s` = the crate's call (its vertex and quad passes run in one call),
 /// `t_geometry_s` = mapping positions and copying into `mesh`. `bytes_edges` is left
-/// to the caller (the buffers' size).
+/// to the caller (the buffers' size). Errors with [`ExtractError::NonFiniteValue`] (the first
+/// in storage order) when a value is NaN or infinite: the crate reads the values itself, so
+/// they are checked first, in one vectorised scan.
 pub fn extract(
     samples: &Samples,
     settings: &ExtractSettings,
     buffers: &mut SurfaceNetsBuffers,
     mesh: &mut Mesh,
     stats: &mut Stats,
-) {
+) -> Result<(), ExtractError> {
     let [nx, ny, nz] = samples.cells;
     let dims = [nx + 1, ny + 1, nz + 1];
     let len = dims[0] * dims[1] * dims[2];
@@ -95,10 +97,15 @@ pub fn extract(
     stats.edges = nx * (ny + 1) * (nz + 1) + (nx + 1) * ny * (nz + 1) + (nx + 1) * (ny + 1) * nz;
     if samples.values.len() < len {
         // Not laid out for these settings (the extractor checks this first); nothing to mesh.
-        return;
+        return Ok(());
     }
 
     let t = std::time::Instant::now();
+    if crate::util::any_non_finite(&samples.values[..len]) {
+        if let Some(e) = samples.non_finite_error() {
+            return Err(e);
+        }
+    }
     let iso = settings.iso;
     let values: &[f32] = if iso == 0.0 {
         &samples.values[..len]
@@ -154,6 +161,7 @@ pub fn extract(
         }
     }
     stats.t_geometry_s = t.elapsed().as_secs_f64();
+    Ok(())
 }
 
 #[cfg(test)]

@@ -56,6 +56,76 @@ pub(crate) fn inside_word(values: &[f32], iso: f32) -> u64 {
     }
 }
 
+/// [`inside_word`] of 64 values and whether any of them is not finite, from one read of the
+/// values: four at a time on x86-64 (an ordered less-than, NaN outside as with `<`), and
+/// `v - v`, which is 0 for a finite `v` and NaN for NaN and infinities, summed per lane (a sum
+/// that meets a NaN stays NaN). What the first pass over a caller's values uses to refuse
+/// non-finite ones without a pass of its own.
+#[inline(always)]
+pub(crate) fn inside_word_finite64(values: &[f32; 64], iso: f32) -> (u64, bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{
+            _mm_add_ps, _mm_cmplt_ps, _mm_cmpunord_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps,
+            _mm_setzero_ps, _mm_sub_ps,
+        };
+        let mut word = 0u64;
+        // SAFETY: SSE2 is in the x86-64 baseline; each load reads the 4 values of its chunk
+        // (unaligned).
+        unsafe {
+            let t = _mm_set1_ps(iso);
+            let mut acc = _mm_setzero_ps();
+            for (i, four) in values.as_chunks::<4>().0.iter().enumerate() {
+                let v = _mm_loadu_ps(four.as_ptr());
+                let mask = _mm_movemask_ps(_mm_cmplt_ps(v, t)) as u64;
+                word |= mask << (4 * i);
+                acc = _mm_add_ps(acc, _mm_sub_ps(v, v));
+            }
+            (word, _mm_movemask_ps(_mm_cmpunord_ps(acc, acc)) != 0)
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        (
+            inside_word(values, iso),
+            values.iter().any(|v| !v.is_finite()),
+        )
+    }
+}
+
+/// [`inside_word`] of at most 64 values and whether any of them is not finite
+/// ([`inside_word_finite64`] for a full word).
+#[inline(always)]
+pub(crate) fn inside_word_finite(values: &[f32], iso: f32) -> (u64, bool) {
+    match <&[f32; 64]>::try_from(values) {
+        Ok(v) => inside_word_finite64(v, iso),
+        Err(_) => (
+            inside_word(values, iso),
+            values.iter().any(|v| !v.is_finite()),
+        ),
+    }
+}
+
+/// Whether `values` holds a NaN or an infinity: branch-free, at memory speed (`v - v` summed
+/// in 32 independent lanes, which the compiler keeps in vector registers; see
+/// [`inside_word_finite64`]). For a pass that reads no value of its own before a library does.
+pub(crate) fn any_non_finite(values: &[f32]) -> bool {
+    const LANES: usize = 32;
+    let mut acc = [0f32; LANES];
+    let chunks = values.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for (a, v) in acc.iter_mut().zip(c) {
+            // Not 0: NaN for a non-finite v (the point of the check).
+            #[allow(clippy::eq_op)]
+            {
+                *a += v - v;
+            }
+        }
+    }
+    acc.iter().any(|a| *a != 0.0) || rest.iter().any(|v| !v.is_finite())
+}
+
 /// [`bits_at`] from any position, before or past `words` too: bits outside `words` read as 0.
 #[inline]
 pub(crate) fn bits_at_signed(words: &[u64], pos: isize) -> u64 {
@@ -94,6 +164,41 @@ pub(crate) fn overwritten<T: Copy + Send + Sync>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn finite_checks_see_every_position_and_kind() {
+        // Every position of a word, full (64) and partial (45), and of a length with a
+        // remainder after the 32 lanes; large finite values (whose v - v is 0) are not
+        // flagged, and the inside bits are those of `inside_word`.
+        let bad = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -f32::NAN];
+        for len in [64, 45, 103] {
+            let mut v: Vec<f32> = (0..len).map(|i| (i as f32 - 30.0) * 1e36).collect();
+            v[7] = f32::MAX;
+            v[8] = f32::MIN;
+            v[9] = f32::MIN_POSITIVE / 4.0;
+            v[10] = -0.0;
+            assert!(!any_non_finite(&v));
+            if len <= 64 {
+                assert_eq!(inside_word_finite(&v, 0.0), (inside_word(&v, 0.0), false));
+            }
+            for at in 0..len {
+                for b in bad {
+                    let keep = v[at];
+                    v[at] = b;
+                    assert!(any_non_finite(&v), "{b} at {at} of {len}");
+                    if len <= 64 {
+                        assert_eq!(
+                            inside_word_finite(&v, 1e30),
+                            (inside_word(&v, 1e30), true),
+                            "{b} at {at} of {len}"
+                        );
+                    }
+                    v[at] = keep;
+                }
+            }
+        }
+        assert!(!any_non_finite(&[]));
+    }
 
     #[test]
     fn for_each_bit_visits_exactly_the_set_bits_from_any_start() {

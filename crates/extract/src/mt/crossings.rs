@@ -27,7 +27,7 @@ use rayon::prelude::*;
 use super::clustering::proposal::{self, Candidate, PointEdges, ProposalCounts, Rules};
 use super::layout::{add, owns, Layout};
 use crate::lattice::FULL;
-use crate::util::{bits_at_signed, for_each_bit, inside_word};
+use crate::util::{bits_at_signed, for_each_bit, inside_word, inside_word_finite64};
 use crate::{ExtractError, Lattice, Stats};
 
 /// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
@@ -550,7 +550,9 @@ pub(crate) fn number_plane(
 /// and (with `work.propose`) the cluster proposals ([`crate::mt::clustering::proposal`]),
 /// copied into `out.proposals`; step 2 (parallel over planes), every crossing's id and position
 /// (`out.positions`, one vertex per crossing). Returns how many crossings lie on a sample
-/// point (within the weld distance).
+/// point (within the weld distance). On the simple lattice, step 0 also checks every value and
+/// errors with [`ExtractError::NonFiniteValue`] (the first in storage order) on NaN or
+/// infinity.
 ///
 /// ```text
 ///   inside bits  ->  crossed points (bits + rank)  ->  ids: first(C) + popcount(owned & below d)
@@ -570,24 +572,45 @@ pub(crate) fn vertex_pass(
     let slots = samples.values.len();
     let words = slots.div_ceil(64);
     let planes = samples.dims[2];
-    // Vertex pass, step 0: the inside bits.
+    // Vertex pass, step 0: the inside bits. On the simple lattice every slot is a lattice
+    // point, and its values are checked for NaN and infinities in the same read (the unused
+    // slots of the body-centred lattice hold NaN; its values come from a field, checked as
+    // sampled, or are the caller's to check).
     {
         let values = &samples.values;
-        pool.install(|| {
+        let check = layout.lattice == Lattice::Simple;
+        let non_finite = pool.install(|| {
             buf.inside[..words]
                 .par_chunks_mut(1024)
                 .enumerate()
-                .for_each(|(c, chunk)| {
+                .map(|(c, chunk)| {
+                    let mut bad = false;
                     for (j, word) in chunk.iter_mut().enumerate() {
                         let start = (c * 1024 + j) * 64;
                         let end = (start + 64).min(slots);
-                        *word = match <&[f32; 64]>::try_from(&values[start..end]) {
-                            Ok(block) => inside_word64(block, iso),
-                            Err(_) => inside_word(&values[start..end], iso),
+                        let block = &values[start..end];
+                        *word = match (<&[f32; 64]>::try_from(block), check) {
+                            (Ok(block), false) => inside_word64(block, iso),
+                            (Ok(block), true) => {
+                                let (w, b) = inside_word_finite64(block, iso);
+                                bad |= b;
+                                w
+                            }
+                            (Err(_), _) => {
+                                bad |= check && block.iter().any(|v| !v.is_finite());
+                                inside_word(block, iso)
+                            }
                         };
                     }
-                });
+                    bad
+                })
+                .reduce(|| false, |a, b| a | b)
         });
+        if non_finite {
+            if let Some(e) = samples.non_finite_error() {
+                return Err(e);
+            }
+        }
         buf.inside[words] = 0;
     }
 
