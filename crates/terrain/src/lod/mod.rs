@@ -21,9 +21,13 @@
 //! A crossing is named by its edge's two lattice points and computed from them alone, so every
 //! chunk that meets it computes the same bits, and welding by key joins the chunks exactly.
 //!
-//! Not here (yet): clustering across levels (plain marching tetrahedra only), edits, morphing.
+//! Edits are an overlay of brush strokes over the procedural field ([`edits`]), sampled by
+//! every level at its own lattice points.
+//!
+//! Not here (yet): clustering across levels (plain marching tetrahedra only), morphing.
 
 pub mod check;
+pub mod edits;
 pub mod error;
 pub mod lattice;
 pub mod level_map;
@@ -32,6 +36,7 @@ pub mod mt;
 pub mod refine;
 pub mod world;
 
+pub use edits::{EditedField, Overlay, Stroke};
 pub use error::LodError;
 pub use level_map::{ChunkKey, LevelMap, LodGeometry};
 pub use mesh::{chunk_tets, world_tets, MeshTet};

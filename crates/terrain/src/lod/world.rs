@@ -22,6 +22,7 @@ use rayon::prelude::*;
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
 
+use super::edits::{chunks_seeing, EditedField, Overlay};
 use super::error::LodError;
 use super::lattice::Point;
 use super::level_map::{ChunkKey, LevelMap, LodGeometry};
@@ -66,6 +67,10 @@ pub struct LodWorld<F: ScalarField> {
     /// The map the next remesh moves to.
     pending: LevelMap,
     meshes: HashMap<ChunkKey, ChunkMesh>,
+    /// The brush strokes applied so far ([`LodWorld::edit`]).
+    edits: Overlay,
+    /// Chunks of the current map an edit marked for the next remesh.
+    edited: std::collections::HashSet<ChunkKey>,
 }
 
 /// Meshes every chunk of `map` on `pool`, in map order.
@@ -141,6 +146,8 @@ impl<F: ScalarField> LodWorld<F> {
             map: None,
             pending,
             meshes: HashMap::new(),
+            edits: Overlay::new(settings.frame),
+            edited: Default::default(),
         })
     }
 
@@ -172,13 +179,18 @@ impl<F: ScalarField> LodWorld<F> {
             .copied()
             .filter(|k| match (&self.map, self.meshes.contains_key(k)) {
                 (Some(old), true) => {
+                    if self.edited.contains(k) {
+                        return true;
+                    }
                     let (lo, hi) = dependency_box(new, k);
                     old.leaves_touching(lo, hi) != new.leaves_touching(lo, hi)
                 }
                 _ => true,
             })
             .collect();
-        let meshes = mesh_some(new, &stale, &self.field, &self.settings.frame, &self.pool)?;
+        let field = EditedField::new(&self.field, &self.edits);
+        let meshes = mesh_some(new, &stale, &field, &self.settings.frame, &self.pool)?;
+        self.edited.clear();
         let mut dropped: Vec<ChunkKey> = self
             .meshes
             .keys()
@@ -200,6 +212,34 @@ impl<F: ScalarField> LodWorld<F> {
             dropped,
             triangles,
         })
+    }
+
+    /// Applies `brush` for a frame of `dt` seconds to the world's overlay of edits and marks
+    /// the chunks of the current map whose tets can see a changed value
+    /// ([`super::edits::chunks_seeing`]); the next [`LodWorld::remesh`] re-meshes them (with
+    /// any level changes). A brush that misses the world changes nothing. Returns how many
+    /// chunks it marked.
+    pub fn edit(&mut self, brush: &crate::Brush, dt: f32) -> Result<usize, LodError> {
+        let world = self.settings.geometry.world_size();
+        let Some((lo, hi)) = self.edits.stroke_box(brush, world) else {
+            brush
+                .check(dt)
+                .map_err(|e| LodError::Invalid(e.to_string()))?;
+            return Ok(0);
+        };
+        self.edits.add(*brush, dt)?;
+        let marked = self
+            .map
+            .as_ref()
+            .map_or(Vec::new(), |m| chunks_seeing(m, lo, hi));
+        let n = marked.len();
+        self.edited.extend(marked);
+        Ok(n)
+    }
+
+    /// The strokes applied so far: the world samples `EditedField::new(field, edits)`.
+    pub fn edits(&self) -> &Overlay {
+        &self.edits
     }
 
     /// The level map of the current surfaces (`None` before the first remesh).
@@ -231,7 +271,10 @@ impl<F: ScalarField> LodWorld<F> {
     pub fn memory_bytes(&self) -> usize {
         let meshes: usize = self.meshes.values().map(ChunkMesh::bytes).sum();
         let map = self.map.as_ref().map_or(0, |m| m.chunks().len()) * 2 * 16;
-        meshes + map + self.meshes.capacity() * (16 + std::mem::size_of::<ChunkMesh>())
+        meshes
+            + map
+            + self.meshes.capacity() * (16 + std::mem::size_of::<ChunkMesh>())
+            + self.edits.bytes()
     }
 
     /// The settings.
