@@ -5,7 +5,7 @@
 //! ```text
 //! experiments report --run results/paper-20260301-120000 --scaling results/scaling-... \
 //!     --check-cost results/check-cost-... --peers results/peers-... \
-//!     --peers-seeds results/peers-seeds-... --study sim-study --out reports
+//!     --peers-seeds results/peers-seeds-... --study sim-study --lod results/lod-ci-... --out reports
 //! experiments report --check        # reports/ against a rebuild from reports/data
 //! ```
 
@@ -13,8 +13,8 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context};
 use rmt_report::{
-    build, check, default_check_cost, default_peers, default_peers_seeds, default_scaling,
-    default_study, Questionnaire, ReportInputs,
+    build, check, default_check_cost, default_lod, default_peers, default_peers_seeds,
+    default_scaling, default_study, Questionnaire, ReportInputs,
 };
 
 /// Arguments of `report`.
@@ -51,6 +51,13 @@ pub struct Args {
     /// Leave out the second study's section.
     #[arg(long)]
     pub no_study: bool,
+    /// Run folder of a `lod` manifest (`experiments run experiments/manifests/lod-ci.toml`) for
+    /// the level-of-detail section [default: RUN/lod when it holds one].
+    #[arg(long, conflicts_with = "no_lod")]
+    pub lod: Option<PathBuf>,
+    /// Leave out the level-of-detail section.
+    #[arg(long)]
+    pub no_lod: bool,
     /// Report folder to write (or, with --check, to compare with).
     #[arg(long, default_value = "reports")]
     pub out: PathBuf,
@@ -107,6 +114,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         args.study.clone().or_else(|| default_study(&args.run))
     };
+    let lod = if args.no_lod {
+        None
+    } else {
+        args.lod.clone().or_else(|| default_lod(&args.run))
+    };
     let questionnaire = (!args.no_questionnaire).then(|| Questionnaire {
         inputs: rmt_analysis::Inputs::in_dir(&args.questionnaire),
         options: rmt_analysis::Options {
@@ -123,6 +135,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         peers,
         peers_seeds,
         study,
+        lod,
         questionnaire,
         keep_raw: !args.no_raw,
     };

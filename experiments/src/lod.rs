@@ -177,6 +177,30 @@ pub struct LodStep {
     pub pop: Option<Pop>,
     /// The checks, on validated steps.
     pub check: Option<WorldCheck>,
+    /// Per level `0..=levels`: chunks in the map and their triangles.
+    pub levels: Vec<LevelCount>,
+}
+
+/// The chunks and triangles of one level at one step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LevelCount {
+    /// Chunks of the level in the map.
+    pub chunks: usize,
+    /// Their triangles.
+    pub triangles: usize,
+}
+
+/// One chunk of the level map at the last step, for the report's top view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapChunk {
+    /// The chunk.
+    pub key: ChunkKey,
+    /// Its box's near corner, world coordinates.
+    pub min: [f64; 3],
+    /// Its box's far corner, world coordinates.
+    pub max: [f64; 3],
+    /// Its triangles.
+    pub triangles: usize,
 }
 
 /// One configuration's flight.
@@ -192,6 +216,8 @@ pub struct LodSession {
     pub rss_max_bytes: u64,
     /// The last step's world, welded, when asked for.
     pub mesh: Option<rmt_mesh::Mesh>,
+    /// The last step's level map, in map order.
+    pub map: Vec<MapChunk>,
 }
 
 /// Flies the viewer of `plan` over the world of `e` (see the module doc); with `keep_mesh`, the
@@ -255,6 +281,7 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             None
         };
         let chunks = world.level_map().map_or(0, |m| m.chunks().len());
+        let levels = level_counts(&world, geom.levels);
         steps.push(LodStep {
             step: k,
             viewer,
@@ -266,6 +293,7 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             memory_bytes: world.memory_bytes(),
             pop,
             check,
+            levels,
         });
     }
     let (finest_triangles, finest_source) = finest(&world, field, plan, threads)?;
@@ -275,7 +303,44 @@ pub fn run_lod_session<F: ScalarField + Copy>(
         finest_source,
         rss_max_bytes: peak_rss_bytes(),
         mesh: keep_mesh.then(|| world.mesh_welded().0),
+        map: map_chunks(&world, &geom, &frame),
     })
+}
+
+/// Chunks and triangles per level `0..=levels` of the world's current map.
+fn level_counts<F: ScalarField>(world: &LodWorld<F>, levels: u8) -> Vec<LevelCount> {
+    let mut out = vec![LevelCount::default(); usize::from(levels) + 1];
+    for (k, m) in world.chunk_meshes() {
+        if let Some(c) = out.get_mut(usize::from(k.level)) {
+            c.chunks += 1;
+            c.triangles += m.triangles();
+        }
+    }
+    out
+}
+
+/// The world's current level map with every chunk's box in world coordinates.
+fn map_chunks<F: ScalarField>(
+    world: &LodWorld<F>,
+    geom: &LodGeometry,
+    frame: &LodFrame,
+) -> Vec<MapChunk> {
+    let u = f64::from(frame.h) * 0.5;
+    let origin = frame.origin.as_dvec3().to_array();
+    let at = |p: [i64; 3]| std::array::from_fn(|i| origin[i] + p[i] as f64 * u);
+    world
+        .chunk_meshes()
+        .into_iter()
+        .map(|(key, m)| {
+            let (lo, hi) = key.bounds(geom);
+            MapChunk {
+                key,
+                min: at(lo),
+                max: at(hi),
+                triangles: m.triangles(),
+            }
+        })
+        .collect()
 }
 
 /// A world position in lattice units `u = h / 2` from the frame's origin.
@@ -498,6 +563,41 @@ pub fn lod_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
                 opt(st.check.map(|c| c.orientation_errors.to_string())),
                 opt(st.check.map(|c| format!("{:.4}", c.normal_seam_max_deg))),
             ]
+        })
+        .collect()
+}
+
+/// The rows of `lod_levels.csv` for one session (columns of
+/// [`LOD_LEVELS`](rmt_runfolder::schema::LOD_LEVELS)): every step, every level.
+pub fn lod_level_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
+    s.steps
+        .iter()
+        .flat_map(|st| {
+            st.levels.iter().enumerate().map(move |(level, c)| {
+                vec![
+                    id.to_string(),
+                    st.step.to_string(),
+                    level.to_string(),
+                    c.chunks.to_string(),
+                    c.triangles.to_string(),
+                ]
+            })
+        })
+        .collect()
+}
+
+/// The rows of `lod_map.csv` for one session (columns of
+/// [`LOD_MAP`](rmt_runfolder::schema::LOD_MAP)): the last step's chunks in map order.
+pub fn lod_map_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
+    let step = s.steps.last().map_or(0, |st| st.step).to_string();
+    s.map
+        .iter()
+        .map(|c| {
+            let mut row = vec![id.to_string(), step.clone(), c.key.level.to_string()];
+            row.extend(c.key.at.iter().map(i32::to_string));
+            row.extend(c.min.iter().chain(&c.max).map(|v| format!("{v:.6}")));
+            row.push(c.triangles.to_string());
+            row
         })
         .collect()
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 use experiments::manifest::{self, Overrides};
 use experiments::run_record::Status;
 use experiments::runner::{self, RunOptions};
-use rmt_runfolder::schema::{LOD_STEPS, LOD_SUMMARY};
+use rmt_runfolder::schema::{LOD_LEVELS, LOD_MAP, LOD_STEPS, LOD_SUMMARY};
 use rmt_runfolder::Table;
 
 const WORLD: &str = r#"
@@ -87,6 +87,85 @@ fn a_flight_writes_one_row_per_step_a_closed_world_and_a_summary() {
     assert!(p50 >= 0.0 && p50 <= p99);
     assert!(folder.join("meshes/cs_bu.ply").is_file());
     assert!(!folder.join("raw.csv").exists());
+}
+
+/// `lod_levels.csv` splits every step's chunks and triangles by level; `lod_map.csv` is the
+/// last step's map, whose boxes tile the world, with that step's triangles; both are the same on
+/// 1 and 2 threads.
+#[test]
+fn levels_and_the_last_map_add_up_to_the_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = write(
+        dir.path(),
+        "lod.toml",
+        &WORLD.replace("save_meshes = true", ""),
+    );
+    let opts = RunOptions {
+        quiet: true,
+        stop_after: None,
+    };
+    let mut files = Vec::new();
+    for threads in [1, 2] {
+        let folder = dir.path().join(format!("t{threads}"));
+        let overrides = Overrides {
+            threads: Some(threads),
+            ..Overrides::default()
+        };
+        runner::start(&manifest, &overrides, Some(&folder), &opts).unwrap();
+        let steps = Table::read(&folder.join("lod.csv")).unwrap();
+        let levels = Table::read(&folder.join("lod_levels.csv")).unwrap();
+        let map = Table::read(&folder.join("lod_map.csv")).unwrap();
+        assert_eq!(levels.header, LOD_LEVELS);
+        assert_eq!(map.header, LOD_MAP);
+        let num = |t: &Table, r: usize, c: &str| -> f64 { t.get(r, c).unwrap().parse().unwrap() };
+        // Levels 0..=2 at each of the 5 steps.
+        assert_eq!(levels.rows.len(), 5 * 3);
+        for r in 0..5 {
+            let of_step: Vec<usize> = (0..levels.rows.len())
+                .filter(|&i| num(&levels, i, "step") as usize == r)
+                .collect();
+            let lv: Vec<f64> = of_step.iter().map(|&i| num(&levels, i, "level")).collect();
+            assert_eq!(lv, [0.0, 1.0, 2.0]);
+            let sum = |c: &str| of_step.iter().map(|&i| num(&levels, i, c)).sum::<f64>();
+            assert_eq!(sum("chunks"), num(&steps, r, "chunks"), "step {r}");
+            assert_eq!(sum("triangles"), num(&steps, r, "triangles"), "step {r}");
+        }
+        // The viewer is near the ground: the finest level is in use at the end.
+        let finest_last = (0..levels.rows.len())
+            .find(|&i| num(&levels, i, "step") == 4.0 && num(&levels, i, "level") == 0.0)
+            .unwrap();
+        assert!(num(&levels, finest_last, "chunks") > 0.0);
+        assert_eq!(map.rows.len() as f64, num(&steps, 4, "chunks"));
+        let mut volume = 0.0;
+        let mut triangles = 0.0;
+        for r in 0..map.rows.len() {
+            assert_eq!(map.get(r, "step"), Some("4"));
+            let level = num(&map, r, "level");
+            let edge = num(&map, r, "x_max") - num(&map, r, "x_min");
+            // Chunks of 4 cells of 2 / 32 at level l: 0.25 * 2^l world units.
+            assert!(
+                (edge - 0.25 * 2f64.powf(level)).abs() < 1e-6,
+                "row {r}: {edge}"
+            );
+            volume += (0..3)
+                .map(|a| {
+                    let ax = ["x", "y", "z"][a];
+                    num(&map, r, &format!("{ax}_max")) - num(&map, r, &format!("{ax}_min"))
+                })
+                .product::<f64>();
+            triangles += num(&map, r, "triangles");
+        }
+        assert!(
+            (volume - 4.0).abs() < 1e-6,
+            "the map's boxes fill {volume} of 4"
+        );
+        assert_eq!(triangles, num(&steps, 4, "triangles"));
+        files.push((
+            fs::read(folder.join("lod_levels.csv")).unwrap(),
+            fs::read(folder.join("lod_map.csv")).unwrap(),
+        ));
+    }
+    assert!(files[0] == files[1], "1 and 2 threads differ");
 }
 
 /// The same flight on 1 and 2 threads gives the same `lod.csv` outside the time and memory

@@ -21,6 +21,8 @@ pub enum AnyFigure {
     Rows(RowChart),
     /// X-y panels.
     Xy(XyChart),
+    /// The level map of a `lod` run from above.
+    TopView(crate::lod::TopView),
 }
 
 impl AnyFigure {
@@ -29,6 +31,7 @@ impl AnyFigure {
         match self {
             AnyFigure::Rows(chart) => write_figure(chart, dir, name),
             AnyFigure::Xy(chart) => write_figure(chart, dir, name),
+            AnyFigure::TopView(view) => write_figure(view, dir, name),
         }
     }
 }

@@ -21,6 +21,8 @@
 //!   clustering, with the dissertation's own ratio) and the defects of each mesh;
 //! - [`peers`]: against what game developers use (marching cubes, surface nets, meshoptimizer
 //!   at RMT's count): time, quality, rendering cost and defects per object, over seeds too;
+//! - [`lod`]: level of detail, from a `lod` run: the level map from above with the viewer's
+//!   path, and the triangles per level;
 //! - [`study`]: the second perception study (RMT against the peers, smooth and flat): the
 //!   analysis of its answers, the power table and the coverage check on simulated studies;
 //! - [`readme`]: the one-page README; [`report`]: building and checking the folder.
@@ -36,6 +38,7 @@
 //!     peers: None,
 //!     peers_seeds: None,
 //!     study: None,
+//!     lod: None,
 //!     questionnaire: None,
 //!     keep_raw: true,
 //! };
@@ -55,6 +58,7 @@ pub mod data;
 pub mod error;
 pub mod figures;
 pub mod format;
+pub mod lod;
 pub mod output;
 pub mod peers;
 pub mod plot;
@@ -67,6 +71,6 @@ pub mod tables;
 
 pub use error::{ReportError, Result};
 pub use report::{
-    build, check, compare, default_check_cost, default_peers, default_peers_seeds, default_scaling,
-    default_study, validate, CheckOutcome, Questionnaire, ReportInputs,
+    build, check, compare, default_check_cost, default_lod, default_peers, default_peers_seeds,
+    default_scaling, default_study, validate, CheckOutcome, Questionnaire, ReportInputs,
 };

@@ -26,19 +26,19 @@ const GRID: RGBColor = RGBColor(228, 228, 228);
 /// Minor grid lines of log axes.
 const GRID_MINOR: RGBColor = RGBColor(243, 243, 243);
 /// Outer margin, pixels.
-const MARGIN: i32 = 16;
+pub(crate) const MARGIN: i32 = 16;
 /// Title size.
 const TITLE_SIZE: f64 = 20.0;
 /// Subtitle, axis titles and legend size.
-const SMALL_SIZE: f64 = 14.0;
+pub(crate) const SMALL_SIZE: f64 = 14.0;
 /// Row labels and headings.
 const LABEL_SIZE: f64 = 14.0;
 /// Tick labels and value labels.
-const TICK_SIZE: f64 = 12.0;
+pub(crate) const TICK_SIZE: f64 = 12.0;
 
-type DrawResult = std::result::Result<(), String>;
+pub(crate) type DrawResult = std::result::Result<(), String>;
 
-fn e<E: std::fmt::Display>(error: E) -> String {
+pub(crate) fn e<E: std::fmt::Display>(error: E) -> String {
     error.to_string()
 }
 
@@ -57,7 +57,7 @@ pub fn text_width(text: &str, size: f64) -> i32 {
 }
 
 /// Draws `text` at `at` with the given anchor.
-fn label<DB: DrawingBackend>(
+pub(crate) fn label<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     text: &str,
     at: (i32, i32),
@@ -564,7 +564,7 @@ pub trait Figure {
 }
 
 /// Title, wrapped subtitle lines and legend at the top of a figure; returns the y below them.
-fn draw_header<DB: DrawingBackend>(
+pub(crate) fn draw_header<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     subtitle: &[String],
@@ -583,7 +583,7 @@ fn draw_header<DB: DrawingBackend>(
     Ok(y + legend_height(legend, width - 2 * MARGIN))
 }
 
-fn header_height(subtitle: &[String], legend: &[LegendEntry], width: i32) -> i32 {
+pub(crate) fn header_height(subtitle: &[String], legend: &[LegendEntry], width: i32) -> i32 {
     12 + TITLE_SIZE as i32
         + 10
         + subtitle.len() as i32 * (SMALL_SIZE as i32 + 6)
@@ -592,7 +592,7 @@ fn header_height(subtitle: &[String], legend: &[LegendEntry], width: i32) -> i32
 }
 
 /// The width a header needs: the title and subtitle lines.
-fn header_width(title: &str, subtitle: &[String]) -> i32 {
+pub(crate) fn header_width(title: &str, subtitle: &[String]) -> i32 {
     subtitle
         .iter()
         .map(|s| text_width(s, SMALL_SIZE))

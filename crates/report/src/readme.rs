@@ -42,6 +42,8 @@ pub struct ReadmeInput<'a> {
     pub peers: Option<(&'a RunInfo, &'a [crate::peers::PeerRow])>,
     /// The second study, when given.
     pub study: Option<&'a crate::study::Study>,
+    /// The `lod` run, when given.
+    pub lod: Option<&'a crate::lod::LodRun>,
 }
 
 fn provenance_rows(info: &RunInfo) -> Vec<(String, String)> {
@@ -320,6 +322,8 @@ fn figure_heading(name: &str) -> &str {
         "seed_triangles" => "Triangles over the seeds",
         "seed_reduction" => "Triangle reduction over the seeds",
         "seed_radius_ratio" => "Radius ratio over the seeds",
+        "lod_top_view" => "The level map from above (lod run)",
+        "lod_triangles" => "Triangles per level (lod run)",
         other => other,
     }
 }
@@ -562,6 +566,12 @@ pub fn readme(input: &ReadmeInput) -> String {
         }));
     }
 
+    if let Some(lod) = input.lod {
+        out.push_str(&crate::lod::readme_section(lod, |name| {
+            table_link(input.tables, name)
+        }));
+    }
+
     out.push_str("## Files\n\n");
     out.push_str("| file | what |\n|---|---|\n");
     for table in input.tables {
@@ -591,6 +601,9 @@ pub fn readme(input: &ReadmeInput) -> String {
             "controls.csv" => "one row per control answer",
             "coverage.csv" => "coverage of the planted strengths over simulated studies",
             "coverage_tests.csv" => "the simulated studies' test rates",
+            "lod.csv" => "one row per viewer step of the lod flight",
+            "lod_levels.csv" => "chunks and triangles per viewer step and level",
+            "lod_map.csv" => "the level map at the flight's last step, one row per chunk",
             _ => "input",
         };
         let scope = if file.starts_with("scaling/") {
@@ -603,6 +616,8 @@ pub fn readme(input: &ReadmeInput) -> String {
             " (peers seed study)"
         } else if file.starts_with("study/") {
             " (second study)"
+        } else if file.starts_with("lod/") {
+            " (lod run)"
         } else {
             ""
         };
@@ -626,9 +641,10 @@ pub fn readme(input: &ReadmeInput) -> String {
          cargo run --release -p experiments -- run experiments/manifests/check-cost.toml\n\
          cargo run --release -p experiments -- run experiments/manifests/peers.toml\n\
          cargo run --release -p experiments -- run experiments/manifests/peers-seeds.toml\n\
+         cargo run --release -p experiments -- run experiments/manifests/lod-ci.toml\n\
          cargo run --release -p experiments -- report --run results/<paper run> --scaling \
          results/<scaling run> --check-cost results/<check-cost run> --peers results/<peers \
-         run> --peers-seeds results/<peers-seeds run>\n```\n",
+         run> --peers-seeds results/<peers-seeds run> --lod results/<lod-ci run>\n```\n",
     );
     out
 }

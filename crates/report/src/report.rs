@@ -11,13 +11,14 @@
 //!                            summary.csv), when given
 //! <out>/data/peers-seeds/    the peers seed study (run.json, manifest.toml, seeds.csv)
 //! <out>/data/study/          the second study's answers and design (crate::study), when given
+//! <out>/data/lod/            a `lod` run's files (crate::lod), when given
 //! <out>/figures/NAME.{png,svg}
 //! <out>/tables/NAME.{md,csv}
 //! <out>/questionnaire/       the questionnaire analysis (rmt-analysis: tables and charts)
 //! ```
 //!
 //! `data/` is itself a valid run folder (with `data/scaling/`, `data/check-cost/`,
-//! `data/peers/`, `data/peers-seeds/` and `data/study/` found by default), so a report
+//! `data/peers/`, `data/peers-seeds/`, `data/study/` and `data/lod/` found by default), so a report
 //! rebuilds from its own copy: that is what [`check`] does.
 
 use std::collections::BTreeSet;
@@ -74,6 +75,8 @@ pub struct ReportInputs {
     /// The folder of the second study's answers and design (see [`crate::study`] and
     /// [`default_study`]), if any.
     pub study: Option<PathBuf>,
+    /// A run folder of the `lod` workload (see [`crate::lod`] and [`default_lod`]), if any.
+    pub lod: Option<PathBuf>,
     /// The questionnaire, if it is part of the report.
     pub questionnaire: Option<Questionnaire>,
     /// Copy `raw.csv` into `data/` (it can be large; `summary.csv` holds what the report uses).
@@ -112,6 +115,16 @@ pub fn default_study(run: &Path) -> Option<PathBuf> {
 
 /// The folder of `data/` that holds the second study.
 pub const STUDY_DIR: &str = "study";
+
+/// `run/lod` when it holds a `lod` run with the section's files (as a report's `data/`
+/// folder does).
+pub fn default_lod(run: &Path) -> Option<PathBuf> {
+    let candidate = run.join(LOD_DIR);
+    crate::lod::is_lod(&candidate).then_some(candidate)
+}
+
+/// The folder of `data/` that holds the `lod` run.
+pub const LOD_DIR: &str = "lod";
 
 /// The folder of `data/` that holds the peers run.
 pub const PEERS_DIR: &str = "peers";
@@ -223,6 +236,13 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         )),
         None => None,
     };
+    let lod = match &inputs.lod {
+        Some(folder) => Some((
+            crate::lod::read_lod(folder)?,
+            crate::lod::lod_files(folder)?,
+        )),
+        None => None,
+    };
     // Read every input before writing anything: `out/data` may be the input.
     let data = read_data_files(&inputs.run, inputs.keep_raw)?;
     let sub_data = |folder: &Option<PathBuf>| match folder {
@@ -281,6 +301,26 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         }
         None => {}
     }
+    // The lod run's folder: its own files (lod.csv, lod_levels.csv, lod_map.csv and the run's).
+    let lod_dir = data_dir.join(LOD_DIR);
+    match &lod {
+        Some((_, files)) => {
+            std::fs::create_dir_all(&lod_dir).map_err(io_error(&lod_dir))?;
+            for (name, bytes) in files {
+                write_atomic(&lod_dir.join(name), bytes)?;
+            }
+            data_files.extend(files.iter().map(|(n, _)| format!("{LOD_DIR}/{n}")));
+        }
+        None if lod_dir.is_dir() => {
+            for name in crate::lod::LOD_FILES {
+                let path = lod_dir.join(name);
+                if path.is_file() {
+                    std::fs::remove_file(&path).map_err(io_error(&path))?;
+                }
+            }
+        }
+        None => {}
+    }
 
     for (name, files) in &subs {
         let dir = data_dir.join(name);
@@ -327,6 +367,9 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
     }
     if let Some((s, _)) = &study {
         all_tables.extend(crate::study::study_tables(s));
+    }
+    if let Some((l, _)) = &lod {
+        all_tables.extend(crate::lod::lod_tables(l));
     }
     let mut kept = BTreeSet::new();
     for table in &all_tables {
@@ -379,6 +422,16 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
             all_figures.push(("peers_time_triangles".into(), AnyFigure::Xy(chart)));
         }
     }
+    if let Some((l, _)) = &lod {
+        all_figures.push((
+            "lod_top_view".into(),
+            AnyFigure::TopView(crate::lod::top_view(l)),
+        ));
+        all_figures.push((
+            "lod_triangles".into(),
+            AnyFigure::Rows(crate::lod::triangles_figure(l)),
+        ));
+    }
     let mut kept = BTreeSet::new();
     for (name, figure) in &all_figures {
         for path in figure.write(&figures_dir, name)? {
@@ -418,6 +471,7 @@ pub fn build(inputs: &ReportInputs, out: &Path) -> Result<Vec<PathBuf>> {
         check_cost: check_cost.as_ref(),
         peers: peers.as_ref().map(|(info, rows)| (info, rows.as_slice())),
         study: study.as_ref().map(|(s, _)| s),
+        lod: lod.as_ref().map(|(l, _)| l),
         figures: &figure_names,
         tables: &all_tables,
         questionnaire: questionnaire.as_ref(),

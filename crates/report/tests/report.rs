@@ -30,6 +30,7 @@ fn inputs(run: &Path, scaling: Option<&Path>, resamples: Option<usize>) -> Repor
         peers: None,
         peers_seeds: None,
         study: None,
+        lod: None,
         questionnaire: resamples.map(questionnaire),
         keep_raw: true,
     }
@@ -659,4 +660,94 @@ fn the_study_section_is_built_from_simulated_answers_and_says_so() {
     }
     let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
     assert!(!readme.contains("A second study on screen"));
+}
+
+#[test]
+fn the_lod_section_shows_the_level_map_from_above_and_triangles_per_level() {
+    let out = tempfile::tempdir().unwrap();
+    let ci = fixtures().join("ci");
+    let with_lod = ReportInputs {
+        lod: Some(fixtures().join("lod")),
+        ..inputs(&ci, None, None)
+    };
+    let files = build(&with_lod, out.path()).unwrap();
+    for file in [
+        "data/lod/lod_map.csv",
+        "data/lod/lod_levels.csv",
+        "data/lod/lod.csv",
+        "data/lod/summary.csv",
+        "figures/lod_top_view.png",
+        "figures/lod_top_view.svg",
+        "figures/lod_triangles.png",
+        "tables/lod_levels.csv",
+        "tables/lod_summary.md",
+    ] {
+        assert!(out.path().join(file).is_file(), "{file} missing");
+        assert!(
+            files.iter().any(|f| f == Path::new(file)),
+            "{file} not listed"
+        );
+    }
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(readme.contains("## Level of detail: the level map from above"));
+    // The section names its world: the lod-ci manifest's caves.
+    assert!(
+        readme.contains("the `lod-ci` manifest's run"),
+        "world not named"
+    );
+    assert!(readme.contains("caves of 64 x 32 x 64 finest cells"));
+    assert!(readme.contains("![The level map from above](figures/lod_top_view.png)"));
+    // Triangles per level at the last step add up to lod.csv's last step.
+    let levels = std::fs::read_to_string(out.path().join("tables/lod_levels.csv")).unwrap();
+    let total: u64 = levels
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(3).unwrap().parse::<u64>().unwrap())
+        .sum();
+    let steps = std::fs::read_to_string(fixtures().join("lod/lod.csv")).unwrap();
+    let last = steps.lines().last().unwrap();
+    let header: Vec<&str> = steps.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "triangles").unwrap();
+    assert_eq!(
+        total,
+        last.split(',').nth(col).unwrap().parse::<u64>().unwrap()
+    );
+    assert_eq!(levels.lines().count(), 1 + 3, "levels 0-2");
+    // Every chunk the section cuts is drawn: the SVG holds the level colours' rectangles.
+    let svg = std::fs::read_to_string(out.path().join("figures/lod_top_view.svg")).unwrap();
+    assert!(svg.matches("<rect").count() > 10);
+
+    // The report's own copy finds the lod run again and rebuilds identically.
+    let again = ReportInputs {
+        lod: rmt_report::default_lod(&out.path().join("data")),
+        ..inputs(&out.path().join("data"), None, None)
+    };
+    assert!(again.lod.is_some());
+    assert!(check(&again, out.path()).unwrap().passed());
+    // Without it the section and its files go.
+    build(&inputs(&ci, None, None), out.path()).unwrap();
+    for gone in [
+        "tables/lod_levels.csv",
+        "figures/lod_top_view.png",
+        "data/lod/lod_map.csv",
+    ] {
+        assert!(!out.path().join(gone).exists(), "{gone} left behind");
+    }
+    let readme = std::fs::read_to_string(out.path().join("README.md")).unwrap();
+    assert!(!readme.contains("Level of detail"));
+}
+
+#[test]
+fn a_lod_folder_without_its_map_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    copy_dir(&fixtures().join("lod"), dir.path());
+    std::fs::remove_file(dir.path().join("lod_map.csv")).unwrap();
+    assert!(!rmt_report::lod::is_lod(dir.path()));
+    let with_lod = ReportInputs {
+        lod: Some(dir.path().to_path_buf()),
+        ..inputs(&fixtures().join("ci"), None, None)
+    };
+    let out = tempfile::tempdir().unwrap();
+    let err = build(&with_lod, out.path()).unwrap_err().to_string();
+    assert!(err.contains("lod_map.csv"), "{err}");
 }

@@ -14,6 +14,8 @@
 //! | [`TOPOLOGY_CSV`], [`FAILURES_CSV`] | runner, seed studies | topology tallies and failing fields |
 //! | [`EDITS_CSV`] | runner, `edit` workload | [`schema::EDITS`](crate::schema::EDITS) |
 //! | [`LOD_CSV`] | runner, `lod` workload | [`schema::LOD_STEPS`](crate::schema::LOD_STEPS) (`summary.csv`: [`schema::LOD_SUMMARY`](crate::schema::LOD_SUMMARY)) |
+//! | [`LOD_LEVELS_CSV`] | runner, `lod` workload | [`schema::LOD_LEVELS`](crate::schema::LOD_LEVELS): chunks and triangles per step and level |
+//! | [`LOD_MAP_CSV`] | runner, `lod` workload | [`schema::LOD_MAP`](crate::schema::LOD_MAP): the last step's level map, one row per chunk |
 //!
 //! The study commands (`experiments render`, `questionnaire`) add their own folders beside these
 //! (see `rmt_render::run_folder`).
@@ -46,6 +48,10 @@ pub const FAILURES_CSV: &str = "topology_failures.csv";
 pub const EDITS_CSV: &str = "edits.csv";
 /// The `lod` workload's viewer steps, one row each.
 pub const LOD_CSV: &str = "lod.csv";
+/// The `lod` workload's chunks and triangles per viewer step and level.
+pub const LOD_LEVELS_CSV: &str = "lod_levels.csv";
+/// The `lod` workload's level map at its last step, one row per chunk.
+pub const LOD_MAP_CSV: &str = "lod_map.csv";
 
 /// The mesh file of configuration `id` in run folder `folder`: `<folder>/meshes/<id>.ply`.
 pub fn mesh_file(folder: &Path, id: &str) -> PathBuf {

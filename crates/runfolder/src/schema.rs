@@ -171,6 +171,30 @@ pub const LOD_STEPS: [&str; 18] = [
     "normal_seam_max_deg",
 ];
 
+/// The columns of `lod_levels.csv` (the `lod` workload: one row per viewer step and level
+/// `0..=levels`, levels without chunks included): the chunks of that level in the map and their
+/// triangles.
+pub const LOD_LEVELS: [&str; 5] = ["id", "step", "level", "chunks", "triangles"];
+
+/// The columns of `lod_map.csv` (the `lod` workload: the level map of the last step, one row per
+/// chunk in map order): the chunk's level, its index among that level's chunks, its box in world
+/// coordinates and its triangles.
+pub const LOD_MAP: [&str; 13] = [
+    "id",
+    "step",
+    "level",
+    "ix",
+    "iy",
+    "iz",
+    "x_min",
+    "y_min",
+    "z_min",
+    "x_max",
+    "y_max",
+    "z_max",
+    "triangles",
+];
+
 /// The columns of a `lod` run's `summary.csv` (one row per configuration).
 pub const LOD_SUMMARY: [&str; 32] = [
     "id",

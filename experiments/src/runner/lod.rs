@@ -1,7 +1,8 @@
 //! The `lod` workload in a run folder: one viewer flight over a multiresolution world per
-//! configuration ([`crate::lod::run_lod_session`]), written to `lod.csv` (one row per step) and
-//! `summary.csv` (re-mesh time quantiles, pops, seams, validation, triangles over the finest
-//! level, memory). Both are written once at the end, atomically; an interrupted run leaves no
+//! configuration ([`crate::lod::run_lod_session`]), written to `lod.csv` (one row per step),
+//! `lod_levels.csv` (chunks and triangles per step and level), `lod_map.csv` (the last step's
+//! level map, for the report's top view) and `summary.csv` (re-mesh time quantiles, pops, seams,
+//! validation, triangles over the finest level, memory). Both are written once at the end, atomically; an interrupted run leaves no
 //! CSV and is started again rather than resumed.
 
 use std::fs;
@@ -9,13 +10,14 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use rmt_runfolder::layout::{
-    mesh_file, CONFIGURATIONS_CSV, LOD_CSV, MANIFEST_COPY, MESHES, RUN_JSON, SUMMARY_CSV,
+    mesh_file, CONFIGURATIONS_CSV, LOD_CSV, LOD_LEVELS_CSV, LOD_MAP_CSV, MANIFEST_COPY, MESHES,
+    RUN_JSON, SUMMARY_CSV,
 };
-use rmt_runfolder::schema::{LOD_STEPS, LOD_SUMMARY};
+use rmt_runfolder::schema::{LOD_LEVELS, LOD_MAP, LOD_STEPS, LOD_SUMMARY};
 use rmt_runfolder::{csv_bytes, write_atomic};
 
 use super::session::{self, RunOptions, RunReport};
-use crate::lod::{lod_rows, lod_summary_row, run_lod_session};
+use crate::lod::{lod_level_rows, lod_map_rows, lod_rows, lod_summary_row, run_lod_session};
 use crate::manifest::{Fields, LodPlan, Plan};
 use crate::provenance::Provenance;
 use crate::run_record::{RunRecord, Status};
@@ -37,6 +39,8 @@ pub(super) fn execute_lod(
         "{msg:>16} [{bar:30}] {pos}/{len} flights, {elapsed} elapsed",
     );
     let mut steps = vec![LOD_STEPS.map(String::from).to_vec()];
+    let mut levels = vec![LOD_LEVELS.map(String::from).to_vec()];
+    let mut map = vec![LOD_MAP.map(String::from).to_vec()];
     let mut summary = vec![LOD_SUMMARY.map(String::from).to_vec()];
     let mut status = Status::Finished;
     let mut ran = 0;
@@ -52,6 +56,8 @@ pub(super) fn execute_lod(
         let session = run_lod_session(field, &c.extraction, lod, plan.threads, plan.save_meshes)
             .with_context(|| format!("lod flight of configuration {}", c.id))?;
         steps.extend(lod_rows(&c.id, &session));
+        levels.extend(lod_level_rows(&c.id, &session));
+        map.extend(lod_map_rows(&c.id, &session));
         summary.push(lod_summary_row(
             &c.id,
             &c.extraction,
@@ -72,12 +78,16 @@ pub(super) fn execute_lod(
     bar.finish_and_clear();
     if status == Status::Finished {
         write_atomic(&folder.join(LOD_CSV), &csv_bytes(&steps)?)?;
+        write_atomic(&folder.join(LOD_LEVELS_CSV), &csv_bytes(&levels)?)?;
+        write_atomic(&folder.join(LOD_MAP_CSV), &csv_bytes(&map)?)?;
         write_atomic(&folder.join(SUMMARY_CSV), &csv_bytes(&summary)?)?;
         let mut files = vec![
             MANIFEST_COPY,
             RUN_JSON,
             CONFIGURATIONS_CSV,
             LOD_CSV,
+            LOD_LEVELS_CSV,
+            LOD_MAP_CSV,
             SUMMARY_CSV,
         ];
         if plan.save_meshes {
