@@ -333,3 +333,60 @@ fn overlay_memory_follows_the_edits_not_the_world() {
     assert!(double > a + a / 4 && double < 3 * a, "{a} -> {double}");
     assert!(a < 64 * 8 * 80, "{a} bytes for 64 strokes");
 }
+
+fn cases(default: u32) -> u32 {
+    std::env::var("RMT_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .map_or(default, |n: u32| (n / 16).max(default))
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::test_runner::Config {
+        cases: cases(8),
+        failure_persistence: None,
+        ..proptest::test_runner::Config::default()
+    })]
+
+    /// Random fields, random balanced maps and random strokes (adding or removing, clamped or
+    /// not, any size), interleaved: after every step the incremental world equals a
+    /// from-scratch meshing of field + overlay, byte for byte, closed, manifold and oriented.
+    #[test]
+    fn random_strokes_and_maps_equal_from_scratch(
+        field_seed in proptest::prelude::any::<u64>(),
+        map_seeds in proptest::collection::vec(proptest::prelude::any::<u64>(), 3),
+        strokes in proptest::collection::vec(
+            ((-1.2f32..1.2, -1.2f32..1.2, -1.2f32..1.2), 0.05f32..0.6, 0.5f32..10.0, 0u8..4),
+            4,
+        ),
+    ) {
+        let field = RandomField::from_seed(field_seed);
+        let s = LodSettings {
+            geometry: LodGeometry::new(2, 2, [2, 1, 2]).unwrap(),
+            frame: LodFrame { origin: Vec3::splat(-1.0), h: 0.125 },
+            ratio: 0.5,
+            threads: 2,
+        };
+        let g = s.geometry;
+        let mut world = LodWorld::new(field.clone(), s).unwrap();
+        world.set_level_map(LevelMap::random(g, map_seeds[0], 0.5)).unwrap();
+        world.remesh().unwrap();
+        for (i, ((x, y, z), radius, strength, kind)) in strokes.into_iter().enumerate() {
+            let c = Vec3::new(x, y, z);
+            let brush = match kind {
+                0 => Brush::add(c, radius, strength),
+                1 => Brush::subtract(c, radius, strength),
+                2 => Brush::add(c, radius, strength).with_clamp(0.3),
+                _ => Brush::subtract(c, radius, strength).with_clamp(0.3),
+            };
+            world.edit(&brush, 0.05).unwrap();
+            if i % 2 == 1 {
+                world
+                    .set_level_map(LevelMap::random(g, map_seeds[1 + i / 2], 0.5))
+                    .unwrap();
+            }
+            world.remesh().unwrap();
+            assert_from_scratch(&world, &field, &format!("stroke {i}"));
+        }
+    }
+}
