@@ -35,14 +35,21 @@ Conventions
   first (one copy, by numpy). The body-centred lattice interleaves corner and centre planes in
   its sample array, so there the values are copied into it (``stats["input_copied"]`` True).
   Do not write to the volume from another thread during the call.
-* The body-centred lattice (``lattice="bcdl"``) also samples the centre of every cube, and the
-  centres of the cubes just outside each face of the box ("ghosts", sampled on the face, at its
-  centre: the tetrahedra between the box face and the first centres need them). They are never
-  guessed: pass ``centres`` of shape ``volume.shape + 1`` (the ghost layer included, as
-  :func:`sample` returns them; entries outside two or three faces are not read), or a callable
-  ``centres(x, y, z)``, or ``centres`` of shape ``volume.shape - 1`` together with ``ghosts``:
-  a number (every ghost has that value, e.g. a value outside when the object stays away from
-  the box) or a callable ``ghosts(x, y, z)`` evaluated at the ghosts. Without them
+* The body-centred lattice (``lattice="bcdl"``) also samples the centre of every cube: pass
+  ``centres`` of shape ``volume.shape - 1`` (``centres[k, j, i]`` at the centre of cube
+  ``[k, j, i]``). Between each cube face on the box and the centre inside lies half an
+  octahedron, a pyramid; it is split into two tetrahedra along the face diagonal through the
+  face's lowest corner, whose crossing is a vertex of its own, so no value outside the box is
+  needed and the mesh is closed wherever the surface stays inside the box. Integrated
+  clustering leaves the crossings within one and a half cells of the box faces alone there
+  (no cluster's triangles touch a pyramid), so its guarantee holds. The library's own
+  lattice closes the pyramids instead with the centres of the cubes just outside the box
+  ("ghosts", sampled on the face, at its centre): pass ``centres`` of shape
+  ``volume.shape + 1`` (the ghost layer included, as :func:`sample` returns them; entries
+  outside two or three faces are not read), or a callable ``centres(x, y, z)``, or
+  ``centres`` of shape ``volume.shape - 1`` together with ``ghosts``: a number (every ghost has
+  that value) or a callable ``ghosts(x, y, z)`` evaluated at the ghosts. The two meshes are the
+  same more than a cell inside the box. Centres are never guessed: without them
   ``lattice="bcdl"`` is refused.
 * The GIL is released while the extractor runs; ``threads`` defaults to the machine's cores.
   Errors are ``ValueError`` (with the library's message), ``TypeError`` for a non-float dtype,
@@ -327,12 +334,13 @@ def extract(volume: Any, level: float = 0.0, *, spacing: Sequence[float] = (1.0,
         Values at the cube centres, for ``lattice="bcdl"``: with the ghost layer (entry
         ``[k + 1, j + 1, i + 1]`` is the centre of cube ``[k, j, i]``; the first and last
         entries along an axis are the ghosts on that box face, as :func:`sample` returns
-        them), or without it (then ``ghosts`` is needed), or ``centres(x, y, z)``, a
-        vectorised callable of world coordinates evaluated once at every centre and ghost.
+        them), or without it (the box faces are then closed by pyramids, see the module doc,
+        unless ``ghosts`` is given), or ``centres(x, y, z)``, a vectorised callable of world
+        coordinates evaluated once at every centre and ghost.
     ghosts : number, callable, or None
-        With ``(nz, ny, nx)`` centres only: the values of the ghosts (the centres of the cubes
-        just outside the box, sampled at the centre of their box face): one number for all, or
-        ``ghosts(x, y, z)`` evaluated at them. Never guessed; see the module doc.
+        With ``(nz, ny, nx)`` centres only, optional: the values of the ghosts (the centres of
+        the cubes just outside the box, sampled at the centre of their box face): one number
+        for all, or ``ghosts(x, y, z)`` evaluated at them. Never guessed; see the module doc.
     origin : 3 floats
         World position of ``volume[0, 0, 0]``, array order ``(z, y, x)``. Not in scikit-image
         (which starts at 0, the default).
@@ -365,15 +373,10 @@ def extract(volume: Any, level: float = 0.0, *, spacing: Sequence[float] = (1.0,
             centres = _as_float32(centres, "centres")
             inner = tuple(s - 1 for s in volume.shape)
             if centres.shape == inner:
-                if ghosts is None:
-                    raise ValueError(
-                        f"centres of shape {inner} (the volume's shape minus 1) leave out the "
-                        "ghosts, the centres of the cubes just outside the box, which the "
-                        "body-centred tetrahedra along the box faces need: pass ghosts= (a "
-                        "number, or a callable ghosts(x, y, z)), or centres of shape "
-                        f"{tuple(s + 1 for s in volume.shape)} with the ghost layer, or a "
-                        "callable centres; they are not guessed by interpolation")
-                centres = _centres_with_ghosts(centres, ghosts, volume.shape, spacing, origin)
+                # Without ghosts= the box faces are closed by pyramids (no ghost needed).
+                if ghosts is not None:
+                    centres = _centres_with_ghosts(centres, ghosts, volume.shape, spacing,
+                                                   origin)
             elif ghosts is not None:
                 raise ValueError(f"ghosts= completes centres of shape {inner}; got centres of "
                                  f"shape {centres.shape}")

@@ -80,8 +80,9 @@ def extract(
     """The isosurface volume == level of volume[z, y, x], as scikit-image's marching_cubes reads
     and returns it: spacing, origin, vertices and normals in array order (z, y, x); no copy of
     a C-contiguous float32 volume (simple lattice, mc, surface-nets). lattice bcdl needs
-    centres: shape + 1 (ghost layer included), shape - 1 with ghosts (a number or callable), or
-    a callable. clustering applies to mt (mc and surface-nets: the default or none)."""
+    centres: shape - 1 (the box faces closed by pyramids, no ghost), shape + 1 (ghost layer
+    included), shape - 1 with ghosts (a number or callable), or a callable. clustering applies
+    to mt (mc and surface-nets: the default or none)."""
 
 def extract_field(
     f: _Field,

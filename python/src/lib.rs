@@ -24,7 +24,9 @@ use numpy::{PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
-use rmt_extract::{Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Stats};
+use rmt_extract::{
+    Boundary, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Stats,
+};
 use rmt_mesh::Mesh;
 
 use crate::errors::extract_error;
@@ -182,7 +184,8 @@ fn volume_grid(shape: [usize; 3], spacing: [f64; 3], origin: [f64; 3]) -> PyResu
 ///
 /// `volume` is C-contiguous float32 of shape (nz + 1, ny + 1, nx + 1); `centres` (body-centred
 /// lattice only) of shape (nz + 2, ny + 2, nx + 2), the ghost layer included (the Python
-/// wrapper builds it from `centres` and `ghosts`). On the simple lattice (and for marching
+/// wrapper builds it from `centres` and `ghosts`), or (nz, ny, nx), without ghosts: then the
+/// box faces are closed by pyramids (`Boundary::Pyramids`). On the simple lattice (and for marching
 /// cubes and surface nets) the volume is read in place, without a copy. Returns `(vertices,
 /// faces, normals, stats, box)` in array order (z, y, x), faces wound for that order.
 #[pyfunction]
@@ -227,6 +230,14 @@ fn extract_volume<'py>(
         )),
         None => None,
     };
+    // Centres of shape `volume.shape - 1` (no ghost layer): the box is closed by the pyramids
+    // of the box faces, split in two tetrahedra each, without ghosts.
+    let mut settings = settings;
+    if settings.lattice == Lattice::BodyCentred
+        && centres_slice.is_some_and(|(_, c)| (0..3).all(|a| c[a] + 1 == shape[a]))
+    {
+        settings.boundary = Boundary::Pyramids;
+    }
     let input = volume::Input {
         values,
         shape,

@@ -7,8 +7,9 @@
 //! centre planes alternate in storage (see `rmt_extract::samples`), so the values are copied
 //! into the extractor's sample array, the centres from `centres` of shape
 //! `(nz + 2, ny + 2, nx + 2)`: the ghost layer included (index 0 and the last along an axis are
-//! the centres of the cubes just outside the box, sampled on the box face). The Python wrapper
-//! builds that array from `(nz, ny, nx)` centres and the user's `ghosts`; no ghost value is
+//! the centres of the cubes just outside the box, sampled on the box face; the Python wrapper
+//! builds that array from `(nz, ny, nx)` centres and the user's `ghosts`), or of shape
+//! `(nz, ny, nx)` without ghosts, for `rmt_extract::Boundary::Pyramids`. No ghost value is
 //! ever made up here.
 
 use rayon::prelude::*;
@@ -163,26 +164,37 @@ impl Input<'_> {
         }
     }
 
+    /// The corners into the body-centred sample array: storage plane 2 z + 1, slots (x, y).
+    fn fill_corners(&self, samples: &mut Samples, slot: impl Fn(usize, usize, usize) -> usize) {
+        let [nz1, ny1, nx1] = self.shape;
+        for z in 0..nz1 {
+            for y in 0..ny1 {
+                let src = (z * ny1 + y) * nx1;
+                let at = slot(2 * z + 1, y, 0);
+                samples.values[at..at + nx1].copy_from_slice(&self.values[src..src + nx1]);
+            }
+        }
+    }
+
     fn fill_bcdl(&self, settings: &ExtractSettings, samples: &mut Samples) -> Result<(), Error> {
         let [nz1, ny1, nx1] = self.shape;
         let (nx, ny, nz) = (nx1 - 1, ny1 - 1, nz1 - 1);
         let Some((centres, cshape)) = self.centres else {
             return Err(Error::Value(format!(
                 "lattice='bcdl' needs the values at the cube centres too: pass centres= (an array \
-                 of shape {:?}, the volume's shape minus 1, with ghosts=; or {:?}, the ghost \
-                 layer included; or a callable), or use extract_field with a callable; they \
-                 are not guessed by interpolation",
+                 of shape {:?}, the volume's shape minus 1; or {:?}, with the ghost layer; or a \
+                 callable), or use extract_field with a callable; they are not guessed by \
+                 interpolation",
                 [nz, ny, nx],
                 [nz + 2, ny + 2, nx + 2]
             )));
         };
         let ghosts = [nz + 2, ny + 2, nx + 2];
-        if cshape != ghosts {
+        let inner = [nz, ny, nx];
+        if cshape != ghosts && cshape != inner {
             return Err(Error::Value(format!(
-                "centres must have shape {ghosts:?} here (the cube centres with the ghost layer; \
-                 the Python wrapper builds it from centres of shape {:?} and ghosts=), got \
-                 {cshape:?}",
-                [nz, ny, nx]
+                "centres must have shape {ghosts:?} (the cube centres with the ghost layer) or \
+                 {inner:?} (without it: the box faces are closed by pyramids), got {cshape:?}"
             )));
         }
         if centres.len() != cshape.iter().product::<usize>() {
@@ -192,14 +204,24 @@ impl Input<'_> {
         samples.values.fill(f32::NAN);
         let [dx, dy, _] = samples.dims;
         let slot = |plane: usize, sy: usize, sx: usize| (plane * dy + sy) * dx + sx;
-        // Corners: storage plane 2 z + 1, slots (x, y).
-        for z in 0..=nz {
-            for y in 0..=ny {
-                let src = (z * ny1 + y) * nx1;
-                let at = slot(2 * z + 1, y, 0);
-                samples.values[at..at + nx1].copy_from_slice(&self.values[src..src + nx1]);
+        if cshape == inner {
+            // No ghost: centre [k, j, i] is storage plane 2 k + 2, slot (i + 1, j + 1); the
+            // ghosts' slots stay NaN and are never read (`Boundary::Pyramids`).
+            self.fill_corners(samples, slot);
+            for k in 0..nz {
+                for j in 0..ny {
+                    let src = (k * ny + j) * nx;
+                    let row = &centres[src..src + nx];
+                    if let Some(i) = row.iter().position(|v| !v.is_finite()) {
+                        return Err(non_finite("centres", src + i, row[i], cshape));
+                    }
+                    let at = slot(2 * k + 2, j + 1, 1);
+                    samples.values[at..at + nx].copy_from_slice(row);
+                }
             }
+            return Ok(());
         }
+        self.fill_corners(samples, slot);
         // Centre plane p (cube k = p - 1) is storage plane 2 p, slot (i + 1, j + 1): the
         // array's layout exactly. Only the points that exist are copied and checked (the
         // centres of cubes outside two or three faces are never read).

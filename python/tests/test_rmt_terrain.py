@@ -372,9 +372,9 @@ def test_ghosts_are_given_never_guessed():
     outside = rmt_terrain.extract(volume, 0.0, centres=inner, ghosts=1.0, **kw)
     assert not np.array_equal(outside.vertices, by_callable.vertices)
     assert outside.validate()["closed"] and by_callable.validate()["closed"]
-    # Without ghosts, centres of the volume's shape minus 1 are refused, with the reason.
+    # Without centres, the body-centred lattice is refused, with the reason.
     with pytest.raises(ValueError, match="not guessed by interpolation"):
-        rmt_terrain.extract(volume, 0.0, centres=inner, **kw)
+        rmt_terrain.extract(volume, 0.0, **kw)
     with pytest.raises(ValueError, match="ghosts= completes"):
         rmt_terrain.extract(volume, 0.0, centres=f, ghosts=1.0, **kw)
     with pytest.raises(ValueError, match="ghosts= completes"):
@@ -383,6 +383,61 @@ def test_ghosts_are_given_never_guessed():
         rmt_terrain.extract(volume, 0.0, centres=inner, ghosts=float("inf"), **kw)
     with pytest.raises(TypeError, match="ghosts must be"):
         rmt_terrain.extract(volume, 0.0, centres=inner, ghosts="outside", **kw)
+
+
+def _inner_triangles(mesh, lo, hi, margin):
+    """The triangles with every corner more than ``margin`` inside the box, as sorted tuples of
+    their corners' coordinates (each rotated to start at its smallest corner: orientation
+    kept), so that two meshes compare without their vertex numbering."""
+    v = mesh.vertices
+    inside = np.all((v > lo + margin) & (v < hi - margin), axis=1)
+    out = []
+    for t in mesh.faces[inside[mesh.faces].all(axis=1)]:
+        c = [tuple(v[i].tolist()) for i in t]
+        k = min(range(3), key=lambda i: c[i])
+        out.append((c[k], c[(k + 1) % 3], c[(k + 2) % 3]))
+    return sorted(out)
+
+
+def test_centres_without_ghosts_close_the_box_with_pyramids():
+    # Centres of the volume's shape minus 1 alone: each half-octahedron between a box face and
+    # the centre inside is split into two tetrahedra. On random smooth fields that cross the
+    # box faces: closed inside the box, manifold, oriented; and more than a cell inside the
+    # box the mesh is the one the exact ghosts give.
+    rng = np.random.default_rng(5)
+    n = 14
+    h = 2.0 / n
+    for trial in range(4):
+        waves = [(rng.normal(0, 5, 3), rng.uniform(0, 2 * np.pi)) for _ in range(5)]
+        offset = rng.uniform(-1, 1)
+
+        def f(x, y, z, waves=waves, offset=offset):
+            v = np.full(np.shape(x), offset)
+            for k, ph in waves:
+                v = v + np.cos(k[0] * x + k[1] * y + k[2] * z + ph)
+            return v
+
+        g = -1.0 + h * np.arange(n + 1)
+        z, y, x = np.meshgrid(g, g, g, indexing="ij")
+        volume = f(x, y, z).astype(np.float32)
+        c = -1.0 + h * (np.arange(n) + 0.5)
+        cz, cy, cx = np.meshgrid(c, c, c, indexing="ij")
+        centres = f(cx, cy, cz).astype(np.float32)
+        for clustering in ["none", "integrated"]:
+            kw = dict(spacing=(h,) * 3, origin=(-1, -1, -1), lattice="bcdl", normals="area",
+                      clustering=clustering)
+            mesh = rmt_terrain.extract(volume, 0.0, centres=centres, **kw)
+            report = mesh.validate()
+            what = f"trial {trial} {clustering}: {report}"
+            assert report["closed"] and report["manifold"] and report["oriented"], what
+            assert report["boundary_edges_on_box"] > 0, what  # it does meet the box faces
+            ghosts = rmt_terrain.extract(volume, 0.0, centres=centres, ghosts=f, **kw)
+            if clustering == "none":
+                a = _inner_triangles(mesh, -1.0, 1.0, h * 1.01)
+                b = _inner_triangles(ghosts, -1.0, 1.0, h * 1.01)
+                assert len(a) > 100 and a == b, what
+                assert len(mesh.faces) != len(ghosts.faces) or not np.array_equal(
+                    mesh.vertices, ghosts.vertices), what
 
 
 # ----------------------------------------------------------------------- the volume, not copied

@@ -9,8 +9,9 @@
 //!   [`Extractor::set_recording`], the anchor cell of every triangle and the clustering's
 //!   activity);
 //! - [`ExtractSettings`]: the [`Grid`], the [`Lattice`], the [`Method`] (marching tetrahedra or
-//!   cubes, or surface nets as a peer), the [`Clustering`] mode, the [`NormalMode`], and for
-//!   chunks the [`Tiling`] and the kept [`CellRange`];
+//!   cubes, or surface nets as a peer), the [`Clustering`] mode, the [`NormalMode`], the
+//!   [`Boundary`] of the body-centred lattice (ghosts or pyramids), and for chunks the
+//!   [`Tiling`] and the kept [`CellRange`];
 //! - [`Stats`]: counters, stage timings and bytes of one extraction ([`Stats::merge_steps_text`]
 //!   splits integrated clustering's time); [`ExtractError`] when it cannot run;
 //! - [`measure()`]: the quality of a mesh ([`Measurement`]; [`measure::on_box_boundary`]);
@@ -38,7 +39,8 @@
 //!    group passes (`repair`), then variants of split islands, lone crossings and sliver pairs
 //!    are added the same way (`additions`); integrated-unchecked keeps every proposal;
 //! 4. **emission** (`mt::emission`): one or two triangles per crossed tetrahedron from the case
-//!    table, written with the clustered vertex ids; collapsed ones are left out;
+//!    table, written with the clustered vertex ids; collapsed ones are left out; without ghosts,
+//!    then the pyramids of the box faces (`mt::pyramids`);
 //! 5. **post-processing** (`post`), for the modes that simplify after the fact: edge collapse
 //!    under the exact check, or meshoptimizer's simplifier;
 //! 6. **normals**.
@@ -92,7 +94,7 @@ pub use measure::{measure, Measurement};
 pub use post::{CollapseAttempt, CollapseOutcome};
 pub use samples::{SampleValues, Samples, Sampling};
 pub use settings::{
-    CellRange, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Tiling,
+    Boundary, CellRange, Clustering, ExtractSettings, Grid, Lattice, Method, NormalMode, Tiling,
 };
 pub use stats::Stats;
 pub use threads::{thread_pool, ThreadPlacement};

@@ -57,7 +57,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::{ExtractError, ExtractSettings, Lattice, Method, Stats};
+use crate::{Boundary, ExtractError, ExtractSettings, Lattice, Method, Stats};
 
 /// Field values on a lattice, plus the layout needed to find a point.
 #[derive(Clone, Debug, Default)]
@@ -75,6 +75,9 @@ pub struct Samples {
     pub dims: [usize; 3],
     /// The values, `dims[0] * dims[1] * dims[2]` of them.
     pub values: SampleValues,
+    /// How the body-centred lattice closes the box: with [`Boundary::Pyramids`] the ghosts
+    /// do not exist (their slots hold NaN and are never read).
+    pub boundary: Boundary,
 }
 
 /// The values of a [`Samples`], one per storage slot: the sample array's own buffer, or, for
@@ -243,6 +246,10 @@ impl Samples {
         let lattice = sampled_lattice(settings);
         let [nx, ny, nz] = settings.grid.cells;
         self.lattice = Some(lattice);
+        self.boundary = match lattice {
+            Lattice::BodyCentred => settings.boundary,
+            Lattice::Simple => Boundary::Ghosts,
+        };
         self.cells = settings.grid.cells;
         self.min = settings.grid.min;
         self.spacing = settings.grid.spacing();
@@ -324,8 +331,13 @@ impl Samples {
     /// Errors unless the layout matches `settings` (for pre-sampled extraction).
     pub fn check_layout(&self, settings: &ExtractSettings) -> Result<(), ExtractError> {
         let lattice = sampled_lattice(settings);
+        let boundary = match lattice {
+            Lattice::BodyCentred => settings.boundary,
+            Lattice::Simple => Boundary::Ghosts,
+        };
         if self.lattice != Some(lattice)
             || self.cells != settings.grid.cells
+            || self.boundary != boundary
             || self.values.len() != self.dims.iter().product::<usize>()
         {
             return Err(ExtractError::InvalidSettings(
@@ -383,7 +395,7 @@ impl Samples {
     }
 
     /// Whether body-centred point `(X, Y, Z)` exists: a corner inside the box, a centre of a cube
-    /// in the box, or a ghost centre outside exactly one face.
+    /// in the box, or a ghost centre outside exactly one face (with [`Boundary::Ghosts`]).
     #[inline]
     pub fn bcdl_exists(&self, p: [i32; 3]) -> bool {
         let odd = p[0] & 1;
@@ -400,7 +412,7 @@ impl Samples {
                 outside += 1;
             }
         }
-        outside == 0 || (odd == 1 && outside == 1)
+        outside == 0 || (odd == 1 && outside == 1 && self.boundary == Boundary::Ghosts)
     }
 
     /// World position of body-centred point `(X, Y, Z)`; ghosts land on the box face.
@@ -535,12 +547,14 @@ impl Samples {
                         (0, 0)
                     }
                 } else {
-                    // Centre plane: at most one of the three coordinates may be a ghost's.
+                    // Centre plane: at most one of the three coordinates may be a ghost's
+                    // (none without ghosts).
                     let outside =
                         usize::from(y == 0 || y == ny + 1) + usize::from(z == 0 || z == 2 * nz + 2);
-                    match outside {
-                        0 => (0, dx),
-                        1 => (1, nx + 1),
+                    match (outside, self.boundary) {
+                        (0, Boundary::Ghosts) => (0, dx),
+                        (0, Boundary::Pyramids) => (1, nx + 1),
+                        (1, Boundary::Ghosts) => (1, nx + 1),
                         _ => (0, 0),
                     }
                 }

@@ -171,6 +171,50 @@ impl Grid {
     }
 }
 
+/// How marching tetrahedra on the body-centred lattice closes the box at its faces.
+///
+/// The tetrahedra of the body-centred lattice join the centres of neighbouring cubes; between
+/// a box face and the centre of the cube inside it lies half an octahedron, a pyramid whose
+/// base is the cube's face.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Boundary {
+    /// The centres of the cubes just outside the box ("ghosts", sampled on the box face at the
+    /// face centre) close each pyramid with four tetrahedra: every lattice point is sampled,
+    /// ghosts included (the default, the dissertation's lattice).
+    #[default]
+    Ghosts,
+    /// No ghost: each pyramid is split into two tetrahedra along the face diagonal through the
+    /// face's lowest corner, and the crossing on that diagonal is a vertex of its own. Only the
+    /// points in the box are sampled. Integrated clustering makes no proposal at a point whose
+    /// tetrahedra reach a pyramid (within one and a half cells of a box face), so the
+    /// crossings on the pyramids' edges stay plain and the guarantee holds.
+    ///
+    /// ```
+    /// use rmt_extract::{Boundary, Clustering, ExtractSettings, Extractor, Grid, Lattice};
+    /// // A ball through the box's upper z face: open along the box only.
+    /// let ball = rmt_fields::Sphere::new(glam::Vec3::new(0.1, 0.0, 0.8), 0.5);
+    /// let mut s = ExtractSettings::new(Grid::cube(16, 1.0), Lattice::BodyCentred,
+    ///     Clustering::Integrated);
+    /// s.boundary = Boundary::Pyramids;
+    /// let mut mesh = rmt_mesh::Mesh::default();
+    /// Extractor::new().extract(&ball, &s, &mut mesh).unwrap();
+    /// let grid = s.grid;
+    /// let r = rmt_mesh::validate(&mesh, &|p| rmt_extract::measure::on_box_boundary(&grid, p));
+    /// assert_eq!((r.boundary_edges_interior, r.non_manifold_edges), (0, 0));
+    /// assert_eq!(r.orientation_errors, 0);
+    /// assert!(r.boundary_edges_on_box > 0);
+    /// ```
+    Pyramids,
+}
+
+impl Boundary {
+    /// Whether this is the default ([`Boundary::Ghosts`]), which settings files leave out.
+    pub fn is_ghosts(&self) -> bool {
+        *self == Boundary::Ghosts
+    }
+}
+
 /// Everything that decides one extraction.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ExtractSettings {
@@ -201,6 +245,10 @@ pub struct ExtractSettings {
     /// all.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub keep_cells: Option<CellRange>,
+    /// How the body-centred lattice closes the box (ignored on the simple lattice and by the
+    /// other methods).
+    #[serde(default, skip_serializing_if = "Boundary::is_ghosts")]
+    pub boundary: Boundary,
 }
 
 /// The tile rule of chunked extraction (see `crates/terrain` for the world that uses it).
@@ -275,12 +323,24 @@ impl ExtractSettings {
             normals: NormalMode::AreaWeighted,
             tiles: None,
             keep_cells: None,
+            boundary: Boundary::Ghosts,
         }
     }
 
     /// Checks the settings before any work: grid, threads, threshold, iso.
     pub fn check(&self) -> Result<(), ExtractError> {
         self.grid.check()?;
+        if self.boundary == Boundary::Pyramids
+            && self.method == Method::Mt
+            && self.lattice == Lattice::BodyCentred
+            && (self.tiles.is_some() || self.keep_cells.is_some())
+        {
+            return Err(ExtractError::Unsupported(
+                "the pyramid boundary (no ghosts) is for a whole box: not with tiles or kept \
+                 cells"
+                    .into(),
+            ));
+        }
         if self.threads == 0 || self.threads > 1024 {
             return Err(ExtractError::InvalidSettings(format!(
                 "threads must be 1..=1024, got {}",

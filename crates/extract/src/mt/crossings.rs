@@ -368,7 +368,11 @@ pub(crate) fn vertex_plane(
             // candidates are joined.
             let first = counts.crossings as u32;
             counts.crossings += own.count_ones() as usize;
-            if let Some(rules) = propose.filter(|_| own.count_ones() >= 2) {
+            // Without ghosts, no proposal near the pyramids of the box faces
+            // (`Layout::near_pyramid`).
+            if let Some(rules) =
+                propose.filter(|_| own.count_ones() >= 2 && !l.near_pyramid(l.coords(sx, sy, z)))
+            {
                 // Only the islands rule reads which edges are inner (all of them in the regular
                 // run).
                 let inner = match (rules, border) {
@@ -486,11 +490,13 @@ pub(crate) fn number_plane(
         Lattice::Simple => [none; 3],
         Lattice::BodyCentred => {
             let faces = z.is_multiple_of(2) && z >= 2 && z <= 2 * nz;
+            // Without ghosts, not the faces on the box's upper faces (as the walk).
+            let upper = usize::from(l.s.boundary == crate::Boundary::Pyramids);
             [
                 // Faces perpendicular to x (layer z / 2 - 1), to y, then to z (layer z / 2).
-                if faces { (1, ny, 0, nx) } else { none },
-                if faces { (0, ny, 1, nx) } else { none },
-                if z.is_multiple_of(2) && z <= 2 * nz {
+                if faces { (1, ny, 0, nx - upper) } else { none },
+                if faces { (0, ny - upper, 1, nx) } else { none },
+                if z.is_multiple_of(2) && z + 2 * upper <= 2 * nz {
                     (1, ny, 1, nx)
                 } else {
                     none

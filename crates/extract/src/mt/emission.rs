@@ -29,7 +29,7 @@ pub(crate) struct EmitBuffers {
     /// The output, one part per run of listed triangles ([`emit`]).
     parts: Vec<Vec<u32>>,
     /// Working memory of the vertex compaction (integrated-unchecked).
-    scratch: Vec<u32>,
+    pub(crate) scratch: Vec<u32>,
     /// Recorded: the anchor cell of every output triangle (linear index, x fastest).
     pub(crate) tri_cells: Vec<u32>,
 }
@@ -229,10 +229,6 @@ pub(crate) fn emit(
         });
         emit_layers(&surface, vertices, mesh, out, pool, stats);
         buf.tri_cells = cells;
-    }
-    if clustering == Clustering::IntegratedUnchecked {
-        // Without the test a vertex may lose all its triangles.
-        mesh.drop_unused_vertices(&mut buf.scratch);
     }
     let [nx, ny, nz] = surface.l.s.cells;
     stats.tetrahedra_total = match surface.l.lattice {

@@ -23,7 +23,7 @@ use super::crossings::{CrossedIndex, CrossedPoint};
 use super::layout::{case_triangles_of, split_quad, Layout, MAX_GROUP_EDGES};
 use crate::lattice::Offset;
 use crate::util::for_each_bit;
-use crate::{CellRange, Lattice};
+use crate::{Boundary, CellRange, Lattice};
 
 /// What a walk over the geometry layers reads: the lattice, the isovalue, the cells kept (a
 /// chunk: only their anchors are walked) and the crossed points of the vertex pass.
@@ -109,14 +109,20 @@ pub(crate) fn for_each_group<const RANK: bool>(
                 let z = (first[2] + 1) as usize;
                 row(l.s.bcdl_index(first), z, len, axis, first, 2);
             };
-            for j in 0..ny as i32 {
-                faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
+            // Without ghosts, the faces on the box's upper faces (whose centre above is a
+            // ghost) are not walked: their pyramids are `pyramids`' (those on the lower faces
+            // have a ghost anchor, which has no crossed edge).
+            let upper = usize::from(l.s.boundary == Boundary::Pyramids);
+            if k + upper <= nz {
+                for j in 0..ny as i32 {
+                    faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
+                }
             }
             if k < nz {
                 for j in 0..ny as i32 {
-                    faces([-1, 2 * j + 1, 2 * ki + 1], nx + 1, 0);
+                    faces([-1, 2 * j + 1, 2 * ki + 1], nx + 1 - upper, 0);
                 }
-                for f in 0..=ny as i32 {
+                for f in 0..=(ny - upper) as i32 {
                     faces([1, 2 * f - 1, 2 * ki + 1], nx, 1);
                 }
             }

@@ -410,7 +410,7 @@ pub(crate) fn boundary_class(c: i32, max: i32) -> usize {
 /// about a fifth of a 32^3 chunk's extraction without clustering.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct BorderCache {
-    key: Option<(Lattice, [usize; 3])>,
+    key: Option<(Lattice, [usize; 3], crate::Boundary)>,
     table: Vec<u32>,
     /// The lattice edges of the grid (`Stats::edges`), once an extraction counted them.
     pub(crate) edges: Option<usize>,
@@ -429,7 +429,7 @@ impl<'a> Layout<'a> {
     /// lattice and cells (else built and kept there).
     pub(crate) fn cached(s: &'a Samples, lattice: Lattice, cache: &mut BorderCache) -> Self {
         let mut layout = Self::without_border_table(s, lattice);
-        let key = Some((lattice, s.cells));
+        let key = Some((lattice, s.cells, s.boundary));
         if cache.key != key {
             cache.table = layout.build_border_table();
             cache.key = key;
@@ -780,6 +780,9 @@ impl<'a> Layout<'a> {
     /// Neighbour bits of the lattice edges at `p` that have every tetrahedron around them (a
     /// crossing there is an inner vertex of plain MT; at the box faces some are missing).
     pub(crate) fn inner_dirs(&self, p: Offset) -> u16 {
+        if self.near_pyramid(p) {
+            return 0;
+        }
         if self.is_regular(p) {
             return FULL;
         }
@@ -794,6 +797,21 @@ impl<'a> Layout<'a> {
         };
         let e = self.border_table[((class(0) * CLASSES + class(1)) * CLASSES + class(2)) * 2 + odd];
         (e >> 17) as u16 & FULL
+    }
+
+    /// Whether, without ghosts ([`crate::Boundary::Pyramids`]), a tetrahedron around an edge of
+    /// `p` may reach a pyramid of the box faces (`super::pyramids`): `p` lies within 3 lattice
+    /// units (one and a half cells) of a box face. A tetrahedron spans at most 2 units per
+    /// axis, so around the edges of a point 3 or more units inside, every corner is at least 1
+    /// unit inside, and every pyramid edge has a corner on the face. Integrated clustering
+    /// makes no proposal at such a point and treats its crossings as not inner (the additions
+    /// skip them): no group's star touches a pyramid, whose triangles the quotient test does
+    /// not see, and the pyramids' crossings stay plain.
+    #[inline]
+    pub(crate) fn near_pyramid(&self, p: Offset) -> bool {
+        self.lattice == Lattice::BodyCentred
+            && self.s.boundary == crate::Boundary::Pyramids
+            && (0..3).any(|a| p[a] < 3 || p[a] > self.max_coord(a) - 3)
     }
 
     /// [`Layout::inner_dirs`] from the tetrahedra around `p` (what the border table stores).
@@ -1019,6 +1037,7 @@ mod tests {
             spacing: glam::Vec3::ONE,
             dims: [6, 6, 11],
             values: vec![0.0; 6 * 6 * 11].into(),
+            boundary: crate::Boundary::Ghosts,
         };
         for lattice in [Lattice::BodyCentred, Lattice::Simple] {
             let mut s = samples.clone();

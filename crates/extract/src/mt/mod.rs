@@ -32,13 +32,14 @@
 use rmt_mesh::Mesh;
 
 use crate::util::for_each_bit;
-use crate::{Clustering, ExtractError, ExtractSettings, Samples, Stats};
+use crate::{Boundary, Clustering, ExtractError, ExtractSettings, Lattice, Samples, Stats};
 
 pub(crate) mod clustering;
 pub(crate) mod crossings;
 pub(crate) mod emission;
 pub(crate) mod geometry;
 pub(crate) mod layout;
+pub(crate) mod pyramids;
 
 pub(crate) use crossings::WELD;
 
@@ -165,6 +166,39 @@ pub(crate) fn extract(
         clustered,
     };
     emit(input, &mut buf.emission, mesh, pool, stats);
+    if layout.lattice == Lattice::BodyCentred && samples.boundary == Boundary::Pyramids {
+        // The box faces' pyramids, after the walk's tetrahedra.
+        let made = pyramids::pyramids(
+            &pyramids::PyramidIn {
+                l: &layout,
+                iso: settings.iso,
+                crossed: &buf.vertices.crossed,
+                cpos: if propose {
+                    &buf.clustering.cpos
+                } else {
+                    &mesh.positions
+                },
+                vertex_of: propose.then_some(&buf.clustering.vertex_of[..]),
+                first_new: mesh.positions.len() as u32,
+            },
+            stats,
+        );
+        mesh.positions.extend_from_slice(&made.positions);
+        mesh.indices.extend_from_slice(&made.indices);
+        if buf.record
+            && matches!(
+                clustering,
+                Clustering::None | Clustering::Integrated | Clustering::IntegratedUnchecked
+            )
+        {
+            buf.emission.tri_cells.extend_from_slice(&made.cells);
+        }
+        stats.tetrahedra_total -= pyramids::pyramid_tetrahedra(samples.cells);
+    }
+    if clustering == Clustering::IntegratedUnchecked {
+        // Without the test a vertex may lose all its triangles.
+        mesh.drop_unused_vertices(&mut buf.emission.scratch);
+    }
     stats.t_geometry_s += t.elapsed().as_secs_f64();
     let lean_bytes = release_tables(buf, pool);
     stats.clusters_rejected = stats.clusters_rejected_prefilter + stats.clusters_rejected_check;
