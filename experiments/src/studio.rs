@@ -10,13 +10,18 @@
 //! Sculpting uses the `edit` workload's terrain (`experiments/manifests/edit.toml`): the box
 //! `-4,-1,-4 .. 4,1,4` with cubic cells, `size` cells along x and z and `size / 4` along y, meshed
 //! in chunks of `chunk^3` cells ([`crate::edit::world_settings`]).
+//!
+//! The LOD mode uses the same box with a multiresolution world ([`rmt_terrain::lod`], as the
+//! `lod` workload builds it: [`crate::lod::lod_settings`]): `size` finest cells along x and z
+//! (`size / 4` along y), chunks of `chunk^3` cells at levels `0..=levels`, split while the viewer
+//! is closer than `ratio` chunk edges; plain marching tetrahedra on the body-centred lattice.
 
 use std::sync::Mutex;
 
 use clap::{Args as _, Parser};
 use rmt_extract::Extractor;
 use rmt_mesh::Mesh;
-use rmt_server::studio::{Backend, BackendError, Extracted, Params};
+use rmt_server::studio::{Backend, BackendError, Extracted, LodBuilt, Params};
 use rmt_terrain::World;
 use serde_json::{json, Map, Value};
 
@@ -36,6 +41,15 @@ pub const PAGE_OPTIONS: [&str; 9] = [
     "normals",
     "simplify",
 ];
+
+/// LOD mode's defaults: finest cells along x and z, chunk edge, coarsest level, distance ratio.
+pub const LOD_SIZE: usize = 128;
+/// See [`LOD_SIZE`].
+pub const LOD_CHUNK: usize = 8;
+/// See [`LOD_SIZE`].
+pub const LOD_LEVELS: usize = 2;
+/// See [`LOD_SIZE`].
+pub const LOD_RATIO: f64 = 1.5;
 
 /// Object parameters the page may not set (they name files).
 const FILE_PARAMETERS: [&str; 1] = ["mesh"];
@@ -361,6 +375,16 @@ impl Backend for StudioBackend {
                 "parameters": sculpt_parameters,
                 "defaults": { "object": "terrain", "size": SCULPT_SIZE.to_string(), "chunk": SCULPT_CHUNK.to_string() },
             },
+            "lod": {
+                "objects": objects(&["terrain", "caves"]),
+                "parameters": [
+                    {"name": "size", "help": "finest cells along x and z of the 8 x 2 x 8 box (y gets a quarter, which chunk x 2^levels must divide), 16 to 256", "default": LOD_SIZE.to_string()},
+                    {"name": "chunk", "help": "chunk edge in cells at every level, 4 to 32", "default": LOD_CHUNK.to_string()},
+                    {"name": "levels", "help": "the coarsest level (0 finest; level l has cells of h 2^l), 0 to 4", "default": LOD_LEVELS.to_string()},
+                    {"name": "ratio", "help": "a chunk is split while the viewer is closer than ratio x its edge, 0.5 to 4", "default": LOD_RATIO.to_string()},
+                ],
+                "defaults": { "object": "terrain", "size": LOD_SIZE.to_string(), "chunk": LOD_CHUNK.to_string(), "levels": LOD_LEVELS.to_string(), "ratio": LOD_RATIO.to_string() },
+            },
         })
     }
 
@@ -427,6 +451,111 @@ impl Backend for StudioBackend {
             ),
         });
         Ok((world, description))
+    }
+
+    fn lod_world(&self, params: &Params) -> Result<LodBuilt, BackendError> {
+        let invalid = BackendError::Invalid;
+        let mut params = params.clone();
+        let size = take_count(&mut params, "size", LOD_SIZE, 16..=256).map_err(invalid)?;
+        let chunk = take_count(&mut params, "chunk", LOD_CHUNK, 4..=32).map_err(invalid)?;
+        let levels = take_count(&mut params, "levels", LOD_LEVELS, 0..=4).map_err(invalid)?;
+        let ratio = match params.iter().position(|(k, _)| k == "ratio") {
+            None => LOD_RATIO,
+            Some(at) => {
+                let (_, v) = params.remove(at);
+                match v.trim().parse::<f64>() {
+                    Ok(r) if (0.5..=4.0).contains(&r) => r,
+                    _ => {
+                        return Err(invalid(format!(
+                            "ratio must be a number from 0.5 to 4, got `{v}`"
+                        )))
+                    }
+                }
+            }
+        };
+        let side = chunk << levels;
+        if size % 4 != 0 || (size / 4) % side != 0 {
+            return Err(invalid(format!(
+                "size {size} gives {} cells along y, which chunks of {chunk} cells at {levels} \
+                 levels do not tile: size / 4 must be a multiple of chunk x 2^levels = {side}",
+                size / 4
+            )));
+        }
+        for (k, v) in &params {
+            match k.as_str() {
+                "object" if v != "terrain" && v != "caves" => {
+                    return Err(invalid(format!(
+                        "LOD mode takes object terrain or caves, got `{v}`"
+                    )))
+                }
+                "object" => {}
+                other if PAGE_OPTIONS.contains(&other.replace('-', "_").as_str()) => {
+                    return Err(invalid(format!(
+                        "`{k}` is fixed in LOD mode (plain marching tetrahedra on the \
+                         body-centred lattice over the edit workload's box; set size, chunk, \
+                         levels and ratio instead)"
+                    )))
+                }
+                _ => {}
+            }
+        }
+        if !params.iter().any(|(k, _)| k == "object") {
+            params.insert(0, ("object".into(), "terrain".into()));
+        }
+        let extra = [
+            format!("--resolution={size},{},{size}", size / 4),
+            format!("--bounds={SCULPT_BOUNDS}"),
+            "--method=mt".to_string(),
+            "--lattice=bcdl".to_string(),
+            "--clustering=none".to_string(),
+        ];
+        let e = self.parse(&params, &extra).map_err(invalid)?;
+        let plan = crate::manifest::LodPlan {
+            levels: levels as u8,
+            chunk: chunk as u32,
+            ratio,
+            steps: 0,
+            path: None,
+            validate_every: 0,
+            validate_max_chunks: 0,
+            finest_exact_chunks: 0,
+        };
+        let settings = crate::lod::lod_settings(&e, &plan, self.threads)
+            .map_err(|err| invalid(format!("{err:#}")))?;
+        let spacing = settings.frame.h;
+        let field = e
+            .object
+            .build_for_spacing(&e.bounds, Some(spacing), &[])
+            .map_err(|err| invalid(format!("building object {}: {err}", e.object.kind)))?;
+        let world = rmt_terrain::lod::LodWorld::new(field, settings)
+            .map_err(|err| invalid(err.to_string()))?;
+        let (min, max) = (e.bounds.min, e.bounds.max);
+        let centre = (min + max) * 0.5;
+        // At the top of the box, a quarter of the way in from its near corner.
+        let viewer = glam::Vec3::new(
+            centre.x + 0.75 * (min.x - centre.x),
+            max.y,
+            centre.z + 0.75 * (min.z - centre.z),
+        );
+        let [nx, ny, nz] = e.resolution.cells();
+        let description = json!({
+            "object": e.object.kind.name(),
+            "cells": [nx, ny, nz],
+            "chunk": chunk,
+            "levels": levels,
+            "ratio": ratio,
+            "h": spacing,
+            "bounds": [min.x, min.y, min.z, max.x, max.y, max.z],
+            "label": format!(
+                "{} {nx}x{ny}x{nz}, chunks {chunk}^3, levels 0-{levels}, ratio {ratio}",
+                e.object.kind.name()
+            ),
+        });
+        Ok(LodBuilt {
+            world,
+            description,
+            viewer,
+        })
     }
 }
 

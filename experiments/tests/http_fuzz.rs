@@ -445,9 +445,10 @@ fn the_studio_never_answers_5xx_and_every_error_has_a_message() {
     let mut rng = Rng(seed());
     let mut tally = Tally::default();
     let mut sessions: Vec<String> = Vec::new();
+    let mut lod_sessions: Vec<String> = Vec::new();
     let brush_fields = ["centre", "mode", "radius_cells", "strength"];
     for _ in 0..count() {
-        let (method, path, body): (&str, String, Option<Vec<u8>>) = match rng.below(12) {
+        let (method, path, body): (&str, String, Option<Vec<u8>>) = match rng.below(14) {
             0..=3 => (
                 "GET",
                 format!("/studio/api/mesh?{}", query(&mut rng, &[])),
@@ -485,12 +486,46 @@ fn the_studio_never_answers_5xx_and_every_error_has_a_message() {
                 ("GET", format!("/studio/assets/{file}"), None)
             }
             10 => ("GET", "/studio/api/schema".to_string(), None),
+            // LOD mode: small worlds, then viewer moves, strokes and exports on them.
+            11 => {
+                let q = query(&mut rng, &[("size", "32"), ("chunk", "4"), ("levels", "1")]);
+                // LOD mode refuses a resolution: leave out the one query() adds for extractions.
+                let q: Vec<&str> = q
+                    .split('&')
+                    .filter(|p| !p.starts_with("resolution=") || rng.chance(10))
+                    .collect();
+                ("POST", format!("/studio/api/lod?{}", q.join("&")), None)
+            }
+            12 => {
+                let id = if !lod_sessions.is_empty() && rng.chance(80) {
+                    rng.pick(&lod_sessions).clone()
+                } else {
+                    segment(&mut rng, "id")
+                };
+                match rng.below(3) {
+                    0 => (
+                        "POST",
+                        format!("/studio/api/lod/{id}/viewer"),
+                        Some(body(&mut rng, &["viewer"])),
+                    ),
+                    1 => (
+                        "POST",
+                        format!("/studio/api/lod/{id}/brush"),
+                        Some(body(&mut rng, &brush_fields)),
+                    ),
+                    _ => {
+                        let q = query(&mut rng, &[]);
+                        ("GET", format!("/studio/api/lod/{id}/export?{q}"), None)
+                    }
+                }
+            }
             _ => {
                 let m = *rng.pick(METHODS);
                 let p = rng
                     .pick(&[
                         "/studio/api/mesh",
                         "/studio/api/sculpt",
+                        "/studio/api/lod",
                         "/studio/",
                         "/healthz",
                         "/",
@@ -507,6 +542,13 @@ fn the_studio_never_answers_5xx_and_every_error_has_a_message() {
                 if let Ok((header, _)) = rmt_server::studio::wire::decode(&r.body) {
                     if let Some(id) = header["session"].as_str() {
                         sessions.push(id.to_string());
+                    }
+                }
+            }
+            if r.status == 201 && path.starts_with("/studio/api/lod?") {
+                if let Ok((header, _)) = rmt_server::studio::wire::decode(&r.body) {
+                    if let Some(id) = header["session"].as_str() {
+                        lod_sessions.push(id.to_string());
                     }
                 }
             }

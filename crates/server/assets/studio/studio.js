@@ -1,6 +1,8 @@
 // The studio page: parameters -> /studio/api/mesh (binary, see rmt_server::studio::wire) ->
 // three.js view; compare mode (two scenes, one camera); sculpt mode (rays picked here, brush on
-// the server, only the re-meshed chunks come back). State for tests is in window.studio.
+// the server, only the re-meshed chunks come back); LOD mode (a fly camera over a multiresolution
+// world: the server re-meshes what the viewer's move changed, levels coloured on demand, strokes
+// at any distance). State for tests is in window.studio.
 import * as THREE from './three.module.min.js';
 import { OrbitControls } from './OrbitControls.js';
 
@@ -22,6 +24,8 @@ const studio = {
   busy: 0,
   error: null,
   swapped: false,
+  // LOD mode: chunks and triangles shown, per level; viewer moves and strokes answered.
+  lod: { chunks: 0, triangles: 0, levels: [], moves: 0, lastMoveMs: null, lastRemeshed: null, strokes: 0, lastStrokeMs: null, viewer: null },
 };
 window.studio = studio;
 
@@ -109,7 +113,7 @@ function makeScene() {
   scene.userData.follow = follow;
   return scene;
 }
-const scenes = [makeScene(), makeScene(), makeScene()]; // A, B, sculpt
+const scenes = [makeScene(), makeScene(), makeScene(), makeScene()]; // A, B, sculpt, LOD
 const shown = [null, null]; // current THREE.Group per compare side
 
 let renderQueued = false;
@@ -155,7 +159,8 @@ function draw() {
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
     renderer.setViewport(0, 0, w, h); renderer.setScissor(0, 0, w, h);
-    renderer.render(studio.mode === 'sculpt' ? scenes[2] : scenes[0], camera);
+    const scene = { sculpt: scenes[2], lod: scenes[3] }[studio.mode] || scenes[0];
+    renderer.render(scene, camera);
   }
 }
 
@@ -283,8 +288,9 @@ function field(container, spec, value) {
 function buildPanel(container, defaults, onChange, kind) {
   container.querySelectorAll('.field').forEach((e) => e.remove());
   const inputs = {};
-  const specs = kind === 'sculpt' ? schema.sculpt.parameters : schema.parameters;
-  const objects = kind === 'sculpt' ? schema.sculpt.objects : schema.objects;
+  const own = kind === 'sculpt' || kind === 'lod' ? schema[kind] : null;
+  const specs = own ? own.parameters : schema.parameters;
+  const objects = own ? own.objects : schema.objects;
   const objectSpec = { name: 'object', help: 'the sampled object', choices: objects.map((o) => o.name), default: defaults.object };
   inputs.object = field(container, objectSpec, defaults.object);
   const paramBox = document.createElement('div');
@@ -551,22 +557,309 @@ window.addEventListener('keydown', (e) => {
   if (e.key === 'y' || (e.key === 'z' && e.shiftKey)) { e.preventDefault(); edit(`/studio/api/sculpt/${session}/redo`); }
 });
 
+// ---- LOD mode: a fly camera over a multiresolution world ---------------------------------------
+// Okabe-Ito, the report's level colours (rmt_report::lod::level_colour): level 0 (finest) first.
+const LEVEL_COLOURS = [0x0072b2, 0xe69f00, 0x009e73, 0xcc79a7, 0x56b4e9, 0xd55e00, 0xf0e442];
+let lodPanel = null;
+let lodSession = null;
+let lodWorld = null; // the header's world description
+const lodGroups = new Map(); // part id -> THREE.Group (userData.level)
+const lodRoot = new THREE.Group();
+scenes[3].add(lodRoot);
+const fly = { keys: new Set(), yaw: 0, pitch: 0, last: null, looking: null, running: false };
+
+function colourByLevel() { return $('lod-colour').checked; }
+function levelColour(level) { return new THREE.Color(LEVEL_COLOURS[level % LEVEL_COLOURS.length]); }
+function tintLod(group) {
+  const m = group.children[0].material;
+  m.color.copy(colourByLevel() ? levelColour(group.userData.level) : COLOUR[0]);
+  m.needsUpdate = true;
+}
+function setLodChunk(part, level) {
+  disposeGroup(lodGroups.get(part.id));
+  lodGroups.delete(part.id);
+  if (part.indices.length === 0) return;
+  const g = meshObjects(geometryOf({ ...part, ratios: null }), 0);
+  g.userData.level = level;
+  g.userData.chunk = part.id;
+  tintLod(g);
+  lodGroups.set(part.id, g);
+  lodRoot.add(g);
+}
+function applyLod(reply) {
+  const h = reply.header;
+  for (const id of h.dropped) { disposeGroup(lodGroups.get(id)); lodGroups.delete(id); }
+  reply.parts.forEach((p, i) => setLodChunk(p, h.chunks[i].level));
+  studio.lod.chunks = h.chunk_count;
+  studio.lod.triangles = h.triangles;
+  studio.lod.levels = h.chunks_per_level;
+  studio.lod.lastRemeshed = h.chunks_remeshed;
+}
+function lodLegend() {
+  const box = $('lod-legend');
+  box.textContent = '';
+  box.hidden = !colourByLevel() || !lodWorld;
+  if (box.hidden) return;
+  for (let l = 0; l <= lodWorld.levels; l++) {
+    const s = document.createElement('span');
+    s.className = 'swatch';
+    s.style.background = `#${levelColour(l).getHexString()}`;
+    const t = document.createElement('span');
+    t.textContent = `level ${l}`;
+    box.append(s, t);
+  }
+}
+let lodHeaderCache = null;
+function lodReadout(h, what, ms) {
+  if (h) lodHeaderCache = h;
+  h = lodHeaderCache;
+  if (!h) return;
+  const p = camera.position;
+  const lines = [
+    `world       ${h.world.label}`,
+    `chunks      ${h.chunk_count} (per level ${h.chunks_per_level.join(' / ')})`,
+    `triangles   ${h.triangles} (per level ${h.triangles_per_level.join(' / ')})`,
+    `viewer      ${fmt(p.x, 2)} ${fmt(p.y, 2)} ${fmt(p.z, 2)}`,
+  ];
+  if (what) {
+    lines.push(`last ${what.padEnd(6)} ${fmt(ms, 1)} ms round trip (re-mesh ${fmt(h.remesh_ms, 1)} ms)`);
+    lines.push(`re-meshed   ${h.chunks_remeshed} chunk(s), ${h.dropped.length} dropped`);
+  } else {
+    lines.push(`built in    ${fmt(h.server_ms, 1)} ms`);
+  }
+  if (h.strokes) lines.push(`strokes     ${h.strokes}`);
+  $('overlay-a').textContent = lines.join('\n');
+}
+
+// The camera's look direction from yaw (about y, 0 looks along -z) and pitch.
+function flyForward() {
+  return new THREE.Vector3(-Math.sin(fly.yaw) * Math.cos(fly.pitch), Math.sin(fly.pitch), -Math.cos(fly.yaw) * Math.cos(fly.pitch));
+}
+function flyAim() {
+  const ahead = camera.position.clone().add(flyForward());
+  camera.up.set(0, 1, 0);
+  camera.lookAt(ahead);
+  controls.target.copy(ahead); // the key light follows it
+  requestRender();
+}
+function flyLookAt(target) {
+  const d = target.clone().sub(camera.position).normalize();
+  fly.yaw = Math.atan2(-d.x, -d.z);
+  fly.pitch = Math.asin(Math.max(-1, Math.min(1, d.y)));
+  flyAim();
+}
+function worldSpan() {
+  const b = lodWorld ? lodWorld.bounds : [-4, -1, -4, 4, 1, 4];
+  return Math.max(b[3] - b[0], b[5] - b[2]);
+}
+function flyTick(now) {
+  if (studio.mode !== 'lod' || fly.keys.size === 0) {
+    fly.running = false;
+    fly.last = null;
+    maybeRemesh(true); // where the flight stopped, however short it was
+    return;
+  }
+  // Slow frames (software WebGL) still fly at the chosen speed, up to a quarter second a frame.
+  const dt = fly.last === null ? 0 : Math.min((now - fly.last) / 1000, 0.25);
+  fly.last = now;
+  const k = (c) => (fly.keys.has(c) ? 1 : 0);
+  const speed = worldSpan() / 8 * (fly.keys.has('shift') ? 4 : 1);
+  const forward = flyForward();
+  const right = new THREE.Vector3(-forward.z, 0, forward.x).normalize();
+  const move = new THREE.Vector3()
+    .addScaledVector(forward, k('w') - k('s'))
+    .addScaledVector(right, k('d') - k('a'))
+    .addScaledVector(new THREE.Vector3(0, 1, 0), k('e') - k('q'));
+  if (move.lengthSq() > 0) camera.position.addScaledVector(move.normalize(), speed * dt);
+  flyAim();
+  lodReadout(null);
+  maybeRemesh();
+  requestAnimationFrame(flyTick);
+}
+const FLY_KEYS = { w: 'w', a: 'a', s: 's', d: 'd', q: 'q', e: 'e', arrowup: 'w', arrowdown: 's', arrowleft: 'a', arrowright: 'd', shift: 'shift' };
+window.addEventListener('keydown', (e) => {
+  if (studio.mode !== 'lod' || e.ctrlKey || e.metaKey || e.altKey) return;
+  if (e.target && (e.target.tagName === 'INPUT' || e.target.tagName === 'SELECT')) return;
+  const key = FLY_KEYS[e.key.toLowerCase()];
+  if (!key) return;
+  e.preventDefault();
+  fly.keys.add(key);
+  if (!fly.running) { fly.running = true; requestAnimationFrame(flyTick); }
+});
+window.addEventListener('keyup', (e) => {
+  const key = FLY_KEYS[e.key.toLowerCase()];
+  if (key) fly.keys.delete(key);
+});
+window.addEventListener('blur', () => fly.keys.clear());
+
+// Re-mesh requests: one in flight at a time; a new one when the camera has moved a quarter of a
+// finest chunk from where the last was asked for (or at all, when the flight stopped).
+let lodInFlight = false;
+let lodAsked = null;
+function lodStep() { return lodWorld ? lodWorld.h * lodWorld.chunk * 0.25 : 0.1; }
+function maybeRemesh(stopped = false) {
+  if (!lodSession || lodInFlight) return;
+  const p = camera.position;
+  if (lodAsked && p.distanceTo(lodAsked) < (stopped ? 1e-6 : lodStep())) return;
+  moveViewer(p.clone());
+}
+async function moveViewer(p) {
+  lodInFlight = true;
+  lodAsked = p;
+  const started = performance.now();
+  try {
+    const reply = await fetchMesh(`/studio/api/lod/${lodSession}/viewer`, {
+      method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ viewer: [p.x, p.y, p.z] }),
+    });
+    applyLod(reply);
+    await nextFrame();
+    const ms = performance.now() - started;
+    studio.lod.moves++;
+    studio.lod.lastMoveMs = ms;
+    studio.lod.viewer = [p.x, p.y, p.z];
+    lodReadout(reply.header, 'move', ms);
+    showError(null);
+    $('status').textContent = `viewer moved · ${reply.header.chunks_remeshed} chunk(s) re-meshed · ${kb(reply.bytes)}`;
+  } catch (e) {
+    showError(e.message);
+  } finally {
+    lodInFlight = false;
+  }
+  if (studio.mode === 'lod') maybeRemesh(!fly.running);
+}
+
+async function newLodWorld() {
+  const q = lodPanel.query();
+  studio.busy++;
+  $('status').textContent = 'building the multiresolution world…';
+  try {
+    // The camera starts where the server puts the viewer (over the ground near a corner).
+    const reply = await fetchMesh(`/studio/api/lod?${q}`, { method: 'POST' });
+    for (const g of lodGroups.values()) disposeGroup(g);
+    lodGroups.clear();
+    lodSession = reply.header.session;
+    lodWorld = reply.header.world;
+    applyLod(reply);
+    const b = lodWorld.bounds;
+    camera.position.fromArray(reply.header.viewer);
+    camera.near = worldSpan() / 2000; camera.far = worldSpan() * 4;
+    camera.updateProjectionMatrix();
+    flyLookAt(new THREE.Vector3((b[0] + b[3]) / 2, (b[1] + b[4]) / 2, (b[2] + b[5]) / 2));
+    lodAsked = camera.position.clone();
+    studio.lod.viewer = reply.header.viewer;
+    await nextFrame();
+    lodReadout(reply.header, null, null);
+    lodLegend();
+    showError(null);
+    $('status').textContent = `world ready · ${kb(reply.bytes)}`;
+  } catch (e) {
+    showError(e.message);
+  } finally {
+    studio.busy--;
+  }
+  updateExportLinks();
+}
+
+function pickLod(event) {
+  const r = canvas.getBoundingClientRect();
+  const ndc = new THREE.Vector2(((event.clientX - r.left) / r.width) * 2 - 1, -((event.clientY - r.top) / r.height) * 2 + 1);
+  raycaster.setFromCamera(ndc, camera);
+  const hits = raycaster.intersectObjects(lodRoot.children, true);
+  if (!hits.length) return null;
+  let o = hits[0].object;
+  while (o && o.userData.level === undefined) o = o.parent;
+  return { point: hits[0].point, level: o ? o.userData.level : 0 };
+}
+let lodPainting = false, lodStrokeBusy = false;
+async function lodStroke(hit) {
+  if (lodStrokeBusy || !lodSession) return;
+  lodStrokeBusy = true;
+  const started = performance.now();
+  // The radius is in cells of the level hit, so a stroke far away is as large on screen.
+  const radius = Math.min(32, (Number($('lod-radius').value) || 2) * 2 ** hit.level);
+  try {
+    const reply = await fetchMesh(`/studio/api/lod/${lodSession}/brush`, {
+      method: 'POST',
+      headers: { 'content-type': 'application/json' },
+      body: JSON.stringify({
+        centre: [hit.point.x, hit.point.y, hit.point.z],
+        mode: document.querySelector('input[name=lod-brush]:checked').value,
+        radius_cells: radius,
+        strength: Number($('lod-strength').value),
+      }),
+    });
+    applyLod(reply);
+    await nextFrame();
+    const ms = performance.now() - started;
+    studio.lod.strokes = reply.header.strokes;
+    studio.lod.lastStrokeMs = ms;
+    lodReadout(reply.header, 'stroke', ms);
+    showError(null);
+    $('status').textContent = `stroke at level ${hit.level} · ${reply.header.chunks_remeshed} chunk(s) re-meshed`;
+  } catch (e) {
+    showError(e.message);
+  } finally {
+    lodStrokeBusy = false;
+  }
+}
+canvas.addEventListener('contextmenu', (e) => { if (studio.mode === 'lod') e.preventDefault(); });
+canvas.addEventListener('pointerdown', (e) => {
+  if (studio.mode !== 'lod') return;
+  if (e.button === 2) {
+    fly.looking = { x: e.clientX, y: e.clientY };
+    canvas.setPointerCapture(e.pointerId);
+  } else if (e.button === 0 && lodSession) {
+    const hit = pickLod(e);
+    if (!hit) return;
+    lodPainting = true;
+    canvas.setPointerCapture(e.pointerId);
+    lodStroke(hit);
+  }
+});
+canvas.addEventListener('pointermove', (e) => {
+  if (studio.mode !== 'lod') return;
+  if (fly.looking) {
+    fly.yaw -= (e.clientX - fly.looking.x) * 0.004;
+    fly.pitch = Math.max(-1.5, Math.min(1.5, fly.pitch - (e.clientY - fly.looking.y) * 0.004));
+    fly.looking = { x: e.clientX, y: e.clientY };
+    flyAim();
+  } else if (lodPainting) {
+    const hit = pickLod(e);
+    if (hit) lodStroke(hit);
+  }
+});
+const stopLod = () => { fly.looking = null; lodPainting = false; };
+canvas.addEventListener('pointerup', stopLod);
+canvas.addEventListener('pointercancel', stopLod);
+$('lod-new').addEventListener('click', newLodWorld);
+$('lod-colour').addEventListener('change', () => {
+  for (const g of lodGroups.values()) tintLod(g);
+  lodLegend();
+  requestRender();
+});
+
 // ---- modes, view options, export --------------------------------------------------------------
 function setMode(mode) {
   studio.mode = mode;
   document.querySelectorAll('#modes button').forEach((b) => b.classList.toggle('on', b.dataset.mode === mode));
-  $('configs').hidden = mode === 'sculpt';
+  $('configs').hidden = mode === 'sculpt' || mode === 'lod';
   $('sculpt-panel').hidden = mode !== 'sculpt';
+  $('lod-panel').hidden = mode !== 'lod';
+  controls.enabled = mode !== 'lod';
+  fly.keys.clear();
   $('config-b').hidden = mode !== 'compare';
   $('overlay-b').hidden = mode !== 'compare';
   $('divider').hidden = mode !== 'compare';
-  $('colour-ratio').disabled = mode === 'sculpt';
+  $('colour-ratio').disabled = mode === 'sculpt' || mode === 'lod';
   controls.mouseButtons = mode === 'sculpt'
     ? { LEFT: null, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.ROTATE }
     : { LEFT: THREE.MOUSE.ROTATE, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.PAN };
   $('overlay-a').textContent = '';
   $('overlay-b').textContent = '';
-  if (mode === 'sculpt') {
+  if (mode === 'lod') {
+    if (!lodSession) newLodWorld();
+    else { flyAim(); lodReadout(null); }
+  } else if (mode === 'sculpt') {
     if (!session) newTerrain();
     else { frame(new THREE.Box3().setFromObject(sculptRoot)); sculptReadout({ ...lastSculptHeader() }, null); }
   } else {
@@ -601,6 +894,16 @@ function rebuildMeshes() {
     chunkGroups.set(id, n);
     sculptRoot.add(n);
   }
+  for (const [id, g] of lodGroups) {
+    const geometry = g.children[0].geometry;
+    g.removeFromParent();
+    g.children.forEach((c) => { if (c.material !== wireMaterial) c.material.dispose(); });
+    const n = meshObjects(geometry, 0);
+    n.userData = { ...g.userData };
+    tintLod(n);
+    lodGroups.set(id, n);
+    lodRoot.add(n);
+  }
   requestRender();
 }
 document.querySelectorAll('input[name=shading]').forEach((r) => r.addEventListener('change', rebuildMeshes));
@@ -634,6 +937,11 @@ function updateExportLinks() {
     for (const f of ['ply', 'obj', 'glb']) box.appendChild(link(`/studio/api/sculpt/${session}/export?format=${f}`, f.toUpperCase()));
     return;
   }
+  if (studio.mode === 'lod') {
+    if (!lodSession) return;
+    for (const f of ['ply', 'obj', 'glb']) box.appendChild(link(`/studio/api/lod/${lodSession}/export?format=${f}`, f.toUpperCase()));
+    return;
+  }
   const sides = studio.mode === 'compare' ? [0, 1] : [0];
   for (const side of sides) {
     for (const f of ['ply', 'obj', 'glb']) {
@@ -660,6 +968,7 @@ async function start() {
   panels[1] = buildPanel($('config-b'), { ...d, ...schema.compare_defaults }, () => { if (studio.mode === 'compare') updateSide(1, false); }, 'object');
   panels[0].inputs.object.addEventListener('change', () => setTimeout(() => updateSide(0, true), 260));
   sculptPanel = buildPanel($('sculpt-config'), schema.sculpt.defaults, () => {}, 'sculpt');
+  lodPanel = buildPanel($('lod-config'), schema.lod.defaults, () => {}, 'lod');
   updateExportLinks();
   await updateSide(0, true);
 }

@@ -14,6 +14,10 @@
 //! | `POST /studio/api/sculpt/<id>/brush` `{"centre": [x,y,z], "mode": "add"\|"subtract", "radius_cells": r, "strength": s}` | one stroke: only the re-meshed chunks come back |
 //! | `POST /studio/api/sculpt/<id>/undo`, `/redo` | undo or redo the last stroke (`409` when there is none) |
 //! | `GET /studio/api/sculpt/<id>/export?format=ply\|obj\|glb` | the sculpted terrain, welded, as a file |
+//! | `POST /studio/api/lod?<params>[&viewer=x,y,z]` | a LOD session ([`lod`]): a multiresolution world meshed for the viewer, `201`, every chunk as a part with its level in the header |
+//! | `POST /studio/api/lod/<id>/viewer` `{"viewer": [x,y,z]}` | the viewer moved: only the chunks re-meshed come back, with the ids of those dropped |
+//! | `POST /studio/api/lod/<id>/brush` (the sculpt brush's body) | a stroke at any distance: the chunks of every level that see it come back |
+//! | `GET /studio/api/lod/<id>/export?format=ply\|obj\|glb` | the LOD world, welded, as a file |
 //!
 //! `<params>` are the options of `experiments extract` without the dashes (`object=gyroid&
 //! resolution=64&clustering=none`); what they mean, which are allowed and how they are checked is
@@ -23,6 +27,7 @@
 //! never panics the server (extraction runs on a blocking thread, and a panic there becomes a
 //! 500 for that request only).
 
+pub mod lod;
 pub mod sculpt;
 pub mod wire;
 
@@ -41,6 +46,7 @@ use serde_json::{json, Value};
 use tokio::sync::{OwnedSemaphorePermit, Semaphore};
 
 use crate::http::{asset, json_body, random_token, ApiError};
+use lod::{LodField, LodOutcome, LodSession, ViewerRequest};
 use sculpt::{BrushRequest, EditOutcome, Session, Sessions};
 use wire::Part;
 
@@ -79,6 +85,23 @@ pub trait Backend: Send + Sync + 'static {
     /// Checks `params` and builds the sculpt world they describe (not meshed yet), with a JSON
     /// description for the page.
     fn world(&self, params: &Params) -> Result<(World, Value), BackendError>;
+    /// Checks `params` and builds the multiresolution world they describe (not meshed yet):
+    /// the world, a JSON description for the page, and where the viewer starts. By default the
+    /// studio has no LOD mode.
+    fn lod_world(&self, params: &Params) -> Result<LodBuilt, BackendError> {
+        let _ = params;
+        Err(BackendError::Invalid("this studio has no LOD mode".into()))
+    }
+}
+
+/// A multiresolution world built by [`Backend::lod_world`].
+pub struct LodBuilt {
+    /// The world, not meshed yet.
+    pub world: rmt_terrain::lod::LodWorld<LodField>,
+    /// What the page shows about it (a JSON object).
+    pub description: Value,
+    /// The viewer's starting position, world coordinates.
+    pub viewer: glam::Vec3,
 }
 
 /// The studio's state: the backend, the sculpt sessions (each behind its own lock, so strokes
@@ -87,6 +110,7 @@ pub trait Backend: Send + Sync + 'static {
 pub struct Studio {
     backend: Box<dyn Backend>,
     sessions: Mutex<Sessions>,
+    lod_sessions: Mutex<Sessions<LodSession>>,
     slots: Arc<Semaphore>,
 }
 
@@ -102,6 +126,7 @@ impl Studio {
         Self {
             backend: Box::new(backend),
             sessions: Mutex::new(Sessions::new(MAX_SESSIONS)),
+            lod_sessions: Mutex::new(Sessions::new(MAX_SESSIONS)),
             slots: Arc::new(Semaphore::new(slots.max(1))),
         }
     }
@@ -150,6 +175,10 @@ pub fn router(studio: Arc<Studio>) -> Router {
         .route("/studio/api/sculpt/{id}/undo", post(sculpt_undo))
         .route("/studio/api/sculpt/{id}/redo", post(sculpt_redo))
         .route("/studio/api/sculpt/{id}/export", get(sculpt_export))
+        .route("/studio/api/lod", post(lod_new))
+        .route("/studio/api/lod/{id}/viewer", post(lod_viewer))
+        .route("/studio/api/lod/{id}/brush", post(lod_brush))
+        .route("/studio/api/lod/{id}/export", get(lod_export))
         .layer(DefaultBodyLimit::max(BODY_LIMIT))
         .with_state(studio)
 }
@@ -510,9 +539,158 @@ async fn sculpt_export(
     run.await.unwrap_or_else(IntoResponse::into_response)
 }
 
+/// `x,y,z` as a finite point, or a 400 naming `name`.
+fn parse_point(name: &str, text: &str) -> Result<glam::Vec3, ApiError> {
+    let bad = || {
+        ApiError::bad_request(format!(
+            "{name} must be three finite numbers x,y,z, got `{text}`"
+        ))
+    };
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f32>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(*x, *y, *z)),
+        _ => Err(bad()),
+    }
+}
+
+async fn lod_new(State(studio): State<Arc<Studio>>, RawQuery(q): RawQuery) -> Response {
+    let run = async move {
+        let mut params = parse_query(q.as_deref())?;
+        let viewer = take(&mut params, "viewer")
+            .map(|v| parse_point("viewer", &v))
+            .transpose()?;
+        let slot = studio.slot().await?;
+        blocking(move || {
+            let start = std::time::Instant::now();
+            let built = studio.backend.lod_world(&params).map_err(backend_error)?;
+            let (session, outcome) = LodSession::new(
+                built.world,
+                built.description,
+                viewer.unwrap_or(built.viewer),
+            )
+            .map_err(|m| backend_error(BackendError::Failed(m)))?;
+            drop(slot);
+            let id = random_token().map_err(ApiError::internal)?;
+            let header = session.header(&id, &outcome, start.elapsed().as_secs_f64() * 1e3);
+            let bytes = wire::encode(&header, &outcome.parts);
+            studio
+                .lod_sessions
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .insert(id, session);
+            Ok(binary_reply(StatusCode::CREATED, bytes))
+        })
+        .await
+    };
+    run.await.unwrap_or_else(IntoResponse::into_response)
+}
+
+/// A viewer move or a stroke on LOD session `id`.
+enum LodEdit {
+    Viewer(ViewerRequest),
+    Brush(BrushRequest),
+}
+
+async fn lod_edit(studio: Arc<Studio>, id: String, edit: LodEdit) -> Response {
+    let slot = match studio.slot().await {
+        Ok(s) => s,
+        Err(e) => return e.into_response(),
+    };
+    blocking(move || {
+        let _slot = slot;
+        let start = std::time::Instant::now();
+        let session = studio
+            .lod_sessions
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(&id)
+            .ok_or_else(|| {
+                ApiError::not_found("no such LOD session (it may have expired); start a new one")
+            })?;
+        let mut session = session.lock().unwrap_or_else(|e| e.into_inner());
+        let outcome: LodOutcome = match &edit {
+            LodEdit::Viewer(v) => session.move_viewer(v),
+            LodEdit::Brush(b) => session.stroke(b),
+        }
+        .map_err(ApiError::bad_request)?;
+        let header = session.header(&id, &outcome, start.elapsed().as_secs_f64() * 1e3);
+        Ok(binary_reply(
+            StatusCode::OK,
+            wire::encode(&header, &outcome.parts),
+        ))
+    })
+    .await
+    .unwrap_or_else(IntoResponse::into_response)
+}
+
+async fn lod_viewer(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    body: Result<Bytes, BytesRejection>,
+) -> Response {
+    match json_body::<ViewerRequest>(body, BODY_LIMIT) {
+        Ok(v) => lod_edit(studio, id, LodEdit::Viewer(v)).await,
+        Err(e) => e.into_response(),
+    }
+}
+
+async fn lod_brush(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    body: Result<Bytes, BytesRejection>,
+) -> Response {
+    match json_body::<BrushRequest>(body, BODY_LIMIT) {
+        Ok(b) => lod_edit(studio, id, LodEdit::Brush(b)).await,
+        Err(e) => e.into_response(),
+    }
+}
+
+async fn lod_export(
+    State(studio): State<Arc<Studio>>,
+    Path(id): Path<String>,
+    RawQuery(q): RawQuery,
+) -> Response {
+    let run = async move {
+        let mut params = parse_query(q.as_deref())?;
+        let format = export_format(&mut params)?;
+        if let Some((k, _)) = params.first() {
+            return Err(ApiError::bad_request(format!(
+                "unknown parameter `{k}` (expected format)"
+            )));
+        }
+        blocking(move || {
+            let session = studio
+                .lod_sessions
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .get(&id)
+                .ok_or_else(|| ApiError::not_found("no such LOD session"))?;
+            let mesh = session.lock().unwrap_or_else(|e| e.into_inner()).welded();
+            let (bytes, ct) = export_file(&mesh, &format)?;
+            Ok(file_reply(bytes, ct, &format!("lod-world.{format}")))
+        })
+        .await
+    };
+    run.await.unwrap_or_else(IntoResponse::into_response)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn points_parse_as_three_finite_numbers() {
+        assert_eq!(
+            parse_point("viewer", "1, -2.5,3").unwrap(),
+            glam::Vec3::new(1.0, -2.5, 3.0)
+        );
+        for bad in ["", "1,2", "1,2,3,4", "1,x,3", "1,inf,3", "NaN,0,0"] {
+            assert!(parse_point("viewer", bad).is_err(), "{bad}");
+        }
+    }
 
     #[test]
     fn query_strings_decode_and_bad_escapes_are_errors() {

@@ -224,13 +224,14 @@ impl Session {
 /// A session behind its own lock: strokes on different sessions run side by side.
 pub type SharedSession = Arc<Mutex<Session>>;
 
-/// Sessions by id, at most `capacity` (the least recently used one goes first).
-pub struct Sessions {
-    map: HashMap<String, (SharedSession, Instant)>,
+/// Sessions by id, at most `capacity` (the least recently used one goes first); sculpt sessions
+/// by default, LOD sessions ([`super::lod::LodSession`]) too.
+pub struct Sessions<S = Session> {
+    map: HashMap<String, (Arc<Mutex<S>>, Instant)>,
     capacity: usize,
 }
 
-impl Sessions {
+impl<S> Sessions<S> {
     /// No sessions yet.
     pub fn new(capacity: usize) -> Self {
         Self {
@@ -240,7 +241,7 @@ impl Sessions {
     }
 
     /// Adds a session, evicting the least recently used one when full.
-    pub fn insert(&mut self, id: String, session: Session) {
+    pub fn insert(&mut self, id: String, session: S) {
         while self.map.len() >= self.capacity {
             let oldest = self
                 .map
@@ -259,7 +260,7 @@ impl Sessions {
     }
 
     /// The session `id` (marked as used now).
-    pub fn get(&mut self, id: &str) -> Option<SharedSession> {
+    pub fn get(&mut self, id: &str) -> Option<Arc<Mutex<S>>> {
         let (session, used) = self.map.get_mut(id)?;
         *used = Instant::now();
         Some(session.clone())

@@ -5,7 +5,9 @@ Loads the studio, waits for the first mesh, checks that the canvas is not blank 
 its pixels differs from the background, read from a screenshot), changes the clustering and checks
 that the triangle counter changes, measures the time from a parameter change to the updated frame
 at 64^3 and the bytes per mesh, opens compare mode (blind), then sculpt mode: one stroke, checks
-that the counter and the latency readout update, undo; exports a .glb and loads it back (glTF 2.0
+that the counter and the latency readout update, undo; LOD mode: the multiresolution world
+with more than one level, W held to fly forward (the page asks the server for a re-mesh as the
+camera moves), colour by level (the mesh's colours change), one stroke; exports a .glb and loads it back (glTF 2.0
 structure: header, JSON and BIN chunks, accessors within the buffer, indices within the vertices,
 triangle count equal to the page's). Saves screenshots.
 
@@ -365,6 +367,57 @@ def main():
         driver.find_element(By.ID, "undo").click()
         wait.until(lambda d: state("edits") > edits and state("busy") == 0)
         result["after_undo_triangles"] = state("sculptTriangles")
+
+        # LOD: a fly camera over the multiresolution world, levels coloured, a stroke.
+        driver.find_element(By.CSS_SELECTOR, "#modes button[data-mode=lod]").click()
+        wait.until(lambda d: (state("lod.chunks") or 0) > 0 and state("busy") == 0)
+        if state("error"):
+            fail(f"LOD error: {state('error')}")
+        levels = state("lod.levels")
+        result["lod_chunks_per_level"] = levels
+        if sum(1 for n in levels if n > 0) < 2:
+            fail(f"the LOD world shows one level only: {levels}")
+        png = shot("studio-lod.png")
+        box = canvas_box()
+        share = share_not_background(png, box)
+        result["lod_nonbackground_share"] = round(share, 3)
+        if share < 0.05:
+            fail(f"LOD view looks blank ({share:.1%})")
+        plain = mean_colour(png, box)
+        start = state("lod.viewer")
+        moves = state("lod.moves")
+        ActionChains(driver).key_down("w").pause(3.0).key_up("w").perform()
+        wait.until(lambda d: state("lod.moves") > moves)
+        time.sleep(1.0)
+        wait.until(lambda d: state("busy") == 0)
+        if state("error"):
+            fail(f"LOD error after flying: {state('error')}")
+        end = state("lod.viewer")
+        flown = sum((a - b) ** 2 for a, b in zip(start, end)) ** 0.5
+        result["lod_flown"] = round(flown, 3)
+        result["lod_moves"] = state("lod.moves") - moves
+        result["lod_move_ms_last"] = round(state("lod.lastMoveMs"), 1)
+        if flown < 0.1:
+            fail(f"holding W did not move the viewer the server meshes for ({start} -> {end})")
+        driver.find_element(By.ID, "lod-colour").click()
+        time.sleep(0.5)
+        png = shot("studio-lod-levels.png")
+        coloured = mean_colour(png, box)
+        gap = sum(abs(a - b) for a, b in zip(plain, coloured))
+        result["lod_level_colour_gap"] = round(gap, 1)
+        if gap < 20:
+            fail(f"colour by level did not change the view's colours ({gap:.1f})")
+        if driver.find_element(By.ID, "lod-legend").get_attribute("hidden") is not None:
+            fail("no level legend with colour by level")
+        canvas = driver.find_element(By.ID, "view3d")
+        # Above the centre: ground a few chunks away, usually coarser than where the camera is.
+        ActionChains(driver).move_to_element_with_offset(canvas, 0, -120).click().perform()
+        wait.until(lambda d: (state("lod.strokes") or 0) > 0 and state("busy") == 0)
+        if state("error"):
+            fail(f"LOD stroke error: {state('error')}")
+        result["lod_stroke_ms"] = round(state("lod.lastStrokeMs"), 1)
+        result["lod_stroke_status"] = driver.find_element(By.ID, "status").text
+        shot("studio-lod-stroke.png")
         print(json.dumps(result))
     finally:
         driver.quit()
