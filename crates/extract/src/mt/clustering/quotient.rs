@@ -33,6 +33,8 @@
 //! proposed after the islands settle (variants of split islands, lone crossings, sliver pairs) is
 //! in [`super::additions`].
 
+use std::sync::atomic::{AtomicU8, Ordering};
+
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -380,6 +382,111 @@ impl Quotient<'_> {
         }
     }
 
+    /// [`Quotient::verdict`] of a kept group `gi` (the repair rounds test only kept groups),
+    /// read from the quotient labels: a crossing is a member exactly when its label is the
+    /// group's (the labels of a kept group's members are its leader, and no other crossing's
+    /// is), and the group's vertex is its leader's quotient position. So a star triangle's
+    /// quotient corners are its corners' labels, the same from each of the up to three groups
+    /// whose star holds it, and so is test (c) on it: `flips` memoises (c) per plain MT
+    /// triangle for one state (0 not known yet, 1 passes, 2 fails), filled by whichever test
+    /// reaches the triangle first. The same verdict as [`Quotient::verdict`]; the tests of
+    /// `repair` compare the two on every group they test.
+    pub(crate) fn verdict_kept(
+        &self,
+        gi: usize,
+        s: &mut Star,
+        test_a: bool,
+        flips: &[AtomicU8],
+    ) -> Verdict {
+        debug_assert_ne!(self.g.active[gi], 0, "group {gi} is not kept");
+        let g = &self.groups[gi];
+        let lones = self.lones_of(gi);
+        let me = self.g.leader[gi];
+        debug_assert_eq!(self.g.vpos[me as usize], self.g.centroid[gi]);
+        let vlabel = &self.g.vlabel[..];
+        s.src.clear();
+        s.dst.clear();
+        let mut adj = [0u32; 32];
+        let mut faces = 0i32;
+        let mut geometry = true;
+        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+            for &ti in self.tris_of(x) {
+                let t = self.tri(ti);
+                let q = t.map(|y| vlabel[y as usize]);
+                let mask =
+                    u8::from(q[0] == me) | u8::from(q[1] == me) << 1 | u8::from(q[2] == me) << 2;
+                debug_assert_ne!(
+                    mask, 0,
+                    "crossing {x} of group {gi} is labelled {}",
+                    vlabel[x as usize]
+                );
+                if mask.count_ones() >= 2 {
+                    // Collapsed: only test (a) reads it, once, from its first member corner.
+                    if test_a && t[mask.trailing_zeros() as usize] == x {
+                        for e in 0..3 {
+                            let (a, b) = (e, (e + 1) % 3);
+                            if mask >> a & 1 != 0 && mask >> b & 1 != 0 {
+                                let ra = Self::local(g, lones, t[a]);
+                                let rb = Self::local(g, lones, t[b]);
+                                adj[ra] |= 1 << rb;
+                                adj[rb] |= 1 << ra;
+                            }
+                        }
+                        faces += i32::from(mask == 0b111);
+                    }
+                    continue;
+                }
+                // One member corner, `x`: the triangle is read once, from it.
+                if q[0] == q[1] || q[1] == q[2] || q[0] == q[2] {
+                    continue;
+                }
+                let k = mask.trailing_zeros() as usize;
+                s.src.push(q[(k + 1) % 3]);
+                s.dst.push(q[(k + 2) % 3]);
+                if geometry && !self.flip_ok(t, q, ti, flips) {
+                    if !test_a {
+                        return Verdict::FailsLink;
+                    }
+                    geometry = false;
+                }
+            }
+        }
+        if test_a {
+            let edges: u32 = adj.iter().map(|m| m.count_ones()).sum::<u32>() / 2;
+            let members = u32::from(g.members) | ((1u32 << lones.len()) - 1) << 16;
+            if !connected(&adj, members) || members.count_ones() as i32 - edges as i32 + faces != 1
+            {
+                return Verdict::FailsContractible;
+            }
+        }
+        if geometry && simple_cycle(&s.src, &s.dst) {
+            Verdict::Passes
+        } else {
+            Verdict::FailsLink
+        }
+    }
+
+    /// Test (c) on plain MT triangle `tri` (corners `t`, quotient labels `q`, all distinct) in
+    /// the current state, memoised in `flips` (see [`Quotient::verdict_kept`]).
+    #[inline]
+    fn flip_ok(&self, t: [u32; 3], q: [u32; 3], tri: u32, flips: &[AtomicU8]) -> bool {
+        let memo = &flips[tri as usize];
+        match memo.load(Ordering::Relaxed) {
+            1 => true,
+            2 => false,
+            _ => {
+                let ok = match shape(q.map(|x| self.position(x))) {
+                    Shape::Flat => shape(t.map(|x| self.cpos[x as usize])) == Shape::Flat,
+                    Shape::Normal(n) => {
+                        n.dot(DVec3::from(self.grad[tri as usize].map(f64::from))) > 0.0
+                    }
+                };
+                memo.store(if ok { 1 } else { 2 }, Ordering::Relaxed);
+                ok
+            }
+        }
+    }
+
     /// Number of crossings in group `gi`.
     pub(crate) fn size(&self, gi: usize) -> u32 {
         self.groups[gi].size() + self.lones_of(gi).len() as u32
@@ -395,7 +502,8 @@ impl Quotient<'_> {
     #[inline(always)]
     pub(crate) fn tri(&self, t: u32) -> [u32; 3] {
         let i = 3 * t as usize;
-        [self.tris[i], self.tris[i + 1], self.tris[i + 2]]
+        let c = &self.tris[i..i + 3];
+        [c[0], c[1], c[2]]
     }
 
     /// Fills `s` with the star of group `gi`: the plain MT triangles with a member, each once
