@@ -691,6 +691,149 @@ mod tests {
         (proposals.len(), others)
     }
 
+    /// What the first round of the islands' tests meets on `field` (integrated clustering,
+    /// `n` cells in [-1, 1]^3): the islands tested, those with no lone crossing (test (a) by
+    /// the lattice's table), those the table refuses (decided without walking the star), and
+    /// the lookups and evaluations of test (c)'s memo. Every island's verdict from the labels,
+    /// table and memo ([`Quotient::verdict_kept`]) is compared with the walk
+    /// ([`Quotient::verdict`]), and the table with the walk's test (a) alone.
+    fn first_round(field: &impl rmt_fields::ScalarField, n: usize, lattice: Lattice) -> [usize; 5] {
+        use std::sync::atomic::{AtomicU8, Ordering};
+        let pool = test_pool(1);
+        let settings = settings_on([n; 3], lattice, crate::Clustering::Integrated);
+        let (samples, _, _, _) = extracted(field, &settings, &pool);
+        let layout = Layout::new(&samples, lattice);
+        let mut tables = crate::mt::crossings::VertexTables::default();
+        tables.allocate(&samples);
+        let mut buf = ClusterBuffers::default();
+        let work = crate::mt::crossings::VertexWork {
+            propose: Some(proposal::Rules::Islands),
+            known_edges: None,
+        };
+        let out = crate::mt::crossings::VertexOut {
+            proposals: &mut buf.candidates,
+            positions: &mut buf.cpos,
+        };
+        let mut stats = Stats::default();
+        crate::mt::crossings::vertex_pass(
+            &layout,
+            settings.iso,
+            work,
+            &pool,
+            &mut tables,
+            out,
+            &mut stats,
+        )
+        .expect("vertex pass");
+        // The steps of `run` up to the islands' first round.
+        build_groups(&mut buf, &tables.crossed, &layout, &pool);
+        let surface = Surface {
+            l: &layout,
+            iso: settings.iso,
+            keep: None,
+            crossed: &tables.crossed,
+        };
+        plain_triangles(&surface, &buf.cpos, false, &mut buf.plain, &pool);
+        let mut groups = std::mem::take(&mut buf.groups);
+        let f = fixed(&buf, &layout);
+        groups.relabel(&f, &pool);
+        additions::give_lones(&f, &mut groups, &buf.edge_of, false, &pool);
+        let q = Quotient::new(&f, &groups);
+        let islands = f.groups.len();
+        let flips: Vec<AtomicU8> = (0..f.tris.len() / 3).map(|_| AtomicU8::new(0)).collect();
+        let mut s = quotient::Star::default();
+        let (mut lone_free, mut refused) = (0, 0);
+        for gi in 0..islands {
+            let walk = q.verdict(gi, &mut s, true);
+            assert_eq!(
+                q.verdict_kept(gi, &mut s, true, &flips),
+                walk,
+                "island {gi}: labels, table and memo against the walk"
+            );
+            if q.lones_of(gi).is_empty() {
+                lone_free += 1;
+                let table = layout.t.is_contractible(f.groups[gi].dirs);
+                assert_eq!(
+                    table,
+                    walk != quotient::Verdict::FailsContractible,
+                    "island {gi}: test (a) by table against the walk"
+                );
+                refused += usize::from(!table);
+            }
+        }
+        // Test (c)'s memo: a triangle of three different labels is read once from each of its
+        // corners in a kept group, and evaluated once.
+        let (mut lookups, mut evaluated) = (0, 0);
+        for t in f.tris.chunks_exact(3) {
+            let l = [0, 1, 2].map(|k| groups.vlabel[t[k] as usize]);
+            if l[0] == l[1] || l[1] == l[2] || l[0] == l[2] {
+                continue;
+            }
+            let kept = t.iter().filter(|&&x| !q.alone(x)).count();
+            lookups += kept;
+            evaluated += usize::from(kept > 0);
+        }
+        let memo: usize = flips
+            .iter()
+            .map(|m| usize::from(m.load(Ordering::Relaxed) != 0))
+            .sum();
+        assert!(memo <= evaluated, "the memo holds only star triangles");
+        [islands, lone_free, refused, lookups, evaluated]
+    }
+
+    #[test]
+    fn islands_decided_by_the_lattice_table_and_the_memo_agree_with_the_walk() {
+        // Also a measurement (printed with --nocapture): the share of the first round's
+        // islands whose test (a) the table decides, of those it decides without the walk, and
+        // the share of test (c)'s reads the memo answers.
+        use rmt_fields::{Asteroid, AsteroidParams, CaveParams, CaveTerrain, RandomField, Sphere};
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            let n = 40;
+            let mut rows = vec![
+                (
+                    "sphere",
+                    first_round(&Sphere::new(glam::Vec3::ZERO, 0.8), n, lattice),
+                ),
+                (
+                    "asteroid",
+                    first_round(
+                        &Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default()),
+                        n,
+                        lattice,
+                    ),
+                ),
+                (
+                    "caves",
+                    first_round(&CaveTerrain::new(CaveParams::default()), n, lattice),
+                ),
+                ("wavy", first_round(&wavy(), n, lattice)),
+            ];
+            let mut random = [0usize; 5];
+            for seed in 0..6 {
+                let r = first_round(&RandomField::from_seed(seed), 20, lattice);
+                for (a, b) in random.iter_mut().zip(r) {
+                    *a += b;
+                }
+            }
+            rows.push(("random x6", random));
+            for (name, [islands, lone_free, refused, lookups, evaluated]) in &rows {
+                let pct = |a: usize, b: usize| 100.0 * a as f64 / (b.max(1)) as f64;
+                println!(
+                    "{lattice:?} {name:10}: {islands:6} islands; test (a) by table {:.1}%, \
+                     decided without the walk {:.2}%; test (c) memo answers {:.1}% of {lookups} reads",
+                    pct(*lone_free, *islands),
+                    pct(*refused, *islands),
+                    100.0 - pct(*evaluated, *lookups),
+                );
+                assert!(lone_free <= islands && refused <= lone_free, "{name}");
+            }
+            for (name, [islands, lone_free, _, lookups, evaluated]) in &rows[..2] {
+                assert!(*islands > 1000, "{name}: only {islands} islands");
+                assert!(*lone_free > 0 && evaluated < lookups, "{name}");
+            }
+        }
+    }
+
     #[test]
     fn share_of_proposals_with_no_other_proposal_in_their_star() {
         // A measurement (printed with --nocapture) for the table of issue 41; it asserts that

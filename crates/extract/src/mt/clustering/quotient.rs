@@ -404,10 +404,18 @@ impl Quotient<'_> {
         let me = self.g.leader[gi];
         debug_assert_eq!(self.g.vpos[me as usize], self.g.centroid[gi]);
         let vlabel = &self.g.vlabel[..];
+        // Test (a) of a group of one point's crossings (no lone crossing) by the lattice's
+        // table ([`crate::lattice::LatticeTables::is_contractible`]); the walk then tests (b)
+        // and (c) only.
+        let by_table = test_a && lones.is_empty();
+        if by_table && !self.l.t.is_contractible(g.dirs) {
+            return Verdict::FailsContractible;
+        }
+        let test_a = test_a && !by_table;
         s.src.clear();
         s.dst.clear();
         let mut adj = [0u32; 32];
-        let mut faces = 0i32;
+        let (mut faces, mut edges) = (0i32, 0u32);
         let mut geometry = true;
         for x in g.ids().chain(lones.iter().map(|l| l.id)) {
             for &ti in self.tris_of(x) {
@@ -420,7 +428,9 @@ impl Quotient<'_> {
                     "crossing {x} of group {gi} is labelled {}",
                     vlabel[x as usize]
                 );
-                if mask.count_ones() >= 2 {
+                // Two or more member corners (no popcount: it is a library call on the
+                // baseline target).
+                if mask & (mask - 1) != 0 {
                     // Collapsed: only test (a) reads it, once, from its first member corner.
                     if test_a && t[mask.trailing_zeros() as usize] == x {
                         for e in 0..3 {
@@ -428,6 +438,8 @@ impl Quotient<'_> {
                             if mask >> a & 1 != 0 && mask >> b & 1 != 0 {
                                 let ra = Self::local(g, lones, t[a]);
                                 let rb = Self::local(g, lones, t[b]);
+                                // Each edge counted once, when it is first seen.
+                                edges += adj[ra] >> rb & 1 ^ 1;
                                 adj[ra] |= 1 << rb;
                                 adj[rb] |= 1 << ra;
                             }
@@ -452,7 +464,6 @@ impl Quotient<'_> {
             }
         }
         if test_a {
-            let edges: u32 = adj.iter().map(|m| m.count_ones()).sum::<u32>() / 2;
             let members = u32::from(g.members) | ((1u32 << lones.len()) - 1) << 16;
             if !connected(&adj, members) || members.count_ones() as i32 - edges as i32 + faces != 1
             {
