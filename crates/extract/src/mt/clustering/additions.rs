@@ -464,7 +464,7 @@ mod tests {
                 cpos: &cpos,
                 groups: &cores,
                 tris: &[],
-                grad: &[],
+                source: &[],
                 inc_start: &[],
                 inc: &[],
             };

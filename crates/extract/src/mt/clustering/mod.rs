@@ -400,7 +400,7 @@ fn fixed<'a>(buf: &'a ClusterBuffers, layout: &'a Layout<'a>) -> Fixed<'a> {
         cpos: &buf.cpos,
         groups: &buf.candidates,
         tris: &buf.plain.tris,
-        grad: &buf.plain.grad,
+        source: &buf.plain.source,
         inc_start: &buf.plain.inc.start,
         inc: &buf.plain.inc.inc,
     }
@@ -921,7 +921,7 @@ mod tests {
                         cpos: &buf.clustering.cpos,
                         groups: &buf.clustering.candidates,
                         tris: &[],
-                        grad: &[],
+                        source: &[],
                         inc_start: &[],
                         inc: &[],
                     };

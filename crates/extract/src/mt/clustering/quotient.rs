@@ -60,11 +60,11 @@ pub(crate) struct Fixed<'a> {
     pub(crate) cpos: &'a [[f32; 3]],
     /// The proposed groups' cores (a point's island).
     pub(crate) groups: &'a [Candidate],
-    /// Plain MT's triangles (three crossing ids each), the gradient of each one's source
-    /// tetrahedron (up to a positive factor), and every crossing's triangles
+    /// Plain MT's triangles (three crossing ids each), each one's source tetrahedron (see
+    /// [`super::plain::PlainList::source`]), and every crossing's triangles
     /// (`inc[inc_start[x]..inc_start[x + 1]]`).
     pub(crate) tris: &'a [u32],
-    pub(crate) grad: &'a [[f32; 3]],
+    pub(crate) source: &'a [(u32, u8)],
     pub(crate) inc_start: &'a [u32],
     pub(crate) inc: &'a [u32],
 }
@@ -245,7 +245,7 @@ pub(crate) struct Quotient<'a> {
     pub(crate) cpos: &'a [[f32; 3]],
     pub(crate) groups: &'a [Candidate],
     tris: &'a [u32],
-    grad: &'a [[f32; 3]],
+    source: &'a [(u32, u8)],
     inc_start: &'a [u32],
     inc: &'a [u32],
     pub(crate) g: &'a Groups,
@@ -259,7 +259,7 @@ impl<'a> Quotient<'a> {
             cpos: f.cpos,
             groups: f.groups,
             tris: f.tris,
-            grad: f.grad,
+            source: f.source,
             inc_start: f.inc_start,
             inc: f.inc,
             g,
@@ -488,14 +488,22 @@ impl Quotient<'_> {
             _ => {
                 let ok = match shape(q.map(|x| self.position(x))) {
                     Shape::Flat => shape(t.map(|x| self.cpos[x as usize])) == Shape::Flat,
-                    Shape::Normal(n) => {
-                        n.dot(DVec3::from(self.grad[tri as usize].map(f64::from))) > 0.0
-                    }
+                    Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
                 };
                 memo.store(if ok { 1 } else { 2 }, Ordering::Relaxed);
                 ok
             }
         }
+    }
+
+    /// The gradient of plain MT triangle `tri`'s source tetrahedron (of the linear interpolant
+    /// on it, up to a positive factor): computed when test (c) reads the triangle, the same
+    /// bits as the listing would have stored.
+    #[inline]
+    fn gradient(&self, tri: u32) -> [f32; 3] {
+        let (anchor, tet) = self.source[tri as usize];
+        self.l
+            .gradient(anchor as usize, usize::from(tet & 0x7f), tet & 0x80 != 0)
     }
 
     /// Number of crossings in group `gi`.
@@ -612,7 +620,7 @@ impl Quotient<'_> {
         });
         match shape(new) {
             Shape::Flat => shape(t.map(|x| self.cpos[x as usize])) == Shape::Flat,
-            Shape::Normal(n) => n.dot(DVec3::from(self.grad[tri as usize].map(f64::from))) > 0.0,
+            Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
         }
     }
 
