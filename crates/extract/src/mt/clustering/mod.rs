@@ -698,7 +698,7 @@ mod tests {
     /// table and memo ([`Quotient::verdict_kept`]) is compared with the walk
     /// ([`Quotient::verdict`]), and the table with the walk's test (a) alone.
     fn first_round(field: &impl rmt_fields::ScalarField, n: usize, lattice: Lattice) -> [usize; 5] {
-        use std::sync::atomic::{AtomicU8, Ordering};
+        use std::sync::atomic::Ordering;
         let pool = test_pool(1);
         let settings = settings_on([n; 3], lattice, crate::Clustering::Integrated);
         let (samples, _, _, _) = extracted(field, &settings, &pool);
@@ -740,15 +740,30 @@ mod tests {
         additions::give_lones(&f, &mut groups, &buf.edge_of, false, &pool);
         let q = Quotient::new(&f, &groups);
         let islands = f.groups.len();
-        let flips: Vec<AtomicU8> = (0..f.tris.len() / 3).map(|_| AtomicU8::new(0)).collect();
+        let mut tables = quotient::RoundTables::default();
+        tables.prepare(&q, false, &pool);
+        let flips = &tables.flips;
+        // The round's tables with every triangle labelled (a round testing many groups).
+        let mut labelled = quotient::RoundTables::default();
+        labelled.prepare(&q, true, &pool);
         let mut s = quotient::Star::default();
         let (mut lone_free, mut refused) = (0, 0);
         for gi in 0..islands {
             let walk = q.verdict(gi, &mut s, true);
             assert_eq!(
-                q.verdict_kept(gi, &mut s, true, &flips),
+                q.verdict_kept(gi, &mut s, true, &tables),
                 walk,
                 "island {gi}: labels, table and memo against the walk"
+            );
+            assert_eq!(
+                q.verdict_kept(gi, &mut s, true, &labelled),
+                walk,
+                "island {gi}: the round's labelled triangles against the walk"
+            );
+            assert_eq!(
+                q.verdict_kept(gi, &mut s, false, &labelled),
+                q.verdict(gi, &mut s, false),
+                "island {gi}: (b) and (c) from the labelled triangles against the walk"
             );
             if q.lones_of(gi).is_empty() {
                 lone_free += 1;

@@ -282,6 +282,65 @@ pub(crate) struct Star {
     link: Vec<u32>,
 }
 
+/// Test (c)'s memo value of a plain MT triangle that collapsed in the state of the round (two
+/// of its corners' labels coincide), set by [`RoundTables::prepare`].
+pub(crate) const COLLAPSED: u8 = 3;
+
+/// Per plain MT triangle, what the tests of one round (one state) share: test (c)'s memo (0
+/// not known yet, 1 passes, 2 fails, filled by whichever test reads the triangle first), and,
+/// when the round tests many groups, every triangle's quotient labels with the collapsed ones
+/// marked [`COLLAPSED`] in the memo, computed once for the round.
+#[derive(Default)]
+pub(crate) struct RoundTables {
+    pub(crate) flips: Vec<AtomicU8>,
+    /// Per triangle, its corners' labels (when `labelled`).
+    pub(crate) labels: Vec<[u32; 3]>,
+    pub(crate) labelled: bool,
+}
+
+impl RoundTables {
+    /// Sets the tables up for the state of `q`: the memo cleared, and with `label` every
+    /// triangle's labels and collapsed mark (in parallel over runs of triangles).
+    pub(crate) fn prepare(&mut self, q: &Quotient, label: bool, pool: &rayon::ThreadPool) {
+        let n = q.tris.len() / 3;
+        self.labelled = label;
+        self.flips.resize_with(n, || AtomicU8::new(0));
+        if !label {
+            pool.install(|| {
+                self.flips
+                    .par_chunks_mut(1 << 14)
+                    .for_each(|c| c.iter_mut().for_each(|m| *m.get_mut() = 0))
+            });
+            return;
+        }
+        self.labels.resize(n, [0; 3]);
+        const RUN: usize = 1 << 12;
+        let vlabel = &q.g.vlabel[..];
+        pool.install(|| {
+            self.flips
+                .par_chunks_mut(RUN)
+                .zip(self.labels.par_chunks_mut(RUN))
+                .enumerate()
+                .for_each(|(k, (flips, labels))| {
+                    let tris = &q.tris[3 * k * RUN..3 * (k * RUN + labels.len())];
+                    for ((m, l), t) in flips.iter_mut().zip(labels).zip(tris.chunks_exact(3)) {
+                        let c = [
+                            vlabel[t[0] as usize],
+                            vlabel[t[1] as usize],
+                            vlabel[t[2] as usize],
+                        ];
+                        *l = c;
+                        *m.get_mut() = if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
+                            COLLAPSED
+                        } else {
+                            0
+                        };
+                    }
+                })
+        });
+    }
+}
+
 impl Quotient<'_> {
     /// The label of crossing `x` in the quotient: the leader of its group when that group is
     /// active, else itself.
@@ -396,9 +455,10 @@ impl Quotient<'_> {
         gi: usize,
         s: &mut Star,
         test_a: bool,
-        flips: &[AtomicU8],
+        r: &RoundTables,
     ) -> Verdict {
         debug_assert_ne!(self.g.active[gi], 0, "group {gi} is not kept");
+        let flips = &r.flips[..];
         let g = &self.groups[gi];
         let lones = self.lones_of(gi);
         let me = self.g.leader[gi];
@@ -412,6 +472,9 @@ impl Quotient<'_> {
             return Verdict::FailsContractible;
         }
         let test_a = test_a && !by_table;
+        if !test_a && r.labelled {
+            return self.verdict_labelled(gi, s, r);
+        }
         s.src.clear();
         s.dst.clear();
         let mut adj = [0u32; 32];
@@ -455,7 +518,7 @@ impl Quotient<'_> {
                 let k = mask.trailing_zeros() as usize;
                 s.src.push(q[(k + 1) % 3]);
                 s.dst.push(q[(k + 2) % 3]);
-                if geometry && !self.flip_ok(t, q, ti, flips) {
+                if geometry && !self.flip_ok(q, ti, flips) {
                     if !test_a {
                         return Verdict::FailsLink;
                     }
@@ -477,17 +540,57 @@ impl Quotient<'_> {
         }
     }
 
-    /// Test (c) on plain MT triangle `tri` (corners `t`, quotient labels `q`, all distinct) in
+    /// [`Quotient::verdict_kept`] without test (a) (not asked, or decided by the table), from
+    /// the round's tables (`r.labelled`): a triangle that collapsed in this state is skipped
+    /// on one byte, and the others' quotient labels are read in one place.
+    fn verdict_labelled(&self, gi: usize, s: &mut Star, r: &RoundTables) -> Verdict {
+        let g = &self.groups[gi];
+        let lones = self.lones_of(gi);
+        let me = self.g.leader[gi];
+        s.src.clear();
+        s.dst.clear();
+        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+            for &ti in self.tris_of(x) {
+                if r.flips[ti as usize].load(Ordering::Relaxed) == COLLAPSED {
+                    continue;
+                }
+                // Three different labels, one of them the group's (`x`'s).
+                let q = r.labels[ti as usize];
+                let k = if q[0] == me {
+                    0
+                } else if q[1] == me {
+                    1
+                } else {
+                    2
+                };
+                debug_assert_eq!(q[k], me, "triangle {ti} at member {x} of group {gi}");
+                s.src.push(q[(k + 1) % 3]);
+                s.dst.push(q[(k + 2) % 3]);
+                if !self.flip_ok(q, ti, &r.flips) {
+                    return Verdict::FailsLink;
+                }
+            }
+        }
+        if simple_cycle(&s.src, &s.dst) {
+            Verdict::Passes
+        } else {
+            Verdict::FailsLink
+        }
+    }
+
+    /// Test (c) on plain MT triangle `tri` (quotient labels `q`, all distinct) in
     /// the current state, memoised in `flips` (see [`Quotient::verdict_kept`]).
     #[inline]
-    fn flip_ok(&self, t: [u32; 3], q: [u32; 3], tri: u32, flips: &[AtomicU8]) -> bool {
+    fn flip_ok(&self, q: [u32; 3], tri: u32, flips: &[AtomicU8]) -> bool {
         let memo = &flips[tri as usize];
         match memo.load(Ordering::Relaxed) {
             1 => true,
             2 => false,
             _ => {
                 let ok = match shape(q.map(|x| self.position(x))) {
-                    Shape::Flat => shape(t.map(|x| self.cpos[x as usize])) == Shape::Flat,
+                    Shape::Flat => {
+                        shape(self.tri(tri).map(|x| self.cpos[x as usize])) == Shape::Flat
+                    }
                     Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
                 };
                 memo.store(if ok { 1 } else { 2 }, Ordering::Relaxed);

@@ -14,11 +14,9 @@
 //! a failing addition is undone (a new group splits, a group gives back its new lone crossings)
 //! before anything older splits.
 
-use std::sync::atomic::AtomicU8;
-
 use rayon::prelude::*;
 
-use super::quotient::{Fixed, Groups, Quotient, Star, Verdict, NONE};
+use super::quotient::{Fixed, Groups, Quotient, RoundTables, Star, Verdict, NONE};
 
 /// The outcome of the repair rounds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -75,16 +73,18 @@ pub(crate) fn settle(
     let start = std::time::Instant::now();
     // Per group: 1 while it fails (b) or (c) this round, 2 when it fails (a).
     let mut failing = vec![0u8; f.groups.len()];
-    // Test (c) per plain MT triangle in the state of the round (see `Quotient::verdict_kept`).
-    let mut flips: Vec<AtomicU8> = Vec::new();
+    // Test (c) per plain MT triangle in the state of the round, and the triangles' labels when
+    // the round tests many groups (see `Quotient::verdict_kept`).
+    let mut tables = RoundTables::default();
     let mut round = 0u32;
     loop {
         round += 1;
         let first = round == 1;
         let q = Quotient::new(f, g);
-        flips.clear();
-        flips.resize_with(f.tris.len() / 3, || AtomicU8::new(0));
-        let flips = &flips[..];
+        // Labelling every triangle costs about as much as skipping the collapsed ones saves
+        // in the stars of one group in twenty triangles.
+        tables.prepare(&q, 20 * dirty.len() >= f.tris.len() / 3, pool);
+        let tables = &tables;
         let fails: Vec<(u32, u8)> = pool.install(|| {
             // Runs of at least 256 groups: each run sets up one star's working memory (a run
             // per test cost about 2% of the tests on one thread, 5% on two).
@@ -99,7 +99,7 @@ pub(crate) fn settle(
                             Phase::Islands => true,
                             Phase::Additions { born } => gi >= born || q.has_new_lones(i),
                         };
-                    let verdict = q.verdict_kept(i, s, test_a, flips);
+                    let verdict = q.verdict_kept(i, s, test_a, tables);
                     #[cfg(test)]
                     assert_ne!(q.g.active[i], 0, "group {gi} tested but not kept");
                     #[cfg(test)]
