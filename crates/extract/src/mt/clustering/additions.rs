@@ -120,6 +120,9 @@ pub(crate) fn around(f: &Fixed, g: &Groups, groups: &[u32], pool: &rayon::Thread
     out
 }
 
+/// Crossings per run of the scans over all crossings.
+const RUN: usize = 1 << 12;
+
 /// A triangle is a sliver when its aspect ratio (circumradius over twice the inradius, 1 for an
 /// equilateral triangle) exceeds this.
 pub(crate) const SLIVER_AR: f32 = 4.0;
@@ -169,9 +172,10 @@ pub(crate) fn sliver_proposals(
     pool: &rayon::ThreadPool,
 ) -> SliverProposals {
     let q = Quotient::new(f, g);
+    // Only for a crossing left alone (few, once the islands settled).
     let pick = |x: u32| -> u32 {
         let (slot, dir) = edge_of[x as usize];
-        if !q.alone(x) || !q.inner(slot as usize, dir) {
+        if !q.inner(slot as usize, dir) {
             return NONE;
         }
         let mut best: Option<(f32, u32)> = None;
@@ -208,11 +212,17 @@ pub(crate) fn sliver_proposals(
         }
         best.map_or(NONE, |(_, u)| u)
     };
-    let choice: Vec<u32> = pool.install(|| {
-        (0..edge_of.len() as u32)
-            .into_par_iter()
-            .map(pick)
-            .collect()
+    // In runs of crossings, the test of the crossings in kept groups (nearly all) inline.
+    let mut choice = vec![NONE; edge_of.len()];
+    pool.install(|| {
+        choice.par_chunks_mut(RUN).enumerate().for_each(|(k, out)| {
+            for (i, c) in out.iter_mut().enumerate() {
+                let x = (k * RUN + i) as u32;
+                if q.alone(x) {
+                    *c = pick(x);
+                }
+            }
+        })
     });
     let mut out = SliverProposals::default();
     for (x, &u) in choice.iter().enumerate() {
@@ -242,21 +252,29 @@ pub(crate) fn give_lones(
     pool: &rayon::ThreadPool,
 ) -> Vec<u32> {
     let q = Quotient::new(f, g);
-    let found: Vec<(u32, Lone)> = pool.install(|| {
-        (0..edge_of.len())
+    // Only for a crossing left alone.
+    let give = |x: usize| -> Option<(u32, Lone)> {
+        let (slot, dir) = edge_of[x];
+        if !q.inner(slot as usize, dir) {
+            return None;
+        }
+        let refused = q.g.refused[x];
+        let h = q.nearest_group(x as u32, |h| h != refused)?;
+        Some((h, Lone { id: x as u32 }))
+    };
+    // In runs of crossings, the test of the crossings in kept groups inline; `attach` sorts.
+    let runs: Vec<Vec<(u32, Lone)>> = pool.install(|| {
+        (0..edge_of.len().div_ceil(RUN))
             .into_par_iter()
-            .filter(|&x| q.alone(x as u32))
-            .filter_map(|x| {
-                let (slot, dir) = edge_of[x];
-                if !q.inner(slot as usize, dir) {
-                    return None;
-                }
-                let refused = q.g.refused[x];
-                let h = q.nearest_group(x as u32, |h| h != refused)?;
-                Some((h, Lone { id: x as u32 }))
+            .map(|k| {
+                (k * RUN..((k + 1) * RUN).min(edge_of.len()))
+                    .filter(|&x| q.alone(x as u32))
+                    .filter_map(give)
+                    .collect()
             })
             .collect()
     });
+    let found = runs.concat();
     attach(f, g, found, want_dirty, pool)
 }
 

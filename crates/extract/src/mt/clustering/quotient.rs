@@ -139,20 +139,23 @@ impl Groups {
         self.vpos.resize(n, [0.0; 3]);
         let (group_of, active, leader, centroid) =
             (&self.group_of, &self.active, &self.leader, &self.centroid);
+        const RUN: usize = 1 << 12;
         pool.install(|| {
             self.vlabel
-                .par_iter_mut()
-                .zip(self.vpos.par_iter_mut())
+                .par_chunks_mut(RUN)
+                .zip(self.vpos.par_chunks_mut(RUN))
                 .enumerate()
-                .with_min_len(1 << 12)
-                .for_each(|(x, (l, p))| {
-                    let h = group_of[x];
-                    if h != NONE && active[h as usize] != 0 {
-                        *l = leader[h as usize];
-                        *p = centroid[h as usize];
-                    } else {
-                        *l = x as u32;
-                        *p = f.cpos[x];
+                .for_each(|(k, (labels, positions))| {
+                    for (i, (l, p)) in labels.iter_mut().zip(positions).enumerate() {
+                        let x = k * RUN + i;
+                        let h = group_of[x];
+                        if h != NONE && active[h as usize] != 0 {
+                            *l = leader[h as usize];
+                            *p = centroid[h as usize];
+                        } else {
+                            *l = x as u32;
+                            *p = f.cpos[x];
+                        }
                     }
                 })
         });
