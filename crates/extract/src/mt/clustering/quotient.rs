@@ -468,13 +468,23 @@ impl Quotient<'_> {
         debug_assert_eq!(self.g.vpos[me as usize], self.g.centroid[gi]);
         let vlabel = &self.g.vlabel[..];
         // Test (a) of a group of one point's crossings (no lone crossing) by the lattice's
-        // table ([`crate::lattice::LatticeTables::is_contractible`]); the walk then tests (b)
-        // and (c) only.
-        let by_table = test_a && lones.is_empty();
-        if by_table && !self.l.t.is_contractible(g.dirs) {
+        // table ([`crate::lattice::LatticeTables::is_contractible`]); with lone crossings, when
+        // the point's part is contractible, from what the lone crossings add to it, walked
+        // around them only ([`Quotient::lones_keep_contractible`]). The walk then tests (b) and
+        // (c) only.
+        let decided = if !test_a {
+            None
+        } else if lones.is_empty() {
+            Some(self.l.t.is_contractible(g.dirs))
+        } else if self.l.t.is_contractible(g.dirs) {
+            Some(self.lones_keep_contractible(lones, me))
+        } else {
+            None
+        };
+        if decided == Some(false) {
             return Verdict::FailsContractible;
         }
-        let test_a = test_a && !by_table;
+        let test_a = test_a && decided.is_none();
         if !test_a && r.labelled {
             return self.verdict_labelled(gi, s, r);
         }
@@ -541,6 +551,70 @@ impl Quotient<'_> {
         } else {
             Verdict::FailsLink
         }
+    }
+
+    /// Test (a) of a kept group (labelled `me`) whose own point's crossings form a contractible
+    /// complex, with its lone crossings `lones`: the group's complex is that one plus the lone
+    /// crossings, the member edges at them and the member triangles through them, so it is
+    /// contractible exactly when every lone crossing reaches the point's part along member
+    /// edges and the lone crossings add as many edges as vertices and triangles (V - E + F
+    /// stays 1). Every member is an inner vertex, so each edge at a lone crossing lies in two
+    /// of its triangles: an edge to the point's part is seen twice, one between two lone
+    /// crossings four times (weights 2 and 1 make both 4); a triangle is counted from its first
+    /// lone corner.
+    pub(crate) fn lones_keep_contractible(&self, lones: &[Lone], me: u32) -> bool {
+        let vlabel = &self.g.vlabel[..];
+        let lone_index = |y: u32| lones.iter().position(|l| l.id == y);
+        // Bit i: lone crossing i has an edge to the point's part; `near[i]` bit j: to lone j.
+        let mut near_part = 0u8;
+        let mut near = [0u8; MAX_LONES];
+        let (mut quarter_edges, mut faces) = (0usize, 0usize);
+        for (i, l) in lones.iter().enumerate() {
+            for &ti in self.tris_of(l.id) {
+                let t = self.tri(ti);
+                let k = t.iter().position(|&y| y == l.id).unwrap_or(0);
+                let mut all = true;
+                for y in [t[(k + 1) % 3], t[(k + 2) % 3]] {
+                    if vlabel[y as usize] != me {
+                        all = false;
+                        continue;
+                    }
+                    match lone_index(y) {
+                        Some(j) => {
+                            quarter_edges += 1;
+                            near[i] |= 1 << j;
+                        }
+                        None => {
+                            quarter_edges += 2;
+                            near_part |= 1 << i;
+                        }
+                    }
+                }
+                if all && t[..k].iter().all(|&y| lone_index(y).is_none()) {
+                    faces += 1;
+                }
+            }
+        }
+        debug_assert_eq!(
+            quarter_edges % 4,
+            0,
+            "an edge at a lone crossing in one triangle"
+        );
+        let mut reached = near_part;
+        loop {
+            let mut grown = reached;
+            let mut bits = reached;
+            while bits != 0 {
+                grown |= near[bits.trailing_zeros() as usize];
+                bits &= bits - 1;
+            }
+            if grown == reached {
+                break;
+            }
+            reached = grown;
+        }
+        let every = (1u16 << lones.len()) - 1;
+        u16::from(reached) == every && quarter_edges / 4 == lones.len() + faces
     }
 
     /// [`Quotient::verdict_kept`] without test (a) (not asked, or decided by the table), from
