@@ -29,6 +29,18 @@
 //!        v-----u
 //! ```
 //!
+//! [`Quotient::verdict`] walks a group's star and decides all three; the repair rounds, which
+//! test only kept groups, use [`Quotient::verdict_kept`], which gives the same verdict with less
+//! work:
+//!
+//! - (a) of a group of one point's crossings is a lattice table over the 2^14 edge masks
+//!   ([`crate::lattice::LatticeTables::is_contractible`]); with lone crossings, that table plus
+//!   a walk around the lone crossings only ([`Quotient::lones_keep_contractible`]);
+//! - membership is one label compare (a kept group's members carry its leader's label), so a
+//!   star triangle's quotient corners are its corners' labels, the same from each group whose
+//!   star holds it: (c) is computed once per triangle and round ([`RoundTables`]), and a round
+//!   that tests many groups labels every triangle once, so the walk skips the collapsed ones.
+//!
 //! The repair rounds that keep only groups passing these tests are in [`super::repair`]; what is
 //! proposed after the islands settle (variants of split islands, lone crossings, sliver pairs) is
 //! in [`super::additions`].
