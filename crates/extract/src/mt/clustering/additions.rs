@@ -212,24 +212,31 @@ pub(crate) fn sliver_proposals(
         }
         best.map_or(NONE, |(_, u)| u)
     };
-    // In runs of crossings, the test of the crossings in kept groups (nearly all) inline.
+    // In runs of crossings, the test of the crossings in kept groups (nearly all) inline; each
+    // run lists the crossings that picked one.
     let mut choice = vec![NONE; edge_of.len()];
-    pool.install(|| {
-        choice.par_chunks_mut(RUN).enumerate().for_each(|(k, out)| {
-            for (i, c) in out.iter_mut().enumerate() {
-                let x = (k * RUN + i) as u32;
-                if q.alone(x) {
-                    *c = pick(x);
+    let picked: Vec<Vec<u32>> = pool.install(|| {
+        choice
+            .par_chunks_mut(RUN)
+            .enumerate()
+            .map(|(k, out)| {
+                let mut picked = Vec::new();
+                for (i, c) in out.iter_mut().enumerate() {
+                    let x = (k * RUN + i) as u32;
+                    if q.alone(x) {
+                        *c = pick(x);
+                        if *c != NONE {
+                            picked.push(x);
+                        }
+                    }
                 }
-            }
-        })
+                picked
+            })
+            .collect()
     });
     let mut out = SliverProposals::default();
-    for (x, &u) in choice.iter().enumerate() {
-        let x = x as u32;
-        if u == NONE {
-            continue;
-        }
+    for &x in picked.iter().flatten() {
+        let u = choice[x as usize];
         let h = g.group_of[u as usize];
         if h != NONE && g.active[h as usize] != 0 {
             out.lones.push((h, Lone { id: x }));

@@ -107,13 +107,35 @@ pub(crate) fn build_groups(
         ..
     } = buf;
     let count = candidates.len();
-    g.group_of.clear();
-    g.group_of.resize(crossings, NONE);
-    for (gi, c) in candidates.iter().enumerate() {
-        for id in c.ids() {
-            g.group_of[id as usize] = gi as u32;
-        }
+    // Ids are numbered plane by plane: a plane's first id is the `first` of its first crossed
+    // point (or of the next plane's, when it has none), so each plane fills its own slice; the
+    // proposals come in the order of their owners, so each plane's are one range too.
+    let planes = layout.s.dims[2];
+    let starts = plane_id_starts(crossed, planes, crossings);
+    let cand_starts: Vec<usize> = starts
+        .iter()
+        .map(|&s| candidates.partition_point(|c| (c.first as usize) < s))
+        .collect();
+    overwritten(&mut g.group_of, crossings, NONE, pool);
+    let mut parts = Vec::with_capacity(planes);
+    let mut rest = &mut g.group_of[..];
+    for z in 0..planes {
+        let (head, tail) = rest.split_at_mut(starts[z + 1] - starts[z]);
+        parts.push(head);
+        rest = tail;
     }
+    let candidates_ref = &*candidates;
+    pool.install(|| {
+        parts.into_par_iter().enumerate().for_each(|(z, out)| {
+            out.fill(NONE);
+            let first = cand_starts[z];
+            for (k, c) in candidates_ref[first..cand_starts[z + 1]].iter().enumerate() {
+                for id in c.ids() {
+                    out[id as usize - starts[z]] = (first + k) as u32;
+                }
+            }
+        })
+    });
     let cpos = &*cpos;
     pool.install(|| {
         candidates
@@ -138,10 +160,6 @@ pub(crate) fn build_groups(
     // Every crossing's edge: plane by plane, points in slot order, edges in bit order, which
     // is the order of the ids.
     let plane = layout.s.dims[0] * layout.s.dims[1];
-    // Ids are numbered plane by plane: a plane's first id is the `first` of its first crossed
-    // point (or of the next plane's, when it has none), so each plane fills its own slice.
-    let planes = layout.s.dims[2];
-    let starts = plane_id_starts(crossed, planes, crossings);
     overwritten(edge_of, crossings, (0, 0), pool);
     let mut parts = Vec::with_capacity(planes);
     let mut rest = &mut edge_of[..];

@@ -111,6 +111,9 @@ pub(crate) struct Groups {
     /// after the proposals changed its state, tested its group and found it failing, or
     /// considered it as a crossing left alone that may join a group.
     pub(crate) touched: Vec<u8>,
+    /// The working tables of the repair rounds ([`super::repair::settle`]), kept here so that
+    /// they are sized once.
+    pub(crate) round: RoundTables,
 }
 
 impl Groups {
@@ -128,6 +131,8 @@ impl Groups {
         self.vlabel.clear();
         self.vpos.clear();
         self.touched.clear();
+        self.round.flips.clear();
+        self.round.labels.clear();
     }
 
     /// Bytes held.
@@ -140,6 +145,7 @@ impl Groups {
             + self.lone_start.len() * 4
             + self.refused.len() * 4
             + self.vlabel.len() * 16
+            + self.round.bytes()
     }
 
     /// Computes every crossing's quotient vertex ([`Groups::vlabel`], [`Groups::vpos`]) from
@@ -304,8 +310,9 @@ pub(crate) const COLLAPSED: u8 = 3;
 /// Per plain MT triangle, what the tests of one round (one state) share: test (c)'s memo (0
 /// not known yet, 1 passes, 2 fails, filled by whichever test reads the triangle first), and,
 /// when the round tests many groups, every triangle's quotient labels with the collapsed ones
-/// marked [`COLLAPSED`] in the memo, computed once for the round.
-#[derive(Default)]
+/// marked [`COLLAPSED`] in the memo, computed once for the round. Kept between rounds and
+/// extractions ([`Groups::round`]).
+#[derive(Debug, Default)]
 pub(crate) struct RoundTables {
     pub(crate) flips: Vec<AtomicU8>,
     /// Per triangle, its corners' labels (when `labelled`).
@@ -313,7 +320,26 @@ pub(crate) struct RoundTables {
     pub(crate) labelled: bool,
 }
 
+impl Clone for RoundTables {
+    fn clone(&self) -> Self {
+        Self {
+            flips: self
+                .flips
+                .iter()
+                .map(|m| AtomicU8::new(m.load(Ordering::Relaxed)))
+                .collect(),
+            labels: self.labels.clone(),
+            labelled: self.labelled,
+        }
+    }
+}
+
 impl RoundTables {
+    /// Bytes held.
+    pub(crate) fn bytes(&self) -> usize {
+        self.flips.len() + self.labels.len() * 12
+    }
+
     /// Sets the tables up for the state of `q`: the memo cleared, and with `label` every
     /// triangle's labels and collapsed mark (in parallel over runs of triangles).
     pub(crate) fn prepare(&mut self, q: &Quotient, label: bool, pool: &rayon::ThreadPool) {

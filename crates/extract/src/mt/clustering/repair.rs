@@ -16,7 +16,7 @@
 
 use rayon::prelude::*;
 
-use super::quotient::{Fixed, Groups, Quotient, RoundTables, Star, Verdict, NONE};
+use super::quotient::{Fixed, Groups, Quotient, Star, Verdict, NONE};
 
 /// The outcome of the repair rounds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -75,7 +75,7 @@ pub(crate) fn settle(
     let mut failing = vec![0u8; f.groups.len()];
     // Test (c) per plain MT triangle in the state of the round, and the triangles' labels when
     // the round tests many groups (see `Quotient::verdict_kept`).
-    let mut tables = RoundTables::default();
+    let mut tables = std::mem::take(&mut g.round);
     let mut round = 0u32;
     loop {
         round += 1;
@@ -201,6 +201,7 @@ pub(crate) fn settle(
         dirty.sort_unstable();
         dirty.dedup();
     }
+    g.round = tables;
     if out.rounds > 0 {
         out.t_repair_s = start.elapsed().as_secs_f64() - out.t_tests_s;
     }
