@@ -42,6 +42,10 @@ pub struct LatticeTables {
     /// For every 14-bit mask, its island holding the lowest set bit (0 for the empty mask):
     /// [`LatticeTables::islands`] is a few table lookups (computed once, 32 KiB).
     first_island: Vec<u16>,
+    /// Bit `mask` set: the crossings on the edges `mask` from one point, with the marching
+    /// tetrahedra edges and triangles among them, form a contractible complex (see
+    /// [`LatticeTables::is_contractible`]; 2 KiB).
+    contractible: Vec<u64>,
 }
 
 impl LatticeTables {
@@ -71,15 +75,17 @@ impl LatticeTables {
             }
             reverse[i] = index_of(neg(offsets[i])).map_or(u8::MAX, |r| r as u8);
         }
-        let first_island = (0..=cluster_mask())
+        let first_island: Vec<u16> = (0..=cluster_mask())
             .map(|mask| grow_island(&link_masks, mask))
             .collect();
+        let contractible = contractible_masks(&link_masks, &first_island);
         Self {
             offsets,
             link_masks,
             reverse,
             tetrahedra,
             first_island,
+            contractible,
         }
     }
 
@@ -112,6 +118,54 @@ impl LatticeTables {
     pub fn is_connected(&self, mask: u16) -> bool {
         mask != 0 && self.islands(mask).nth(1).is_none()
     }
+
+    /// Whether the crossings on the edges `mask` from one point `C` (every edge crossed, `C`
+    /// an inner point), with the marching tetrahedra edges and triangles among them, form a
+    /// contractible complex: connected, with Euler characteristic 1. Those edges and
+    /// triangles are fixed by `mask` alone: the crossings on edges `CA` and `CB` are joined by
+    /// an MT edge exactly when `A` and `B` are adjacent in the link (the surface cuts the
+    /// face `CAB`, where `C` is alone on its side, along that edge; a quad's diagonal never
+    /// joins two of `C`'s edges, which are neighbours on the quad), and three of them bound an
+    /// MT triangle exactly when `A`, `B`, `D` span a triangle of the link (the tetrahedron
+    /// `CABD` with `C` alone on its side). So V - E + F is counted on the link graph: test (a)
+    /// of the quotient test for a group of one point's crossings, by table.
+    pub fn is_contractible(&self, mask: u16) -> bool {
+        let m = usize::from(mask & cluster_mask());
+        self.contractible[m / 64] >> (m % 64) & 1 != 0
+    }
+}
+
+/// The table of [`LatticeTables::is_contractible`]: one bit per 14-bit mask.
+fn contractible_masks(link_masks: &[u16; 14], first_island: &[u16]) -> Vec<u64> {
+    // The triangles of the link (3-cliques: the tetrahedra around the point), as masks.
+    let mut triangles = Vec::new();
+    for i in 0..14 {
+        for j in i + 1..14 {
+            for k in j + 1..14 {
+                let adjacent = |a: usize, b: usize| link_masks[a] >> b & 1 != 0;
+                if adjacent(i, j) && adjacent(j, k) && adjacent(i, k) {
+                    triangles.push((1u16 << i) | (1 << j) | (1 << k));
+                }
+            }
+        }
+    }
+    let mut table = vec![0u64; (1usize << 14) / 64];
+    for mask in 1..=cluster_mask() {
+        if first_island[usize::from(mask)] != mask {
+            continue;
+        }
+        let v = mask.count_ones() as i32;
+        let e = (0..14)
+            .filter(|&i| mask >> i & 1 != 0)
+            .map(|i| (link_masks[i] & mask).count_ones() as i32)
+            .sum::<i32>()
+            / 2;
+        let f = triangles.iter().filter(|&&t| t & mask == t).count() as i32;
+        if v - e + f == 1 {
+            table[usize::from(mask) / 64] |= 1 << (mask % 64);
+        }
+    }
+    table
 }
 
 /// The 14 neighbour bits.

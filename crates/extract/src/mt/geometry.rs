@@ -232,8 +232,9 @@ thread_local! {
 /// What the listing of plain MT's triangles ([`plain_triangles`]) writes beside them, per
 /// triangle of a layer.
 pub(crate) struct ListOut<'s> {
-    /// The gradient of its tetrahedron.
-    pub(crate) grad: &'s mut [[f32; 3]],
+    /// Its source tetrahedron: the anchor slot, and the template index (bits 0-6) with bit 7
+    /// set when no corner is a ghost ([`crate::mt::clustering::plain::PlainList::source`]).
+    pub(crate) source: &'s mut [(u32, u8)],
     /// In a chunk: the kept cells, and per triangle 1 when its anchor's cell is one of them
     /// (the triangles the chunk emits), else 0.
     pub(crate) kept: Option<(CellRange, &'s mut [u8])>,
@@ -364,9 +365,9 @@ pub(crate) fn geometry_in_window(
                 if !plain {
                     let t = at / 3;
                     if let Some(list) = list.as_mut() {
-                        // The gradient of the tetrahedron, for the quotient test's (c).
-                        let grad = l.gradient(anchor, first + usize::from(cycle.tet), inner);
-                        list.grad[t..t + n].fill(grad);
+                        // The tetrahedron, whose gradient the quotient test's (c) reads.
+                        let tet = (first + usize::from(cycle.tet)) as u8 | u8::from(inner) << 7;
+                        list.source[t..t + n].fill((anchor as u32, tet));
                         if let Some((_, flags)) = list.kept.as_mut() {
                             flags[t..t + n].fill(u8::from(kept));
                         }

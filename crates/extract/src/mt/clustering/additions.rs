@@ -120,6 +120,9 @@ pub(crate) fn around(f: &Fixed, g: &Groups, groups: &[u32], pool: &rayon::Thread
     out
 }
 
+/// Crossings per run of the scans over all crossings.
+const RUN: usize = 1 << 12;
+
 /// A triangle is a sliver when its aspect ratio (circumradius over twice the inradius, 1 for an
 /// equilateral triangle) exceeds this.
 pub(crate) const SLIVER_AR: f32 = 4.0;
@@ -169,9 +172,10 @@ pub(crate) fn sliver_proposals(
     pool: &rayon::ThreadPool,
 ) -> SliverProposals {
     let q = Quotient::new(f, g);
+    // Only for a crossing left alone (few, once the islands settled).
     let pick = |x: u32| -> u32 {
         let (slot, dir) = edge_of[x as usize];
-        if !q.alone(x) || !q.inner(slot as usize, dir) {
+        if !q.inner(slot as usize, dir) {
             return NONE;
         }
         let mut best: Option<(f32, u32)> = None;
@@ -208,18 +212,31 @@ pub(crate) fn sliver_proposals(
         }
         best.map_or(NONE, |(_, u)| u)
     };
-    let choice: Vec<u32> = pool.install(|| {
-        (0..edge_of.len() as u32)
-            .into_par_iter()
-            .map(pick)
+    // In runs of crossings, the test of the crossings in kept groups (nearly all) inline; each
+    // run lists the crossings that picked one.
+    let mut choice = vec![NONE; edge_of.len()];
+    let picked: Vec<Vec<u32>> = pool.install(|| {
+        choice
+            .par_chunks_mut(RUN)
+            .enumerate()
+            .map(|(k, out)| {
+                let mut picked = Vec::new();
+                for (i, c) in out.iter_mut().enumerate() {
+                    let x = (k * RUN + i) as u32;
+                    if q.alone(x) {
+                        *c = pick(x);
+                        if *c != NONE {
+                            picked.push(x);
+                        }
+                    }
+                }
+                picked
+            })
             .collect()
     });
     let mut out = SliverProposals::default();
-    for (x, &u) in choice.iter().enumerate() {
-        let x = x as u32;
-        if u == NONE {
-            continue;
-        }
+    for &x in picked.iter().flatten() {
+        let u = choice[x as usize];
         let h = g.group_of[u as usize];
         if h != NONE && g.active[h as usize] != 0 {
             out.lones.push((h, Lone { id: x }));
@@ -242,21 +259,29 @@ pub(crate) fn give_lones(
     pool: &rayon::ThreadPool,
 ) -> Vec<u32> {
     let q = Quotient::new(f, g);
-    let found: Vec<(u32, Lone)> = pool.install(|| {
-        (0..edge_of.len())
+    // Only for a crossing left alone.
+    let give = |x: usize| -> Option<(u32, Lone)> {
+        let (slot, dir) = edge_of[x];
+        if !q.inner(slot as usize, dir) {
+            return None;
+        }
+        let refused = q.g.refused[x];
+        let h = q.nearest_group(x as u32, |h| h != refused)?;
+        Some((h, Lone { id: x as u32 }))
+    };
+    // In runs of crossings, the test of the crossings in kept groups inline; `attach` sorts.
+    let runs: Vec<Vec<(u32, Lone)>> = pool.install(|| {
+        (0..edge_of.len().div_ceil(RUN))
             .into_par_iter()
-            .filter(|&x| q.alone(x as u32))
-            .filter_map(|x| {
-                let (slot, dir) = edge_of[x];
-                if !q.inner(slot as usize, dir) {
-                    return None;
-                }
-                let refused = q.g.refused[x];
-                let h = q.nearest_group(x as u32, |h| h != refused)?;
-                Some((h, Lone { id: x as u32 }))
+            .map(|k| {
+                (k * RUN..((k + 1) * RUN).min(edge_of.len()))
+                    .filter(|&x| q.alone(x as u32))
+                    .filter_map(give)
+                    .collect()
             })
             .collect()
     });
+    let found = runs.concat();
     attach(f, g, found, want_dirty, pool)
 }
 
@@ -271,6 +296,32 @@ pub(crate) fn attach(
     want_dirty: bool,
     pool: &rayon::ThreadPool,
 ) -> Vec<u32> {
+    if found.is_empty() {
+        // Nothing joins: the table only forgets the lone crossings of the groups not kept, and
+        // every group keeps the rest as its base (the same slices as the rebuilt table).
+        let Groups {
+            active,
+            lone_len,
+            base_len,
+            ..
+        } = &mut *g;
+        let count = f.groups.len();
+        pool.install(|| {
+            base_len[..count]
+                .par_chunks_mut(RUN)
+                .zip(lone_len[..count].par_chunks_mut(RUN))
+                .zip(active[..count].par_chunks(RUN))
+                .for_each(|((bases, lens), active)| {
+                    for ((base, len), &a) in bases.iter_mut().zip(lens).zip(active) {
+                        if a == 0 {
+                            *len = 0;
+                        }
+                        *base = *len;
+                    }
+                })
+        });
+        return Vec::new();
+    }
     pool.install(|| found.par_sort_unstable_by_key(|&(h, l)| (h, l.id)));
     // The new lone table, built in parallel over runs of `RUN` groups: each run sets its
     // groups' base lengths (the lones they keep) and counts its lones (pass 1), prefix sums
@@ -447,7 +498,13 @@ mod tests {
         };
         // Enough groups for several runs of the parallel table, and at most `MAX_LONES` lones
         // kept or offered per group, sometimes more offered than fit.
-        for (count, offered) in [(20_000usize, 30_000usize), (9_000, 2_000), (5, 40), (0, 0)] {
+        for (count, offered) in [
+            (20_000usize, 30_000usize),
+            (9_000, 2_000),
+            (5, 40),
+            (0, 0),
+            (9_000, 0),
+        ] {
             // Crossings 0..count are the groups' cores (singletons), the rest lone candidates.
             let crossings = count + 6 * count + offered + 1;
             let cores: Vec<Candidate> = (0..count as u32)
@@ -464,7 +521,7 @@ mod tests {
                 cpos: &cpos,
                 groups: &cores,
                 tris: &[],
-                grad: &[],
+                source: &[],
                 inc_start: &[],
                 inc: &[],
             };
@@ -513,13 +570,25 @@ mod tests {
                     changed, expected_changed,
                     "{count} groups, {threads} threads"
                 );
-                assert_eq!(got.lone, expected.lone, "{count} groups, {threads} threads");
-                assert_eq!(got.lone_start, expected.lone_start);
+                if found.is_empty() {
+                    // Nothing joins: the table is not rebuilt, every group's lone crossings
+                    // are the same slices.
+                    let slice = |g: &Groups, gi: usize| {
+                        let start = g.lone_start[gi] as usize;
+                        g.lone[start..start + usize::from(g.lone_len[gi])].to_vec()
+                    };
+                    for gi in 0..count {
+                        assert_eq!(slice(&got, gi), slice(&expected, gi), "group {gi}");
+                    }
+                } else {
+                    assert_eq!(got.lone, expected.lone, "{count} groups, {threads} threads");
+                    assert_eq!(got.lone_start, expected.lone_start);
+                }
                 assert_eq!(got.lone_len, expected.lone_len);
                 assert_eq!(got.base_len, expected.base_len);
                 assert_eq!(got.group_of, expected.group_of);
             }
-            if count > 0 {
+            if count > 0 && offered > 0 {
                 assert!(
                     !expected_changed.is_empty(),
                     "the test offers lones that fit"

@@ -107,13 +107,35 @@ pub(crate) fn build_groups(
         ..
     } = buf;
     let count = candidates.len();
-    g.group_of.clear();
-    g.group_of.resize(crossings, NONE);
-    for (gi, c) in candidates.iter().enumerate() {
-        for id in c.ids() {
-            g.group_of[id as usize] = gi as u32;
-        }
+    // Ids are numbered plane by plane: a plane's first id is the `first` of its first crossed
+    // point (or of the next plane's, when it has none), so each plane fills its own slice; the
+    // proposals come in the order of their owners, so each plane's are one range too.
+    let planes = layout.s.dims[2];
+    let starts = plane_id_starts(crossed, planes, crossings);
+    let cand_starts: Vec<usize> = starts
+        .iter()
+        .map(|&s| candidates.partition_point(|c| (c.first as usize) < s))
+        .collect();
+    overwritten(&mut g.group_of, crossings, NONE, pool);
+    let mut parts = Vec::with_capacity(planes);
+    let mut rest = &mut g.group_of[..];
+    for z in 0..planes {
+        let (head, tail) = rest.split_at_mut(starts[z + 1] - starts[z]);
+        parts.push(head);
+        rest = tail;
     }
+    let candidates_ref = &*candidates;
+    pool.install(|| {
+        parts.into_par_iter().enumerate().for_each(|(z, out)| {
+            out.fill(NONE);
+            let first = cand_starts[z];
+            for (k, c) in candidates_ref[first..cand_starts[z + 1]].iter().enumerate() {
+                for id in c.ids() {
+                    out[id as usize - starts[z]] = (first + k) as u32;
+                }
+            }
+        })
+    });
     let cpos = &*cpos;
     pool.install(|| {
         candidates
@@ -138,10 +160,6 @@ pub(crate) fn build_groups(
     // Every crossing's edge: plane by plane, points in slot order, edges in bit order, which
     // is the order of the ids.
     let plane = layout.s.dims[0] * layout.s.dims[1];
-    // Ids are numbered plane by plane: a plane's first id is the `first` of its first crossed
-    // point (or of the next plane's, when it has none), so each plane fills its own slice.
-    let planes = layout.s.dims[2];
-    let starts = plane_id_starts(crossed, planes, crossings);
     overwritten(edge_of, crossings, (0, 0), pool);
     let mut parts = Vec::with_capacity(planes);
     let mut rest = &mut edge_of[..];
@@ -400,7 +418,7 @@ fn fixed<'a>(buf: &'a ClusterBuffers, layout: &'a Layout<'a>) -> Fixed<'a> {
         cpos: &buf.cpos,
         groups: &buf.candidates,
         tris: &buf.plain.tris,
-        grad: &buf.plain.grad,
+        source: &buf.plain.source,
         inc_start: &buf.plain.inc.start,
         inc: &buf.plain.inc.inc,
     }
@@ -691,6 +709,184 @@ mod tests {
         (proposals.len(), others)
     }
 
+    /// What the first round of the islands' tests meets on `field` (integrated clustering,
+    /// `n` cells in [-1, 1]^3): the islands tested, those with no lone crossing (test (a) by
+    /// the lattice's table), those the table refuses (decided without walking the star), and
+    /// the lookups and evaluations of test (c)'s memo. Every island's verdict from the labels,
+    /// table and memo ([`Quotient::verdict_kept`]) is compared with the walk
+    /// ([`Quotient::verdict`]), and the table with the walk's test (a) alone.
+    fn first_round(field: &impl rmt_fields::ScalarField, n: usize, lattice: Lattice) -> [usize; 6] {
+        use std::sync::atomic::Ordering;
+        let pool = test_pool(1);
+        let settings = settings_on([n; 3], lattice, crate::Clustering::Integrated);
+        let (samples, _, _, _) = extracted(field, &settings, &pool);
+        let layout = Layout::new(&samples, lattice);
+        let mut tables = crate::mt::crossings::VertexTables::default();
+        tables.allocate(&samples);
+        let mut buf = ClusterBuffers::default();
+        let work = crate::mt::crossings::VertexWork {
+            propose: Some(proposal::Rules::Islands),
+            known_edges: None,
+        };
+        let out = crate::mt::crossings::VertexOut {
+            proposals: &mut buf.candidates,
+            positions: &mut buf.cpos,
+        };
+        let mut stats = Stats::default();
+        crate::mt::crossings::vertex_pass(
+            &layout,
+            settings.iso,
+            work,
+            &pool,
+            &mut tables,
+            out,
+            &mut stats,
+        )
+        .expect("vertex pass");
+        // The steps of `run` up to the islands' first round.
+        build_groups(&mut buf, &tables.crossed, &layout, &pool);
+        let surface = Surface {
+            l: &layout,
+            iso: settings.iso,
+            keep: None,
+            crossed: &tables.crossed,
+        };
+        plain_triangles(&surface, &buf.cpos, false, &mut buf.plain, &pool);
+        let mut groups = std::mem::take(&mut buf.groups);
+        let f = fixed(&buf, &layout);
+        groups.relabel(&f, &pool);
+        additions::give_lones(&f, &mut groups, &buf.edge_of, false, &pool);
+        let q = Quotient::new(&f, &groups);
+        let islands = f.groups.len();
+        let mut tables = quotient::RoundTables::default();
+        tables.prepare(&q, false, &pool);
+        let flips = &tables.flips;
+        // The round's tables with every triangle labelled (a round testing many groups).
+        let mut labelled = quotient::RoundTables::default();
+        labelled.prepare(&q, true, &pool);
+        let mut s = quotient::Star::default();
+        let (mut by_table, mut refused, mut with_lones) = (0, 0, 0);
+        for gi in 0..islands {
+            let walk = q.verdict(gi, &mut s, true);
+            assert_eq!(
+                q.verdict_kept(gi, &mut s, true, &tables),
+                walk,
+                "island {gi}: labels, table and memo against the walk"
+            );
+            assert_eq!(
+                q.verdict_kept(gi, &mut s, true, &labelled),
+                walk,
+                "island {gi}: the round's labelled triangles against the walk"
+            );
+            assert_eq!(
+                q.verdict_kept(gi, &mut s, false, &labelled),
+                q.verdict(gi, &mut s, false),
+                "island {gi}: (b) and (c) from the labelled triangles against the walk"
+            );
+            let table = layout.t.is_contractible(f.groups[gi].dirs);
+            let lones = q.lones_of(gi);
+            if lones.is_empty() {
+                by_table += 1;
+                assert_eq!(
+                    table,
+                    walk != quotient::Verdict::FailsContractible,
+                    "island {gi}: test (a) by table against the walk"
+                );
+                refused += usize::from(!table);
+            } else if table {
+                // The point's part by table, the lone crossings walked around them only.
+                by_table += 1;
+                let contractible = q.lones_keep_contractible(lones, groups.leader[gi]);
+                assert_eq!(
+                    contractible,
+                    walk != quotient::Verdict::FailsContractible,
+                    "island {gi} with {} lone crossings: test (a) against the walk",
+                    lones.len()
+                );
+                with_lones += 1;
+            }
+        }
+        // Test (c)'s memo: a triangle of three different labels is read once from each of its
+        // corners in a kept group, and evaluated once.
+        let (mut lookups, mut evaluated) = (0, 0);
+        for t in f.tris.chunks_exact(3) {
+            let l = [0, 1, 2].map(|k| groups.vlabel[t[k] as usize]);
+            if l[0] == l[1] || l[1] == l[2] || l[0] == l[2] {
+                continue;
+            }
+            let kept = t.iter().filter(|&&x| !q.alone(x)).count();
+            lookups += kept;
+            evaluated += usize::from(kept > 0);
+        }
+        let memo: usize = flips
+            .iter()
+            .map(|m| usize::from(m.load(Ordering::Relaxed) != 0))
+            .sum();
+        assert!(memo <= evaluated, "the memo holds only star triangles");
+        [islands, by_table, refused, lookups, evaluated, with_lones]
+    }
+
+    #[test]
+    fn islands_decided_by_the_lattice_table_and_the_memo_agree_with_the_walk() {
+        // Also a measurement (printed with --nocapture): the share of the first round's
+        // islands whose test (a) the table decides, of those it decides without the walk, and
+        // the share of test (c)'s reads the memo answers.
+        use rmt_fields::{Asteroid, AsteroidParams, CaveParams, CaveTerrain, RandomField, Sphere};
+        for lattice in [Lattice::BodyCentred, Lattice::Simple] {
+            let n = 40;
+            let mut rows = vec![
+                (
+                    "sphere",
+                    first_round(&Sphere::new(glam::Vec3::ZERO, 0.8), n, lattice),
+                ),
+                (
+                    "asteroid",
+                    first_round(
+                        &Asteroid::new(glam::Vec3::ZERO, AsteroidParams::default()),
+                        n,
+                        lattice,
+                    ),
+                ),
+                (
+                    "caves",
+                    first_round(&CaveTerrain::new(CaveParams::default()), n, lattice),
+                ),
+                ("wavy", first_round(&wavy(), n, lattice)),
+            ];
+            let mut random = [0usize; 6];
+            for seed in 0..6 {
+                let r = first_round(&RandomField::from_seed(seed), 20, lattice);
+                for (a, b) in random.iter_mut().zip(r) {
+                    *a += b;
+                }
+            }
+            rows.push(("random x6", random));
+            for (name, [islands, by_table, refused, lookups, evaluated, with_lones]) in &rows {
+                let pct = |a: usize, b: usize| 100.0 * a as f64 / (b.max(1)) as f64;
+                println!(
+                    "{lattice:?} {name:10}: {islands:6} islands; test (a) by table {:.1}% \
+                     ({:.1}% with lone crossings walked), decided without the walk {:.2}%; \
+                     test (c) memo answers {:.1}% of {lookups} reads",
+                    pct(*by_table, *islands),
+                    pct(*with_lones, *islands),
+                    pct(*refused, *islands),
+                    100.0 - pct(*evaluated, *lookups),
+                );
+                assert!(
+                    by_table <= islands && *refused + *with_lones <= *by_table,
+                    "{name}"
+                );
+            }
+            for (name, [islands, by_table, _, lookups, evaluated, with_lones]) in &rows[..2] {
+                assert!(*islands > 1000, "{name}: only {islands} islands");
+                assert!(
+                    *by_table > 0 && *with_lones > 0 && evaluated < lookups,
+                    "{name}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn share_of_proposals_with_no_other_proposal_in_their_star() {
         // A measurement (printed with --nocapture) for the table of issue 41; it asserts that
@@ -778,7 +974,7 @@ mod tests {
                         cpos: &buf.clustering.cpos,
                         groups: &buf.clustering.candidates,
                         tris: &[],
-                        grad: &[],
+                        source: &[],
                         inc_start: &[],
                         inc: &[],
                     };

@@ -1,5 +1,5 @@
 //! The listing of plain MT's triangles that integrated clustering reads: every triangle of
-//! the box once, in the order of the geometry pass, with its tetrahedron's gradient (and, in a
+//! the box once, in the order of the geometry pass, with its source tetrahedron (and, in a
 //! chunk, whether its cell is kept), then every crossing's triangles (the incidence table): the
 //! stars of the quotient test. The emission later maps the same list through the output
 //! vertices ([`crate::mt::emission::emit`]).
@@ -16,8 +16,10 @@ use crate::util::overwritten;
 pub(crate) struct PlainList {
     /// Three crossing ids per triangle, in the order of the geometry pass.
     pub(crate) tris: Vec<u32>,
-    /// Per triangle, the gradient of its source tetrahedron (up to a positive factor).
-    pub(crate) grad: Vec<[f32; 3]>,
+    /// Per triangle, its source tetrahedron: the anchor slot and the template index (bits
+    /// 0-6; bit 7 set when no corner is a ghost). Test (c) computes the gradient from it
+    /// ([`crate::mt::layout::Layout::gradient`]) for the few triangles it reads.
+    pub(crate) source: Vec<(u32, u8)>,
     /// In a chunk: per triangle, 1 when its anchor's cell is kept (emitted by the chunk).
     pub(crate) kept: Vec<u8>,
     /// When recording ([`crate::Extractor::set_recording`]): per triangle, its anchor cell
@@ -32,7 +34,7 @@ impl PlainList {
     /// only when recorded).
     pub(crate) fn clear(&mut self) {
         self.tris.clear();
-        self.grad.clear();
+        self.source.clear();
         self.kept.clear();
         self.inc.start.clear();
         self.inc.inc.clear();
@@ -41,7 +43,7 @@ impl PlainList {
     /// Bytes held.
     pub(crate) fn bytes(&self) -> usize {
         self.tris.len() * 4
-            + self.grad.len() * 12
+            + self.source.len() * 8
             + self.kept.len()
             + self.cells.len() * 4
             + self.inc.bytes()
@@ -50,8 +52,7 @@ impl PlainList {
 
 /// Plain MT's triangles over the whole box, in the order of the geometry pass (layer by
 /// layer), into `list.tris` (three crossing ids each), with each triangle's source tetrahedron
-/// gradient (of the linear interpolant on its source tetrahedron, up to a positive factor) in
-/// `list.grad`; then every crossing's triangles as a CSR table (`list.inc`, in triangle order,
+/// in `list.source` (whose gradient test (c) computes when it reads the triangle); then every crossing's triangles as a CSR table (`list.inc`, in triangle order,
 /// built in parallel by [`incidence_parallel`]). The quotient test reads a group's star from
 /// these instead of from the lattice. In a chunk (`surface.keep`; every anchor is walked all
 /// the same) also, per triangle, whether its anchor's cell is kept (`list.kept`), so that the
@@ -73,7 +74,7 @@ pub(crate) fn plain_triangles(
     };
     let PlainList {
         tris,
-        grad,
+        source,
         kept,
         cells,
         inc,
@@ -83,14 +84,14 @@ pub(crate) fn plain_triangles(
     let layers = counts.len();
     let total: usize = counts.iter().sum();
     overwritten(tris, 3 * total, 0, pool);
-    overwritten(grad, total, [0.0; 3], pool);
+    overwritten(source, total, (0, 0), pool);
     overwritten(kept, if keep.is_some() { total } else { 0 }, 0, pool);
     let record = cells.is_some();
     let mut no_cells = Vec::new();
     let cells = cells.unwrap_or(&mut no_cells);
     overwritten(cells, if record { total } else { 0 }, 0, pool);
     let mut parts = Vec::with_capacity(layers);
-    let (mut rest, mut rest_src, mut rest_kept) = (&mut tris[..], &mut grad[..], &mut kept[..]);
+    let (mut rest, mut rest_src, mut rest_kept) = (&mut tris[..], &mut source[..], &mut kept[..]);
     let mut rest_cells = &mut cells[..];
     for &n in &counts {
         let (head, tail) = rest.split_at_mut(3 * n);
@@ -107,9 +108,9 @@ pub(crate) fn plain_triangles(
         parts
             .into_par_iter()
             .enumerate()
-            .map(|(k, (out, grad, kept, cells))| {
+            .map(|(k, (out, source, kept, cells))| {
                 let list = ListOut {
-                    grad,
+                    source,
                     kept: keep.map(|range| (range, kept)),
                 };
                 let cells = record.then_some(cells);
@@ -165,7 +166,7 @@ mod tests {
                         assert_eq!(list.tris, mesh.indices, "{what}");
                         assert_eq!(processed, stats.tetrahedra_processed, "{what}");
                         let n = list.tris.len() / 3;
-                        assert_eq!(list.grad.len(), n, "{what}");
+                        assert_eq!(list.source.len(), n, "{what}");
                         assert!(list.kept.is_empty(), "{what}: no chunk, no flags");
                         assert_eq!(list.cells.len(), if record { n } else { 0 }, "{what}");
                         let (start, inc) = (&list.inc.start, &list.inc.inc);

@@ -29,9 +29,23 @@
 //!        v-----u
 //! ```
 //!
+//! [`Quotient::verdict`] walks a group's star and decides all three; the repair rounds, which
+//! test only kept groups, use [`Quotient::verdict_kept`], which gives the same verdict with less
+//! work:
+//!
+//! - (a) of a group of one point's crossings is a lattice table over the 2^14 edge masks
+//!   ([`crate::lattice::LatticeTables::is_contractible`]); with lone crossings, that table plus
+//!   a walk around the lone crossings only ([`Quotient::lones_keep_contractible`]);
+//! - membership is one label compare (a kept group's members carry its leader's label), so a
+//!   star triangle's quotient corners are its corners' labels, the same from each group whose
+//!   star holds it: (c) is computed once per triangle and round ([`RoundTables`]), and a round
+//!   that tests many groups labels every triangle once, so the walk skips the collapsed ones.
+//!
 //! The repair rounds that keep only groups passing these tests are in [`super::repair`]; what is
 //! proposed after the islands settle (variants of split islands, lone crossings, sliver pairs) is
 //! in [`super::additions`].
+
+use std::sync::atomic::{AtomicU8, Ordering};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -58,11 +72,11 @@ pub(crate) struct Fixed<'a> {
     pub(crate) cpos: &'a [[f32; 3]],
     /// The proposed groups' cores (a point's island).
     pub(crate) groups: &'a [Candidate],
-    /// Plain MT's triangles (three crossing ids each), the gradient of each one's source
-    /// tetrahedron (up to a positive factor), and every crossing's triangles
+    /// Plain MT's triangles (three crossing ids each), each one's source tetrahedron (see
+    /// [`super::plain::PlainList::source`]), and every crossing's triangles
     /// (`inc[inc_start[x]..inc_start[x + 1]]`).
     pub(crate) tris: &'a [u32],
-    pub(crate) grad: &'a [[f32; 3]],
+    pub(crate) source: &'a [(u32, u8)],
     pub(crate) inc_start: &'a [u32],
     pub(crate) inc: &'a [u32],
 }
@@ -97,6 +111,9 @@ pub(crate) struct Groups {
     /// after the proposals changed its state, tested its group and found it failing, or
     /// considered it as a crossing left alone that may join a group.
     pub(crate) touched: Vec<u8>,
+    /// The working tables of the repair rounds ([`super::repair::settle`]), kept here so that
+    /// they are sized once.
+    pub(crate) round: RoundTables,
 }
 
 impl Groups {
@@ -114,6 +131,8 @@ impl Groups {
         self.vlabel.clear();
         self.vpos.clear();
         self.touched.clear();
+        self.round.flips.clear();
+        self.round.labels.clear();
     }
 
     /// Bytes held.
@@ -126,6 +145,7 @@ impl Groups {
             + self.lone_start.len() * 4
             + self.refused.len() * 4
             + self.vlabel.len() * 16
+            + self.round.bytes()
     }
 
     /// Computes every crossing's quotient vertex ([`Groups::vlabel`], [`Groups::vpos`]) from
@@ -137,20 +157,23 @@ impl Groups {
         self.vpos.resize(n, [0.0; 3]);
         let (group_of, active, leader, centroid) =
             (&self.group_of, &self.active, &self.leader, &self.centroid);
+        const RUN: usize = 1 << 12;
         pool.install(|| {
             self.vlabel
-                .par_iter_mut()
-                .zip(self.vpos.par_iter_mut())
+                .par_chunks_mut(RUN)
+                .zip(self.vpos.par_chunks_mut(RUN))
                 .enumerate()
-                .with_min_len(1 << 12)
-                .for_each(|(x, (l, p))| {
-                    let h = group_of[x];
-                    if h != NONE && active[h as usize] != 0 {
-                        *l = leader[h as usize];
-                        *p = centroid[h as usize];
-                    } else {
-                        *l = x as u32;
-                        *p = f.cpos[x];
+                .for_each(|(k, (labels, positions))| {
+                    for (i, (l, p)) in labels.iter_mut().zip(positions).enumerate() {
+                        let x = k * RUN + i;
+                        let h = group_of[x];
+                        if h != NONE && active[h as usize] != 0 {
+                            *l = leader[h as usize];
+                            *p = centroid[h as usize];
+                        } else {
+                            *l = x as u32;
+                            *p = f.cpos[x];
+                        }
                     }
                 })
         });
@@ -243,7 +266,7 @@ pub(crate) struct Quotient<'a> {
     pub(crate) cpos: &'a [[f32; 3]],
     pub(crate) groups: &'a [Candidate],
     tris: &'a [u32],
-    grad: &'a [[f32; 3]],
+    source: &'a [(u32, u8)],
     inc_start: &'a [u32],
     inc: &'a [u32],
     pub(crate) g: &'a Groups,
@@ -257,7 +280,7 @@ impl<'a> Quotient<'a> {
             cpos: f.cpos,
             groups: f.groups,
             tris: f.tris,
-            grad: f.grad,
+            source: f.source,
             inc_start: f.inc_start,
             inc: f.inc,
             g,
@@ -278,6 +301,85 @@ pub(crate) struct Star {
     dst: Vec<u32>,
     /// Labels of the link vertices (see [`Quotient::passes`]).
     link: Vec<u32>,
+}
+
+/// Test (c)'s memo value of a plain MT triangle that collapsed in the state of the round (two
+/// of its corners' labels coincide), set by [`RoundTables::prepare`].
+pub(crate) const COLLAPSED: u8 = 3;
+
+/// Per plain MT triangle, what the tests of one round (one state) share: test (c)'s memo (0
+/// not known yet, 1 passes, 2 fails, filled by whichever test reads the triangle first), and,
+/// when the round tests many groups, every triangle's quotient labels with the collapsed ones
+/// marked [`COLLAPSED`] in the memo, computed once for the round. Kept between rounds and
+/// extractions ([`Groups::round`]).
+#[derive(Debug, Default)]
+pub(crate) struct RoundTables {
+    pub(crate) flips: Vec<AtomicU8>,
+    /// Per triangle, its corners' labels (when `labelled`).
+    pub(crate) labels: Vec<[u32; 3]>,
+    pub(crate) labelled: bool,
+}
+
+impl Clone for RoundTables {
+    fn clone(&self) -> Self {
+        Self {
+            flips: self
+                .flips
+                .iter()
+                .map(|m| AtomicU8::new(m.load(Ordering::Relaxed)))
+                .collect(),
+            labels: self.labels.clone(),
+            labelled: self.labelled,
+        }
+    }
+}
+
+impl RoundTables {
+    /// Bytes held.
+    pub(crate) fn bytes(&self) -> usize {
+        self.flips.len() + self.labels.len() * 12
+    }
+
+    /// Sets the tables up for the state of `q`: the memo cleared, and with `label` every
+    /// triangle's labels and collapsed mark (in parallel over runs of triangles).
+    pub(crate) fn prepare(&mut self, q: &Quotient, label: bool, pool: &rayon::ThreadPool) {
+        let n = q.tris.len() / 3;
+        self.labelled = label;
+        self.flips.resize_with(n, || AtomicU8::new(0));
+        if !label {
+            pool.install(|| {
+                self.flips
+                    .par_chunks_mut(1 << 14)
+                    .for_each(|c| c.iter_mut().for_each(|m| *m.get_mut() = 0))
+            });
+            return;
+        }
+        self.labels.resize(n, [0; 3]);
+        const RUN: usize = 1 << 12;
+        let vlabel = &q.g.vlabel[..];
+        pool.install(|| {
+            self.flips
+                .par_chunks_mut(RUN)
+                .zip(self.labels.par_chunks_mut(RUN))
+                .enumerate()
+                .for_each(|(k, (flips, labels))| {
+                    let tris = &q.tris[3 * k * RUN..3 * (k * RUN + labels.len())];
+                    for ((m, l), t) in flips.iter_mut().zip(labels).zip(tris.chunks_exact(3)) {
+                        let c = [
+                            vlabel[t[0] as usize],
+                            vlabel[t[1] as usize],
+                            vlabel[t[2] as usize],
+                        ];
+                        *l = c;
+                        *m.get_mut() = if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
+                            COLLAPSED
+                        } else {
+                            0
+                        };
+                    }
+                })
+        });
+    }
 }
 
 impl Quotient<'_> {
@@ -380,6 +482,248 @@ impl Quotient<'_> {
         }
     }
 
+    /// [`Quotient::verdict`] of a kept group `gi` (the repair rounds test only kept groups),
+    /// read from the quotient labels: a crossing is a member exactly when its label is the
+    /// group's (the labels of a kept group's members are its leader, and no other crossing's
+    /// is), and the group's vertex is its leader's quotient position. So a star triangle's
+    /// quotient corners are its corners' labels, the same from each of the up to three groups
+    /// whose star holds it, and so is test (c) on it: `flips` memoises (c) per plain MT
+    /// triangle for one state (0 not known yet, 1 passes, 2 fails), filled by whichever test
+    /// reaches the triangle first. The same verdict as [`Quotient::verdict`]; the tests of
+    /// `repair` compare the two on every group they test.
+    pub(crate) fn verdict_kept(
+        &self,
+        gi: usize,
+        s: &mut Star,
+        test_a: bool,
+        r: &RoundTables,
+    ) -> Verdict {
+        debug_assert_ne!(self.g.active[gi], 0, "group {gi} is not kept");
+        let flips = &r.flips[..];
+        let g = &self.groups[gi];
+        let lones = self.lones_of(gi);
+        let me = self.g.leader[gi];
+        debug_assert_eq!(self.g.vpos[me as usize], self.g.centroid[gi]);
+        let vlabel = &self.g.vlabel[..];
+        // Test (a) of a group of one point's crossings (no lone crossing) by the lattice's
+        // table ([`crate::lattice::LatticeTables::is_contractible`]); with lone crossings, when
+        // the point's part is contractible, from what the lone crossings add to it, walked
+        // around them only ([`Quotient::lones_keep_contractible`]). The walk then tests (b) and
+        // (c) only.
+        let decided = if !test_a {
+            None
+        } else if lones.is_empty() {
+            Some(self.l.t.is_contractible(g.dirs))
+        } else if self.l.t.is_contractible(g.dirs) {
+            Some(self.lones_keep_contractible(lones, me))
+        } else {
+            None
+        };
+        if decided == Some(false) {
+            return Verdict::FailsContractible;
+        }
+        let test_a = test_a && decided.is_none();
+        if !test_a && r.labelled {
+            return self.verdict_labelled(gi, s, r);
+        }
+        s.src.clear();
+        s.dst.clear();
+        let mut adj = [0u32; 32];
+        let (mut faces, mut edges) = (0i32, 0u32);
+        let mut geometry = true;
+        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+            for &ti in self.tris_of(x) {
+                let t = self.tri(ti);
+                let q = t.map(|y| vlabel[y as usize]);
+                let mask =
+                    u8::from(q[0] == me) | u8::from(q[1] == me) << 1 | u8::from(q[2] == me) << 2;
+                debug_assert_ne!(
+                    mask, 0,
+                    "crossing {x} of group {gi} is labelled {}",
+                    vlabel[x as usize]
+                );
+                // Two or more member corners (no popcount: it is a library call on the
+                // baseline target).
+                if mask & (mask - 1) != 0 {
+                    // Collapsed: only test (a) reads it, once, from its first member corner.
+                    if test_a && t[mask.trailing_zeros() as usize] == x {
+                        for e in 0..3 {
+                            let (a, b) = (e, (e + 1) % 3);
+                            if mask >> a & 1 != 0 && mask >> b & 1 != 0 {
+                                let ra = Self::local(g, lones, t[a]);
+                                let rb = Self::local(g, lones, t[b]);
+                                // Each edge counted once, when it is first seen.
+                                edges += adj[ra] >> rb & 1 ^ 1;
+                                adj[ra] |= 1 << rb;
+                                adj[rb] |= 1 << ra;
+                            }
+                        }
+                        faces += i32::from(mask == 0b111);
+                    }
+                    continue;
+                }
+                // One member corner, `x`: the triangle is read once, from it.
+                if q[0] == q[1] || q[1] == q[2] || q[0] == q[2] {
+                    continue;
+                }
+                let k = mask.trailing_zeros() as usize;
+                s.src.push(q[(k + 1) % 3]);
+                s.dst.push(q[(k + 2) % 3]);
+                if geometry && !self.flip_ok(q, ti, flips) {
+                    if !test_a {
+                        return Verdict::FailsLink;
+                    }
+                    geometry = false;
+                }
+            }
+        }
+        if test_a {
+            let members = u32::from(g.members) | ((1u32 << lones.len()) - 1) << 16;
+            if !connected(&adj, members) || members.count_ones() as i32 - edges as i32 + faces != 1
+            {
+                return Verdict::FailsContractible;
+            }
+        }
+        if geometry && simple_cycle(&s.src, &s.dst) {
+            Verdict::Passes
+        } else {
+            Verdict::FailsLink
+        }
+    }
+
+    /// Test (a) of a kept group (labelled `me`) whose own point's crossings form a contractible
+    /// complex, with its lone crossings `lones`: the group's complex is that one plus the lone
+    /// crossings, the member edges at them and the member triangles through them, so it is
+    /// contractible exactly when every lone crossing reaches the point's part along member
+    /// edges and the lone crossings add as many edges as vertices and triangles (V - E + F
+    /// stays 1). Every member is an inner vertex, so each edge at a lone crossing lies in two
+    /// of its triangles: an edge to the point's part is seen twice, one between two lone
+    /// crossings four times (weights 2 and 1 make both 4); a triangle is counted from its first
+    /// lone corner.
+    pub(crate) fn lones_keep_contractible(&self, lones: &[Lone], me: u32) -> bool {
+        let vlabel = &self.g.vlabel[..];
+        let lone_index = |y: u32| lones.iter().position(|l| l.id == y);
+        // Bit i: lone crossing i has an edge to the point's part; `near[i]` bit j: to lone j.
+        let mut near_part = 0u8;
+        let mut near = [0u8; MAX_LONES];
+        let (mut quarter_edges, mut faces) = (0usize, 0usize);
+        for (i, l) in lones.iter().enumerate() {
+            for &ti in self.tris_of(l.id) {
+                let t = self.tri(ti);
+                let k = t.iter().position(|&y| y == l.id).unwrap_or(0);
+                let mut all = true;
+                for y in [t[(k + 1) % 3], t[(k + 2) % 3]] {
+                    if vlabel[y as usize] != me {
+                        all = false;
+                        continue;
+                    }
+                    match lone_index(y) {
+                        Some(j) => {
+                            quarter_edges += 1;
+                            near[i] |= 1 << j;
+                        }
+                        None => {
+                            quarter_edges += 2;
+                            near_part |= 1 << i;
+                        }
+                    }
+                }
+                if all && t[..k].iter().all(|&y| lone_index(y).is_none()) {
+                    faces += 1;
+                }
+            }
+        }
+        debug_assert_eq!(
+            quarter_edges % 4,
+            0,
+            "an edge at a lone crossing in one triangle"
+        );
+        let mut reached = near_part;
+        loop {
+            let mut grown = reached;
+            let mut bits = reached;
+            while bits != 0 {
+                grown |= near[bits.trailing_zeros() as usize];
+                bits &= bits - 1;
+            }
+            if grown == reached {
+                break;
+            }
+            reached = grown;
+        }
+        let every = (1u16 << lones.len()) - 1;
+        u16::from(reached) == every && quarter_edges / 4 == lones.len() + faces
+    }
+
+    /// [`Quotient::verdict_kept`] without test (a) (not asked, or decided by the table), from
+    /// the round's tables (`r.labelled`): a triangle that collapsed in this state is skipped
+    /// on one byte, and the others' quotient labels are read in one place.
+    fn verdict_labelled(&self, gi: usize, s: &mut Star, r: &RoundTables) -> Verdict {
+        let g = &self.groups[gi];
+        let lones = self.lones_of(gi);
+        let me = self.g.leader[gi];
+        s.src.clear();
+        s.dst.clear();
+        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+            for &ti in self.tris_of(x) {
+                if r.flips[ti as usize].load(Ordering::Relaxed) == COLLAPSED {
+                    continue;
+                }
+                // Three different labels, one of them the group's (`x`'s).
+                let q = r.labels[ti as usize];
+                let k = if q[0] == me {
+                    0
+                } else if q[1] == me {
+                    1
+                } else {
+                    2
+                };
+                debug_assert_eq!(q[k], me, "triangle {ti} at member {x} of group {gi}");
+                s.src.push(q[(k + 1) % 3]);
+                s.dst.push(q[(k + 2) % 3]);
+                if !self.flip_ok(q, ti, &r.flips) {
+                    return Verdict::FailsLink;
+                }
+            }
+        }
+        if simple_cycle(&s.src, &s.dst) {
+            Verdict::Passes
+        } else {
+            Verdict::FailsLink
+        }
+    }
+
+    /// Test (c) on plain MT triangle `tri` (quotient labels `q`, all distinct) in
+    /// the current state, memoised in `flips` (see [`Quotient::verdict_kept`]).
+    #[inline]
+    fn flip_ok(&self, q: [u32; 3], tri: u32, flips: &[AtomicU8]) -> bool {
+        let memo = &flips[tri as usize];
+        match memo.load(Ordering::Relaxed) {
+            1 => true,
+            2 => false,
+            _ => {
+                let ok = match shape(q.map(|x| self.position(x))) {
+                    Shape::Flat => {
+                        shape(self.tri(tri).map(|x| self.cpos[x as usize])) == Shape::Flat
+                    }
+                    Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
+                };
+                memo.store(if ok { 1 } else { 2 }, Ordering::Relaxed);
+                ok
+            }
+        }
+    }
+
+    /// The gradient of plain MT triangle `tri`'s source tetrahedron (of the linear interpolant
+    /// on it, up to a positive factor): computed when test (c) reads the triangle, the same
+    /// bits as the listing would have stored.
+    #[inline]
+    fn gradient(&self, tri: u32) -> [f32; 3] {
+        let (anchor, tet) = self.source[tri as usize];
+        self.l
+            .gradient(anchor as usize, usize::from(tet & 0x7f), tet & 0x80 != 0)
+    }
+
     /// Number of crossings in group `gi`.
     pub(crate) fn size(&self, gi: usize) -> u32 {
         self.groups[gi].size() + self.lones_of(gi).len() as u32
@@ -395,7 +739,8 @@ impl Quotient<'_> {
     #[inline(always)]
     pub(crate) fn tri(&self, t: u32) -> [u32; 3] {
         let i = 3 * t as usize;
-        [self.tris[i], self.tris[i + 1], self.tris[i + 2]]
+        let c = &self.tris[i..i + 3];
+        [c[0], c[1], c[2]]
     }
 
     /// Fills `s` with the star of group `gi`: the plain MT triangles with a member, each once
@@ -493,7 +838,7 @@ impl Quotient<'_> {
         });
         match shape(new) {
             Shape::Flat => shape(t.map(|x| self.cpos[x as usize])) == Shape::Flat,
-            Shape::Normal(n) => n.dot(DVec3::from(self.grad[tri as usize].map(f64::from))) > 0.0,
+            Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
         }
     }
 

@@ -73,11 +73,18 @@ pub(crate) fn settle(
     let start = std::time::Instant::now();
     // Per group: 1 while it fails (b) or (c) this round, 2 when it fails (a).
     let mut failing = vec![0u8; f.groups.len()];
+    // Test (c) per plain MT triangle in the state of the round, and the triangles' labels when
+    // the round tests many groups (see `Quotient::verdict_kept`).
+    let mut tables = std::mem::take(&mut g.round);
     let mut round = 0u32;
     loop {
         round += 1;
         let first = round == 1;
         let q = Quotient::new(f, g);
+        // Labelling every triangle costs about as much as skipping the collapsed ones saves
+        // in the stars of one group in twenty triangles.
+        tables.prepare(&q, 20 * dirty.len() >= f.tris.len() / 3, pool);
+        let tables = &tables;
         let fails: Vec<(u32, u8)> = pool.install(|| {
             // Runs of at least 256 groups: each run sets up one star's working memory (a run
             // per test cost about 2% of the tests on one thread, 5% on two).
@@ -92,7 +99,16 @@ pub(crate) fn settle(
                             Phase::Islands => true,
                             Phase::Additions { born } => gi >= born || q.has_new_lones(i),
                         };
-                    match q.verdict(i, s, test_a) {
+                    let verdict = q.verdict_kept(i, s, test_a, tables);
+                    #[cfg(test)]
+                    assert_ne!(q.g.active[i], 0, "group {gi} tested but not kept");
+                    #[cfg(test)]
+                    assert_eq!(
+                        verdict,
+                        q.verdict(i, s, test_a),
+                        "group {gi}: the verdict from the labels and memo against the walk"
+                    );
+                    match verdict {
                         Verdict::Passes => None,
                         Verdict::FailsLink => Some((gi, 1)),
                         Verdict::FailsContractible => Some((gi, 2)),
@@ -185,6 +201,7 @@ pub(crate) fn settle(
         dirty.sort_unstable();
         dirty.dedup();
     }
+    g.round = tables;
     if out.rounds > 0 {
         out.t_repair_s = start.elapsed().as_secs_f64() - out.t_tests_s;
     }
