@@ -255,11 +255,15 @@ impl LevelMap {
         if (0..3).any(|i| a[i] > hi[i] || b[i] < lo[i]) {
             return;
         }
-        if best.is_some_and(|m| m <= k.level) {
+        // Nothing is finer than level 0. (An inner node's leaves are finer than it, so a
+        // best at or below its level does not make it skippable.)
+        if *best == Some(0) {
             return;
         }
         if self.set.contains(&k) {
-            *best = Some(k.level);
+            if best.is_none_or(|m| k.level < m) {
+                *best = Some(k.level);
+            }
         } else if k.level > 0 {
             for c in k.children() {
                 self.descend(c, lo, hi, best);
@@ -380,6 +384,23 @@ mod tests {
             "{}",
             map.chunks().len()
         );
+    }
+
+    #[test]
+    fn the_finest_touching_leaf_is_found_behind_a_coarser_one() {
+        // Root 0 is a leaf (level 1); root 1 is split. A box touching both must see level 0,
+        // whichever root is visited first (a search that skipped an inner node once it had a
+        // leaf of the node's level missed it).
+        let g = LodGeometry::new(1, 4, [2, 1, 1]).unwrap();
+        let map = LevelMap::build(g, |k| k.at[0] == 1);
+        let s = g.chunk_size(1);
+        assert_eq!(map.min_level_touching([0; 3], [s, s, s]), Some(0));
+        assert_eq!(map.min_level_touching([0; 3], [s - 1, s, s]), Some(1));
+        for k in map.chunks() {
+            let (lo, hi) = k.bounds(&g);
+            let want = map.leaves_touching(lo, hi).iter().map(|n| n.level).min();
+            assert_eq!(map.min_level_touching(lo, hi), want, "{k:?}");
+        }
     }
 
     #[test]

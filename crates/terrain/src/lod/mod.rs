@@ -8,11 +8,13 @@
 //!        |
 //!   closure + green (refine.rs)   2:1 balance rule, face rule; cone / one-edge / ordered bisection
 //!        |
-//!   chunk tets (mesh.rs)      each chunk builds a window and keeps the tets whose centroid it owns
+//!   chunk tets (mesh.rs)      no finer neighbour: the lattice's tets it owns (fast path);
+//!                             else a window's forest + closure, keeping the tets it owns
 //!        |
 //!   march (mt.rs)             marching tetrahedra, crossings keyed by their edge's lattice points
 //!        |
-//!   LodWorld (world.rs)       viewer moves -> new map -> re-mesh the chunks whose tets changed
+//!   LodWorld (world.rs)       viewer moves -> new map -> re-mesh the chunks whose level or
+//!                             neighbours' levels changed
 //! ```
 //!
 //! Lattice coordinates are integers in `u = h / 2` ([`lattice`]); level `l` has cells of

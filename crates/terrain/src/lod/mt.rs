@@ -12,6 +12,12 @@
 //!            (where those differences vanish: the edge's direction lo -> hi towards f >= 0)
 //! ```
 //!
+//! Speed without changing a bit: lattice points are numbered on a flat grid over the tets'
+//! box, the triangles of each inside mask come from a table, all normal probes of a chunk go
+//! to the field in one batch (a batch gives every point the bits a single sample gives), and
+//! a chunk whose box the field's bound ([`ScalarField::side`]) puts on one side of 0 is not
+//! sampled at all (its surface is empty either way).
+//!
 //! A crossing's position and normal are functions of its key and the field only, so any
 //! chunk that computes it gets the same bits; welding chunk meshes by key ([`weld`]) is exact
 //! and the shading has no seam where the level changes (the two sides share the vertex).
@@ -23,8 +29,10 @@ use glam::{DVec3, Vec3};
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
 
-use super::lattice::Point;
-use super::mesh::MeshTet;
+use super::error::LodError;
+use super::lattice::{cell_size, Point};
+use super::level_map::{ChunkKey, LevelMap};
+use super::mesh::{chunk_tets, MeshTet};
 
 /// Where the lattice sits in the world: lattice point `p` (in `u`) is at `origin + p h / 2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -121,22 +129,116 @@ pub fn case_triangles(mask: u8, out: &mut [[(usize, usize); 3]; 2]) -> usize {
     }
 }
 
+/// One inside mask's triangles (as tet edges) and how many there are.
+type Case = ([[(usize, usize); 3]; 2], usize);
+
+/// The triangles of every inside mask ([`case_triangles`]), computed once.
+fn case_table() -> &'static [Case; 16] {
+    static TABLE: std::sync::OnceLock<[Case; 16]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        std::array::from_fn(|mask| {
+            let mut tris = [[(0usize, 0usize); 3]; 2];
+            let n = case_triangles(mask as u8, &mut tris);
+            (tris, n)
+        })
+    })
+}
+
+/// The distinct lattice points of some tets, numbered in order of first use, on a flat grid
+/// over their bounding box (at the largest power-of-two step dividing every offset).
+struct PointGrid {
+    lo: Point,
+    shift: u32,
+    n: [usize; 3],
+    slot: Vec<u32>,
+}
+
+impl PointGrid {
+    fn new(tets: &[MeshTet]) -> Option<Self> {
+        let first = tets.first()?.tet[0];
+        let (mut lo, mut hi) = (first, first);
+        for p in tets.iter().flat_map(|t| &t.tet) {
+            for i in 0..3 {
+                lo[i] = lo[i].min(p[i]);
+                hi[i] = hi[i].max(p[i]);
+            }
+        }
+        let mut bits = 0u32;
+        for p in tets.iter().flat_map(|t| &t.tet) {
+            for i in 0..3 {
+                bits |= (p[i] - lo[i]) as u32;
+            }
+        }
+        let shift = bits.trailing_zeros().min(31);
+        let n: [usize; 3] = std::array::from_fn(|i| ((hi[i] - lo[i]) as u32 >> shift) as usize + 1);
+        let cells = n[0].checked_mul(n[1])?.checked_mul(n[2])?;
+        // A sparse set of points (far apart tets) would make a huge grid: use the hash then.
+        if cells > 64 * tets.len() + 4096 {
+            return None;
+        }
+        Some(PointGrid {
+            lo,
+            shift,
+            n,
+            slot: vec![u32::MAX; cells],
+        })
+    }
+
+    fn slot(&mut self, p: Point) -> &mut u32 {
+        let c: [usize; 3] =
+            std::array::from_fn(|i| ((p[i] - self.lo[i]) as u32 >> self.shift) as usize);
+        &mut self.slot[(c[0] * self.n[1] + c[1]) * self.n[2] + c[2]]
+    }
+}
+
 /// Marching tetrahedra over `tets`. Deterministic: vertices in order of first use, tets in
-/// the given order.
+/// the given order. When the field's bound ([`ScalarField::side`]) puts the tets' bounding
+/// box on one side of 0, the surface is empty and nothing is sampled.
 pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> ChunkMesh {
+    if let Some((lo, hi)) =
+        tets.iter()
+            .map(|t| super::lattice::bbox(&t.tet))
+            .reduce(|(a, b), (c, d)| {
+                (
+                    std::array::from_fn(|i| a[i].min(c[i])),
+                    std::array::from_fn(|i| b[i].max(d[i])),
+                )
+            })
+    {
+        // World positions round monotonically, so the box holds every sample point.
+        if field.side(frame.world(lo), frame.world(hi), 0.0).is_some() {
+            return ChunkMesh::default();
+        }
+    }
     // Sample every distinct lattice point once, in order of first use.
-    let mut point_index: HashMap<Point, u32> =
-        HashMap::with_capacity_and_hasher(tets.len(), Default::default());
     let mut points: Vec<Vec3> = Vec::with_capacity(tets.len());
     let mut corner: Vec<u32> = Vec::with_capacity(tets.len() * 4);
-    for t in tets {
-        for p in t.tet {
-            let next = points.len() as u32;
-            let i = *point_index.entry(p).or_insert_with(|| {
-                points.push(frame.world(p));
-                next
-            });
-            corner.push(i);
+    match PointGrid::new(tets) {
+        Some(mut grid) => {
+            for t in tets {
+                for p in t.tet {
+                    let slot = grid.slot(p);
+                    if *slot == u32::MAX {
+                        *slot = points.len() as u32;
+                        points.push(frame.world(p));
+                    }
+                    corner.push(*slot);
+                }
+            }
+        }
+        None => {
+            let mut point_index: HashMap<Point, u32> =
+                HashMap::with_capacity_and_hasher(tets.len(), Default::default());
+            for t in tets {
+                for p in t.tet {
+                    let next = points.len() as u32;
+                    let i = *point_index.entry(p).or_insert_with(|| {
+                        points.push(frame.world(p));
+                        next
+                    });
+                    corner.push(i);
+                }
+            }
         }
     }
     let mut values = vec![0f32; points.len()];
@@ -145,60 +247,98 @@ pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> Chu
         samples: points.len(),
         ..ChunkMesh::default()
     };
-    let mut crossing: HashMap<[Point; 2], u32> = HashMap::default();
-    let mut tris = [[(0usize, 0usize); 3]; 2];
-    let eps = frame.h * 0.25;
-    let mut probe = [Vec3::ZERO; 6];
-    let mut probe_values = [0f32; 6];
+    // Crossings by their edge's two point numbers; positions now, normals after one batch of
+    // probes (a batch gives every point the bits a single sample would).
+    let mut crossing: HashMap<u64, u32> = HashMap::default();
+    let mut ends: Vec<(Point, Point, f32, f32)> = Vec::new();
+    let table = case_table();
     for (ti, t) in tets.iter().enumerate() {
         let ids = &corner[4 * ti..4 * ti + 4];
         let f: [f32; 4] = std::array::from_fn(|v| values[ids[v] as usize]);
         let mask = (0..4).fold(0u8, |m, v| m | u8::from(f[v] < 0.0) << v);
-        let n = case_triangles(mask, &mut tris);
-        for tri in &tris[..n] {
+        let (tris, n) = &table[mask as usize];
+        for tri in &tris[..*n] {
             for &(a, b) in tri {
                 let (pa, pb) = (t.tet[a], t.tet[b]);
-                let (lo, hi, flo, fhi) = if pa < pb {
-                    (pa, pb, f[a], f[b])
+                let (lo, hi, flo, fhi, ilo, ihi) = if pa < pb {
+                    (pa, pb, f[a], f[b], ids[a], ids[b])
                 } else {
-                    (pb, pa, f[b], f[a])
+                    (pb, pa, f[b], f[a], ids[b], ids[a])
                 };
-                let key = [lo, hi];
+                let key = u64::from(ilo) << 32 | u64::from(ihi);
                 let next = mesh.keys.len() as u32;
                 let v = *crossing.entry(key).or_insert_with(|| {
                     let s = f64::from(flo) / (f64::from(flo) - f64::from(fhi));
                     let dl = DVec3::new(f64::from(lo[0]), f64::from(lo[1]), f64::from(lo[2]));
                     let dh = DVec3::new(f64::from(hi[0]), f64::from(hi[1]), f64::from(hi[2]));
                     let p = frame.world_f64(dl + (dh - dl) * s);
-                    for (axis, pair) in probe.chunks_exact_mut(2).enumerate() {
-                        let mut d = Vec3::ZERO;
-                        d[axis] = eps;
-                        pair[0] = p + d;
-                        pair[1] = p - d;
-                    }
-                    field.sample_batch(&probe, &mut probe_values);
-                    let g = Vec3::new(
-                        probe_values[0] - probe_values[1],
-                        probe_values[2] - probe_values[3],
-                        probe_values[4] - probe_values[5],
-                    );
-                    // Where the differences vanish (flat, quantised fields), the edge's own
-                    // direction towards the outside: still a function of the key alone.
-                    let g = if g.length_squared() > 0.0 && g.is_finite() {
-                        g
-                    } else {
-                        (dh - dl).as_vec3() * (fhi - flo).signum()
-                    };
-                    mesh.keys.push(key);
+                    mesh.keys.push([lo, hi]);
                     mesh.positions.push(p.to_array());
-                    mesh.normals.push(g.normalize_or_zero().to_array());
+                    ends.push((lo, hi, flo, fhi));
                     next
                 });
                 mesh.indices.push(v);
             }
         }
     }
+    let eps = frame.h * 0.25;
+    let mut probe = Vec::with_capacity(6 * mesh.positions.len());
+    for p in &mesh.positions {
+        let p = Vec3::from(*p);
+        for axis in 0..3 {
+            let mut d = Vec3::ZERO;
+            d[axis] = eps;
+            probe.push(p + d);
+            probe.push(p - d);
+        }
+    }
+    let mut probe_values = vec![0f32; probe.len()];
+    field.sample_batch(&probe, &mut probe_values);
+    mesh.normals = probe_values
+        .chunks_exact(6)
+        .zip(&ends)
+        .map(|(pv, &(lo, hi, flo, fhi))| {
+            let g = Vec3::new(pv[0] - pv[1], pv[2] - pv[3], pv[4] - pv[5]);
+            // Where the differences vanish (flat, quantised fields), the edge's own direction
+            // towards the outside: still a function of the key alone.
+            let g = if g.length_squared() > 0.0 && g.is_finite() {
+                g
+            } else {
+                let dl = DVec3::new(f64::from(lo[0]), f64::from(lo[1]), f64::from(lo[2]));
+                let dh = DVec3::new(f64::from(hi[0]), f64::from(hi[1]), f64::from(hi[2]));
+                (dh - dl).as_vec3() * (fhi - flo).signum()
+            };
+            g.normalize_or_zero().to_array()
+        })
+        .collect();
     mesh
+}
+
+/// The surface of one chunk of `map`: marching tetrahedra over [`chunk_tets`], or nothing
+/// (without building the tets) when the field's bound puts the chunk's box grown by one cell
+/// of its level on one side of 0. Every tet a chunk owns lies in that box: its centroid is in
+/// the chunk, and it lies in a red-forest leaf of the chunk's level or finer (a coarser tet
+/// meeting the chunk is refined), whose extent along each axis is at most one cell.
+pub fn mesh_chunk(
+    map: &LevelMap,
+    chunk: &ChunkKey,
+    field: &dyn ScalarField,
+    frame: &LodFrame,
+) -> Result<ChunkMesh, LodError> {
+    let (lo, hi) = chunk.bounds(map.geometry());
+    let s = cell_size(chunk.level);
+    let corner = |v: [i64; 3]| -> Option<Point> {
+        let p: [i32; 3] = std::array::from_fn(|i| i32::try_from(v[i]).unwrap_or(i32::MAX));
+        p.iter().all(|&c| c != i32::MAX).then_some(p)
+    };
+    if map.contains(chunk) {
+        if let (Some(a), Some(b)) = (corner(lo.map(|v| v - s)), corner(hi.map(|v| v + s))) {
+            if field.side(frame.world(a), frame.world(b), 0.0).is_some() {
+                return Ok(ChunkMesh::default());
+            }
+        }
+    }
+    Ok(march(&chunk_tets(map, chunk)?, field, frame))
 }
 
 /// Welds chunk meshes (in the given order) into one mesh by crossing key: vertices in order

@@ -10,7 +10,8 @@
 //!                               not all of i, j, k even (a quarter point), is in V; or
 //!                     (face)    S holds all 3 edges of a face and S is not exactly that face;
 //!                   repeat until nothing changes (the least fixed point: refining only adds
-//!                   vertices, so the result does not depend on the order)
+//!                   vertices, so the result does not depend on the order); closure_bits
+//!                   runs it on a worklist (leaves near new vertices) over a bit grid
 //!   green           (no vertex added; green tets are never refined)
 //!     S empty            keep t
 //!     S = face abc       cone: split abc at its midpoints into 4, cone each to the opposite d
@@ -122,11 +123,86 @@ fn edge_order(p: Point, q: Point) -> (i64, Point, Point) {
     (-super::lattice::d2(a, b), a, b)
 }
 
+/// A set of lattice points the closure's rules look up.
+pub trait PointSet {
+    /// Whether `p` is in the set.
+    fn has(&self, p: Point) -> bool;
+}
+
+impl PointSet for HashSet<Point> {
+    fn has(&self, p: Point) -> bool {
+        self.contains(&p)
+    }
+}
+
+/// A set of lattice points as a bit grid over a box, at a power-of-two step: the points the
+/// closure can add to a set of leaves are all on it (see [`closure_bits`]).
+#[derive(Clone, Debug)]
+pub struct PointBits {
+    lo: Point,
+    hi: Point,
+    shift: u32,
+    n: [usize; 3],
+    bits: Vec<u64>,
+}
+
+impl PointBits {
+    /// An empty set over the closed box `[lo, hi]`, holding points whose offsets from `lo` are
+    /// multiples of `2^shift`.
+    pub fn new(lo: Point, hi: Point, shift: u32) -> Self {
+        let n: [usize; 3] = std::array::from_fn(|i| ((hi[i] - lo[i]) as usize >> shift) + 1);
+        PointBits {
+            lo,
+            hi,
+            shift,
+            n,
+            bits: vec![0; (n[0] * n[1] * n[2]).div_ceil(64)],
+        }
+    }
+
+    fn index(&self, p: Point) -> Option<usize> {
+        let mask = (1i32 << self.shift) - 1;
+        let mut c = [0usize; 3];
+        for i in 0..3 {
+            let d = p[i] - self.lo[i];
+            if p[i] < self.lo[i] || p[i] > self.hi[i] || d & mask != 0 {
+                return None;
+            }
+            c[i] = (d >> self.shift) as usize;
+        }
+        Some((c[0] * self.n[1] + c[1]) * self.n[2] + c[2])
+    }
+
+    /// Adds `p`; returns whether it was new. A point off the grid is a bug of the caller.
+    pub fn insert(&mut self, p: Point) -> bool {
+        let Some(i) = self.index(p) else {
+            debug_assert!(false, "point {p:?} off the grid");
+            return false;
+        };
+        let (w, b) = (i / 64, 1u64 << (i % 64));
+        let new = self.bits[w] & b == 0;
+        self.bits[w] |= b;
+        new
+    }
+}
+
+impl PointSet for PointBits {
+    fn has(&self, p: Point) -> bool {
+        self.index(p)
+            .is_some_and(|i| self.bits[i / 64] >> (i % 64) & 1 == 1)
+    }
+}
+
 /// The split-edge mask of `t` (bit `e` for edge `EDGES[e]`): edges whose midpoint is in `v`.
 pub fn split_mask(t: &Tet, v: &HashSet<Point>) -> u8 {
+    split_mask_in(t, v)
+}
+
+/// [`split_mask`] over any [`PointSet`].
+pub fn split_mask_in<S: PointSet + ?Sized>(t: &Tet, v: &S) -> u8 {
     let mut s = 0u8;
     for (e, &(a, b)) in EDGES.iter().enumerate() {
-        if mid(t[a], t[b]).is_some_and(|m| v.contains(&m)) {
+        if mid(t[a], t[b]).is_some_and(|m| v.has(m)) {
             s |= 1 << e;
         }
     }
@@ -144,6 +220,11 @@ pub fn face_rule(s: u8) -> bool {
 
 /// Whether the closure's 2:1 balance rule refines `t`: a quarter point of a face is in `v`.
 pub fn balance_rule(t: &Tet, v: &HashSet<Point>) -> bool {
+    balance_rule_in(t, v)
+}
+
+/// [`balance_rule`] over any [`PointSet`].
+pub fn balance_rule_in<S: PointSet + ?Sized>(t: &Tet, v: &S) -> bool {
     FACES.iter().any(|f| {
         let (a, b, c) = (t[f[0]], t[f[1]], t[f[2]]);
         QUARTERS.iter().any(|&(i, j, k)| {
@@ -151,7 +232,7 @@ pub fn balance_rule(t: &Tet, v: &HashSet<Point>) -> bool {
                 i * i64::from(a[x]) + j * i64::from(b[x]) + k * i64::from(c[x])
             });
             p.iter().all(|w| w % 4 == 0)
-                && v.contains(&[(p[0] / 4) as i32, (p[1] / 4) as i32, (p[2] / 4) as i32])
+                && v.has([(p[0] / 4) as i32, (p[1] / 4) as i32, (p[2] / 4) as i32])
         })
     })
 }
@@ -165,7 +246,9 @@ pub fn vertices(leaves: &[Leaf]) -> HashSet<Point> {
     v
 }
 
-/// Runs the closure to its fixed point; returns how many leaves it red-refined.
+/// Runs the closure to its fixed point; returns how many leaves it red-refined. Full passes
+/// over all leaves, each against the vertices at its start: the reference for
+/// [`closure_bits`].
 pub fn closure(leaves: &mut Vec<Leaf>) -> usize {
     let mut reds = 0;
     loop {
@@ -173,7 +256,7 @@ pub fn closure(leaves: &mut Vec<Leaf>) -> usize {
         let mut next = Vec::with_capacity(leaves.len());
         let mut changed = 0;
         for l in leaves.iter() {
-            if l.level > 0 && (face_rule(split_mask(&l.tet, &v)) || balance_rule(&l.tet, &v)) {
+            if refines(l, &v) {
                 changed += 1;
                 next.extend(red(&l.tet).map(|tet| Leaf {
                     tet,
@@ -183,11 +266,129 @@ pub fn closure(leaves: &mut Vec<Leaf>) -> usize {
                 next.push(*l);
             }
         }
-        *leaves = next;
         if changed == 0 {
             return reds;
         }
+        *leaves = next;
         reds += changed;
+    }
+}
+
+/// Whether the closure red-refines leaf `l` given the vertices `v`.
+fn refines<S: PointSet + ?Sized>(l: &Leaf, v: &S) -> bool {
+    l.level > 0 && (face_rule(split_mask_in(&l.tet, v)) || balance_rule_in(&l.tet, v))
+}
+
+/// [`refines`] when every point of `v` is a lattice point of level `vfine` or coarser. The
+/// midpoint of an edge of a body-centred tet of level `l` is a point of level `l - 1` and not
+/// of level `l`; a quarter point of one of its faces is not even of level `l - 1` (the tets of
+/// level `l - 1` tile the face conformingly with its corners and midpoints only). So with
+/// `vfine > l - 1` no edge is split, and with `vfine > l - 2` no quarter point is in `v`.
+fn refines_from<S: PointSet + ?Sized>(l: &Leaf, v: &S, vfine: u8) -> bool {
+    if l.level == 0 || l.level - 1 < vfine {
+        return false;
+    }
+    face_rule(split_mask_in(&l.tet, v)) || (l.level >= vfine + 2 && balance_rule_in(&l.tet, v))
+}
+
+/// [`closure`] on a worklist, returning the red refinements and the final leaves' vertices
+/// (the leaves' order changes: a refined leaf's first child takes its place, the others are
+/// appended).
+///
+/// The same result as the full passes of [`closure`]: the rules are monotone in the vertex
+/// set, which refinement only grows, so every refinement made here is one the least fixed
+/// point makes, and the loop stops at a fixed point. A leaf's rules read only points on its
+/// closed bounding box, so after the first pass only the leaves whose box meets a cell (of a
+/// coarse grid) that received a new vertex are checked again.
+///
+/// The vertex set is a bit grid: with `m` the finest leaf level, the closure adds vertices of
+/// level `m - 1` at the finest (the rules need a vertex of level `< l - 1` to refine a leaf of
+/// level `l`), so every vertex is on the grid of step `2^(m - 1)` (`2^0` for `m = 0`) over the
+/// leaves' bounding box (refinement stays inside its tet).
+pub fn closure_bits(leaves: &mut Vec<Leaf>) -> (usize, PointBits) {
+    let Some(first) = leaves.first() else {
+        return (0, PointBits::new([0; 3], [0; 3], 0));
+    };
+    let (mut lo, mut hi) = (first.tet[0], first.tet[0]);
+    let mut finest = first.level;
+    for l in leaves.iter() {
+        finest = finest.min(l.level);
+        for p in &l.tet {
+            for i in 0..3 {
+                lo[i] = lo[i].min(p[i]);
+                hi[i] = hi[i].max(p[i]);
+            }
+        }
+    }
+    let shift = u32::from(finest.saturating_sub(1));
+    let mut v = PointBits::new(lo, hi, shift);
+    for l in leaves.iter() {
+        for p in l.tet {
+            v.insert(p);
+        }
+    }
+    // Dirty cells: a coarse grid (step 2^(shift + 3)) marking where new vertices landed.
+    let cshift = shift + 3;
+    let cn: [usize; 3] = std::array::from_fn(|i| ((hi[i] - lo[i]) as usize >> cshift) + 1);
+    let cell = |p: Point, i: usize| ((p[i] - lo[i]) >> cshift) as usize;
+    let mut dirty = vec![false; cn[0] * cn[1] * cn[2]];
+    let mut next_dirty = dirty.clone();
+    let mut reds = 0;
+    let mut first_pass = true;
+    // The finest level of a point in `v` (a midpoint of a level-l edge is of level l - 1).
+    let mut vfine = finest;
+    loop {
+        let mut changed = 0;
+        let n = leaves.len();
+        for i in 0..n {
+            let l = leaves[i];
+            if l.level == 0 {
+                continue;
+            }
+            if !first_pass {
+                let (a, b) = super::lattice::bbox(&l.tet);
+                let mut hit = false;
+                'cells: for x in cell(a, 0)..=cell(b, 0) {
+                    for y in cell(a, 1)..=cell(b, 1) {
+                        for z in cell(a, 2)..=cell(b, 2) {
+                            if dirty[(x * cn[1] + y) * cn[2] + z] {
+                                hit = true;
+                                break 'cells;
+                            }
+                        }
+                    }
+                }
+                if !hit {
+                    continue;
+                }
+            }
+            if refines_from(&l, &v, vfine) {
+                changed += 1;
+                vfine = vfine.min(l.level - 1);
+                for &(a, b) in &EDGES {
+                    let m = half(l.tet[a], l.tet[b]);
+                    if v.insert(m) {
+                        next_dirty[(cell(m, 0) * cn[1] + cell(m, 1)) * cn[2] + cell(m, 2)] = true;
+                    }
+                }
+                let kids = red(&l.tet);
+                leaves[i] = Leaf {
+                    tet: kids[0],
+                    level: l.level - 1,
+                };
+                leaves.extend(kids[1..].iter().map(|&tet| Leaf {
+                    tet,
+                    level: l.level - 1,
+                }));
+            }
+        }
+        if changed == 0 {
+            return (reds, v);
+        }
+        reds += changed;
+        first_pass = false;
+        std::mem::swap(&mut dirty, &mut next_dirty);
+        next_dirty.iter_mut().for_each(|d| *d = false);
     }
 }
 

@@ -5,7 +5,10 @@
 //!   set_viewer(pos) -> LevelMap::from_viewer (pending)
 //!   remesh():  for every chunk K of the new map
 //!                new, or the leaves touching dependency_box(K) differ between the maps
-//!                  -> chunk_tets + march (in parallel, on the world's threads)
+//!                (chunks of >= LOCAL_CHUNK cells: K's own box, so K's level or a
+//!                neighbour's changed)
+//!                  -> mesh_chunk (in parallel, on the world's threads): nothing when the
+//!                     field's bound puts the chunk on one side of 0, else chunk_tets + march
 //!                else keep K's surface
 //!              chunks no longer in the map are dropped
 //! ```
@@ -26,8 +29,8 @@ use super::edits::{chunks_seeing, EditedField, Overlay};
 use super::error::LodError;
 use super::lattice::Point;
 use super::level_map::{ChunkKey, LevelMap, LodGeometry};
-use super::mesh::{chunk_tets, dependency_box, world_tets, MeshTet};
-use super::mt::{march, weld, ChunkMesh, LodFrame};
+use super::mesh::{needs_remesh, world_tets, MeshTet};
+use super::mt::{march, mesh_chunk, weld, ChunkMesh, LodFrame};
 
 /// What a multiresolution world is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -92,7 +95,7 @@ fn mesh_some(
 ) -> Result<Vec<ChunkMesh>, LodError> {
     pool.install(|| {
         keys.par_iter()
-            .map(|k| Ok(march(&chunk_tets(map, k)?, field, frame)))
+            .map(|k| mesh_chunk(map, k, field, frame))
             .collect()
     })
 }
@@ -182,8 +185,7 @@ impl<F: ScalarField> LodWorld<F> {
                     if self.edited.contains(k) {
                         return true;
                     }
-                    let (lo, hi) = dependency_box(new, k);
-                    old.leaves_touching(lo, hi) != new.leaves_touching(lo, hi)
+                    needs_remesh(old, new, k)
                 }
                 _ => true,
             })
