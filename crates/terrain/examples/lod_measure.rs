@@ -52,6 +52,13 @@ fn main() -> anyhow::Result<()> {
         mis += c.misoriented;
         boundary_open += c.open_on_boundary;
         tris += c.triangles;
+        if (seed + 1) % 500 == 0 {
+            eprintln!(
+                "  {} fields: open inside {open}, non-manifold {nm}, misoriented {mis} ({tris} triangles; {:.1} s)",
+                seed + 1,
+                t0.elapsed().as_secs_f64()
+            );
+        }
     }
     println!(
         "edges over {n} random fields x random 2:1 maps (levels 0..2, 16^3 finest cells): open inside {open}, \
