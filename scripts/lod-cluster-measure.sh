@@ -19,17 +19,16 @@
 # 3. A summary per world: measured counts, and a projection to the whole map with the uniform
 #    chunks' ratios applied to the boundary chunks (lattice chunks like them).
 #
-# Results with the multiresolution mesh of commit a65ee82 (three viewer maps per world):
-# - integrated clustering keeps 0.211-0.226 of plain MT's triangles in uniform chunks, at every
-#   level; with tiles = chunks 0.41-0.44 for chunks of 8^3 cells (1.85-1.96x untiled; 0.71 at
-#   level 2 of `big`, 26 chunks) and 0.33 for 16^3 at level 0 (1.51x; 0.50 at level 1, 26 chunks);
-# - transition chunks hold 24% (ci), 42% (big) and 26% (big16) of the plain world's triangles;
+# Results with the multiresolution mesh of commit 84f6b95 (three viewer maps per world):
+# - integrated clustering keeps 0.209-0.219 of plain MT's triangles in uniform chunks, at every
+#   level; with tiles = chunks 0.41-0.44 for chunks of 8^3 cells (1.86-2.05x untiled; 0.68 at
+#   level 2 of `big`, 18 chunks) and 0.33 for 16^3 at level 0 (1.52x; 0.47 at level 1, 18 chunks);
+# - transition chunks hold 16% (ci), 43% (big) and 24% (big16) of the plain world's triangles;
 # - projected over the maps (triangles over plain MT): tiles = chunks with a plain transition
-#   layer 0.55 / 0.68 / 0.52; untiled per level with a plain transition layer 0.41 / 0.55 / 0.42;
+#   layer 0.51 / 0.67 / 0.50; untiled per level with a plain transition layer 0.35 / 0.55 / 0.41;
 #   everything clustered 0.22.
-# (The message of the commit that added this script quoted projections taken with a mesh change
-# then in progress in the working tree, with thinner transition layers: transition 8-10%,
-# projections 0.40-0.48 and 0.28-0.30. The uniform chunks' ratios were the same.)
+# (The message of the commit that added this script quoted projections taken with an earlier
+# working-tree state of the mesh code; these replace them. The uniform chunks' ratios agree.)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-lod-cluster}
