@@ -2,8 +2,10 @@
 float32 volume (a sphere's signed distance): the wall time of the Python call against the
 extractor's own ``stats["t_total_s"]`` (Rust, ``Extractor::extract_borrowed`` plus gradient
 normals), median of interleaved repetitions. The overhead is the argument checks, turning the
-mesh into array order (z, y, x) (``stats["t_reorder_s"]``; marching cubes writes its mesh in
-that order itself, so it needs no such pass), and wrapping the result (``stats["t_input_s"]``, the binding's
+mesh into array order (z, y, x) where the extractor did not write it so
+(``stats["t_reorder_s"]``; marching cubes and plain MT write their meshes in that order
+themselves, so they need no such pass: plain MT turns its positions in one parallel pass inside
+``t_total_s``, as it does for a Rust caller asking for array order), and wrapping the result (``stats["t_input_s"]``, the binding's
 own input work, is about 0 here: the volume is read in place, not copied, and the extractor's
 first pass refuses NaN and infinities as it classifies the values, for any Rust caller too, so
 that check is inside ``t_total_s``).

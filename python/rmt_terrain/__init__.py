@@ -97,8 +97,8 @@ class Mesh:
         ``t_total_s`` is the Rust extraction (with gradient normals; on the simple lattice
         its first pass also checks the values for NaN and infinities), ``t_input_s`` the copy
         and check of the input before it (body-centred lattice; about 0 otherwise),
-        ``t_reorder_s`` turning the mesh into array order after it (0 for marching cubes,
-        which writes it in that order), ``t_call_s`` the whole compiled call (input, extraction
+        ``t_reorder_s`` turning the mesh into array order after it (0 for marching cubes and
+        plain MT, which write it in that order), ``t_call_s`` the whole compiled call (input, extraction
         and conversion of the result; the rest of a call's time is the Python wrapper).
         ``input_copied`` (from :func:`extract`) says whether the volume was copied into the
         extractor's sample array (body-centred lattice) or read in place.

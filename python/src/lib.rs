@@ -251,10 +251,10 @@ fn extract_volume<'py>(
                 let t = std::time::Instant::now();
                 let workers = pool::workers(settings.threads)?;
                 ex.set_pool(workers.clone());
-                // Marching cubes writes the mesh in array order itself (no pass of its own);
-                // the other methods' meshes are turned below.
-                let array_order = settings.method == Method::Mc;
-                ex.set_array_order(array_order);
+                // Marching cubes and plain MT write the mesh in array order themselves
+                // (`Extractor::writes_array_order`); the other modes' meshes are turned below.
+                ex.set_array_order(true);
+                let array_order = ex.writes_array_order(&settings);
                 // In place when the storage is the volume's own (simple lattice), checked for
                 // non-finite values by the extractor's first pass; the body-centred lattice
                 // interleaves corner and centre planes: a copy, checked here on this thread

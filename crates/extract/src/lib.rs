@@ -134,7 +134,8 @@ pub struct Extractor {
     pub(crate) placement: ThreadPlacement,
     /// Edge collapse's candidates and outcomes, when recording ([`Extractor::collapse_log`]).
     pub(crate) collapse_log: Vec<CollapseAttempt>,
-    /// Marching cubes writes its mesh in array order ([`Extractor::set_array_order`]).
+    /// Marching cubes and plain MT write their meshes in array order
+    /// ([`Extractor::set_array_order`]).
     pub(crate) array_order: bool,
 }
 
@@ -354,14 +355,23 @@ impl Extractor {
         self.mt.record = record;
     }
 
-    /// Sets whether marching cubes ([`Method::Mc`]) writes its mesh in the array order of a
-    /// C-ordered `(z, y, x)` volume (see [`Extractor::extract_borrowed`]), as scikit-image's
-    /// `marching_cubes` returns it: every position and normal as `[z, y, x]` and every
-    /// triangle's last two corners swapped (swapping two axes mirrors the mesh; the swap keeps
-    /// triangles counter-clockwise seen from increasing values). Off by default. The positions
-    /// and triangles are written that way by the passes that write them, and normals are
-    /// computed as in world order, so the mesh is exactly the world-order one reordered, with
-    /// no pass of its own. Other methods ignore it: their meshes are in world order `(x, y, z)`.
+    /// Sets whether marching cubes ([`Method::Mc`]) and plain marching tetrahedra write their
+    /// meshes in the array order of a C-ordered `(z, y, x)` volume (see
+    /// [`Extractor::extract_borrowed`]), as scikit-image's `marching_cubes` returns it: every
+    /// position and normal as `[z, y, x]` and every triangle's last two corners swapped
+    /// (swapping two axes mirrors the mesh; the swap keeps triangles counter-clockwise seen from
+    /// increasing values). Off by default. Normals are computed as in world order, so the mesh
+    /// is exactly the world-order one reordered.
+    ///
+    /// - Marching cubes writes positions and triangles that way in the passes that write them:
+    ///   no pass of its own.
+    /// - Plain MT ([`Method::Mt`] with [`Clustering::None`], no tiles, the ghost boundary)
+    ///   writes its triangles swapped in the geometry pass and turns its positions in one
+    ///   parallel pass after it (the positions are read in world order while the triangles are
+    ///   made).
+    ///
+    /// Other methods and modes ignore it ([`Extractor::writes_array_order`] says which):
+    /// their meshes are in world order `(x, y, z)`.
     ///
     /// ```
     /// use rmt_extract::{Clustering, ExtractSettings, Extractor, Grid, Lattice, Method};
@@ -381,6 +391,27 @@ impl Extractor {
     /// ```
     pub fn set_array_order(&mut self, array_order: bool) {
         self.array_order = array_order;
+    }
+
+    /// Whether an extraction with `settings` writes its mesh in array order: the flag of
+    /// [`Extractor::set_array_order`] is on and the method honours it (marching cubes, or plain
+    /// MT without tiles on the ghost boundary).
+    pub fn writes_array_order(&self, settings: &ExtractSettings) -> bool {
+        self.array_order
+            && match settings.method {
+                settings::Method::Mc => true,
+                settings::Method::Mt => Self::plain_mt_in_array_order(settings),
+                settings::Method::SurfaceNets => false,
+            }
+    }
+
+    /// Plain MT that can write array order: no clustering or post-process, no tiles, and the
+    /// ghost boundary (the pyramids' pass writes in world order).
+    fn plain_mt_in_array_order(settings: &ExtractSettings) -> bool {
+        settings.method == settings::Method::Mt
+            && settings.clustering == Clustering::None
+            && settings.tiles.is_none()
+            && (settings.lattice == Lattice::Simple || settings.boundary == Boundary::Ghosts)
     }
 
     /// Recorded by the last extraction ([`Extractor::set_recording`]): the anchor cell of each
@@ -470,6 +501,7 @@ impl Extractor {
             settings::Method::Mt => {
                 // Marching tetrahedra (with its clustering), then the post-processing modes on
                 // its mesh.
+                self.mt.flip = self.array_order && Self::plain_mt_in_array_order(settings);
                 let emitted =
                     mt::extract(&self.samples, settings, &pool, &mut self.mt, mesh, stats)?;
                 let keys = settings.tiles.is_some().then_some(&emitted.tile_keys[..]);
@@ -483,6 +515,16 @@ impl Extractor {
                     stats,
                     log,
                 );
+                if self.mt.flip {
+                    // Array order: the triangles were written swapped; the positions, read in
+                    // world order while they were made, are turned now.
+                    use rayon::prelude::*;
+                    pool.install(|| {
+                        mesh.positions
+                            .par_chunks_mut(1 << 14)
+                            .for_each(|c| c.iter_mut().for_each(|p| *p = reversed(*p)))
+                    });
+                }
                 let lean = self.mt.lean;
                 stats.bytes_edges = emitted.table_bytes
                     + if !lean
@@ -503,7 +545,7 @@ impl Extractor {
             }
         }
         let t = std::time::Instant::now();
-        let array_order = self.array_order && settings.method == settings::Method::Mc;
+        let array_order = self.writes_array_order(settings);
         match (settings.normals, field) {
             (NormalMode::Skip, _) => mesh.normals.clear(),
             (NormalMode::Gradient, Some(f)) => gradient_normals(f, settings, array_order, mesh),

@@ -55,20 +55,26 @@ pub(crate) struct EmitIn<'a> {
     pub(crate) record: bool,
     /// With integrated clustering (checked or not), its output.
     pub(crate) clustered: Option<Clustered<'a>>,
+    /// Plain MT: write the triangles with their last two corners swapped (array order,
+    /// [`crate::Extractor::set_array_order`]).
+    pub(crate) flip: bool,
 }
 
 /// The geometry pass over the lattice, writing the final triangles into `mesh` (with
 /// `clustered`, the crossings' positions and output vertices, through the groups' vertex map,
 /// collapsed triangles dropped), only those of the cells `surface.keep`; with `cells`, each
-/// written triangle's anchor cell too (linear index over the grid's cells).
+/// written triangle's anchor cell too (linear index over the grid's cells); with `flip` (plain
+/// MT only), each triangle with its last two corners swapped.
 pub(crate) fn emit_layers(
     surface: &Surface,
     clustered: Option<Vertices>,
     mesh: &mut Mesh,
     mut cells: Option<&mut Vec<u32>>,
+    flip: bool,
     pool: &rayon::ThreadPool,
     stats: &mut Stats,
 ) {
+    debug_assert!(!flip || clustered.is_none(), "flip is plain MT's only");
     let propose = clustered.is_some();
     // Triangles of plain MT per layer, counted from the anchors' crossed edges, so that every
     // layer writes its triangles straight into its own slice of the output (with clustering,
@@ -107,6 +113,7 @@ pub(crate) fn emit_layers(
                     out,
                     list: None,
                     cells,
+                    flip,
                 };
                 geometry_layer(surface, k, vertices, out)
             })
@@ -148,6 +155,7 @@ pub(crate) fn emit(
         clustering,
         record,
         clustered,
+        flip,
     } = input;
     let keep = surface.keep;
     let listed = clustered.filter(|c| !c.plain.tris.is_empty());
@@ -227,7 +235,15 @@ pub(crate) fn emit(
             positions: c.cpos,
             map: Some(c.vertex_of),
         });
-        emit_layers(&surface, vertices, mesh, out, pool, stats);
+        emit_layers(
+            &surface,
+            vertices,
+            mesh,
+            out,
+            flip && vertices.is_none(),
+            pool,
+            stats,
+        );
         buf.tri_cells = cells;
     }
     let [nx, ny, nz] = surface.l.s.cells;
@@ -279,6 +295,7 @@ mod tests {
                     Some(vertices),
                     &mut walked,
                     None,
+                    false,
                     &pool,
                     &mut reference,
                 );

@@ -51,6 +51,10 @@ pub(crate) struct LayerOut<'s> {
     pub(crate) out: &'s mut [u32],
     pub(crate) list: Option<ListOut<'s>>,
     pub(crate) cells: Option<&'s mut [u32]>,
+    /// Plain MT only (no vertex map, no listing): write each triangle with its last two
+    /// corners swapped, the winding of the mesh in array order
+    /// ([`crate::Extractor::set_array_order`]).
+    pub(crate) flip: bool,
 }
 
 /// Calls `visit(anchor, rank, group, p)` for each body-centred face (group: its axis) or cube
@@ -218,7 +222,11 @@ pub(crate) fn geometry_layer(
                 r += 1;
             });
         }
-        geometry_in_window(surface, k, vertices, &window[..], z0, out)
+        if out.flip {
+            geometry_in_window::<true>(surface, k, vertices, &window[..], z0, out)
+        } else {
+            geometry_in_window::<false>(surface, k, vertices, &window[..], z0, out)
+        }
     })
 }
 
@@ -244,7 +252,7 @@ pub(crate) struct ListOut<'s> {
 /// `out.cells`, each triangle written gets its anchor cell there (linear index, x fastest).
 /// Returns the tetrahedra with a triangle (when listing in a chunk, those of kept cells) and
 /// the triangles written.
-pub(crate) fn geometry_in_window(
+pub(crate) fn geometry_in_window<const FLIP: bool>(
     surface: &Surface,
     k: usize,
     vertices: Vertices,
@@ -263,7 +271,13 @@ pub(crate) fn geometry_in_window(
         out,
         mut list,
         mut cells,
+        flip,
     } = out;
+    debug_assert_eq!(flip, FLIP);
+    debug_assert!(
+        !FLIP || (map.is_none() && list.is_none()),
+        "flip is plain MT's only"
+    );
     let v = &l.s.values;
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
@@ -341,7 +355,11 @@ pub(crate) fn geometry_in_window(
                 let e = cycle.edges.map(usize::from);
                 let q = [ids[e[0]], ids[e[1]], ids[e[2]], 0];
                 let n = if cycle.edges[3] == u8::MAX {
-                    out[at..at + 3].copy_from_slice(&q[..3]);
+                    if FLIP {
+                        out[at..at + 3].copy_from_slice(&[q[0], q[2], q[1]]);
+                    } else {
+                        out[at..at + 3].copy_from_slice(&q[..3]);
+                    }
                     1
                 } else {
                     let q = [q[0], q[1], q[2], ids[e[3]]];
@@ -352,14 +370,25 @@ pub(crate) fn geometry_in_window(
                     let short02 =
                         p(q[0]).distance_squared(p(q[2])) <= p(q[1]).distance_squared(p(q[3]));
                     let r = usize::from(!short02);
-                    out[at..at + 6].copy_from_slice(&[
-                        q[r],
-                        q[r + 1],
-                        q[r + 2],
-                        q[r],
-                        q[r + 2],
-                        q[(r + 3) & 3],
-                    ]);
+                    if FLIP {
+                        out[at..at + 6].copy_from_slice(&[
+                            q[r],
+                            q[r + 2],
+                            q[r + 1],
+                            q[r],
+                            q[(r + 3) & 3],
+                            q[r + 2],
+                        ]);
+                    } else {
+                        out[at..at + 6].copy_from_slice(&[
+                            q[r],
+                            q[r + 1],
+                            q[r + 2],
+                            q[r],
+                            q[r + 2],
+                            q[(r + 3) & 3],
+                        ]);
+                    }
                     2
                 };
                 if !plain {

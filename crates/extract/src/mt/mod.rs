@@ -64,6 +64,9 @@ pub(crate) struct MtBuffers {
     pub(crate) record: bool,
     /// [`crate::BufferPolicy::Lean`]: free every table when its last reader is done.
     pub(crate) lean: bool,
+    /// Plain MT writes its triangles with their last two corners swapped, for a mesh in array
+    /// order ([`crate::Extractor::set_array_order`]; the positions are turned after).
+    pub(crate) flip: bool,
     /// The layout's border table of the last extraction.
     border: BorderCache,
 }
@@ -164,6 +167,7 @@ pub(crate) fn extract(
         clustering,
         record: buf.record,
         clustered,
+        flip: buf.flip,
     };
     emit(input, &mut buf.emission, mesh, pool, stats);
     if layout.lattice == Lattice::BodyCentred && samples.boundary == Boundary::Pyramids {

@@ -122,6 +122,7 @@ pub(crate) fn plain_triangles(
                     out,
                     list: Some(list),
                     cells,
+                    flip: false,
                 };
                 geometry_layer(&walk, k, vertices, out).0
             })
