@@ -233,6 +233,7 @@ pub fn run_lod_session<F: ScalarField + Copy>(
     let geom = settings.geometry;
     let frame = settings.frame;
     let mut world = LodWorld::new(field, settings).context("building the multiresolution world")?;
+    world.set_tet_cache_bytes(plan.tet_cache_mb.saturating_mul(1 << 20));
     let path = viewer_path(e, plan);
     let mut steps = Vec::with_capacity(path.len());
     for (k, &viewer) in path.iter().enumerate() {
@@ -722,6 +723,7 @@ mod tests {
             validate_every: 1,
             validate_max_chunks: 4096,
             finest_exact_chunks: 4096,
+            tet_cache_mb: 1024,
         }
     }
 

@@ -80,6 +80,8 @@
 //! validate_max_chunks = 4096   # skip a check whose region has more chunks than this
 //! finest_exact_chunks = 4096   # count the finest level's triangles exactly up to this many
 //!                           # finest chunks, else estimate them from the world's levels
+//! tet_cache_mb = 1024       # keep chunk tetrahedra by surroundings up to this many MiB
+//!                           # (rmt_terrain::lod::TetCache; 0 keeps none; meshes unchanged)
 //! ```
 //!
 //! **Naming rule** (reproduces the dissertation's ids): object code, `_`, lattice letter (`b`
@@ -465,6 +467,9 @@ pub struct LodEntry {
     /// Count the finest level's triangles exactly up to this many finest chunks.
     #[serde(default)]
     pub finest_exact_chunks: Option<usize>,
+    /// The chunk-tets cache's budget, MiB.
+    #[serde(default)]
+    pub tet_cache_mb: Option<usize>,
 }
 
 /// The checked `lod` workload of a plan.
@@ -487,6 +492,9 @@ pub struct LodPlan {
     pub validate_max_chunks: usize,
     /// Exact finest-level count up to this many finest chunks (default 4096).
     pub finest_exact_chunks: usize,
+    /// The world's chunk-tets cache budget, MiB (default 1024; 0 keeps none). The meshes do
+    /// not depend on it.
+    pub tet_cache_mb: usize,
 }
 
 /// `[matrix]`: objects x methods x lattices x clustering.

@@ -29,6 +29,9 @@ use crate::config::{self, Extraction};
 use crate::extract_args::{self, Args};
 use crate::objects::{ObjectError, ObjectKind};
 
+/// The chunk-tets cache of one studio LOD session (at most four live at once).
+const STUDIO_TET_CACHE_BYTES: usize = 256 << 20;
+
 /// `extract` options the page may set (object parameters come from [`ObjectKind::accepted`]).
 pub const PAGE_OPTIONS: [&str; 9] = [
     "resolution",
@@ -519,6 +522,7 @@ impl Backend for StudioBackend {
             validate_every: 0,
             validate_max_chunks: 0,
             finest_exact_chunks: 0,
+            tet_cache_mb: STUDIO_TET_CACHE_BYTES >> 20,
         };
         let settings = crate::lod::lod_settings(&e, &plan, self.threads)
             .map_err(|err| invalid(format!("{err:#}")))?;
@@ -527,8 +531,10 @@ impl Backend for StudioBackend {
             .object
             .build_for_spacing(&e.bounds, Some(spacing), &[])
             .map_err(|err| invalid(format!("building object {}: {err}", e.object.kind)))?;
-        let world = rmt_terrain::lod::LodWorld::new(field, settings)
+        let mut world = rmt_terrain::lod::LodWorld::new(field, settings)
             .map_err(|err| invalid(err.to_string()))?;
+        // Up to four sessions live at once: a quarter of the runner's budget each.
+        world.set_tet_cache_bytes(STUDIO_TET_CACHE_BYTES);
         let (min, max) = (e.bounds.min, e.bounds.max);
         let centre = (min + max) * 0.5;
         // At the top of the box, a quarter of the way in from its near corner.

@@ -168,8 +168,9 @@ fn levels_and_the_last_map_add_up_to_the_steps() {
     assert!(files[0] == files[1], "1 and 2 threads differ");
 }
 
-/// The same flight on 1 and 2 threads gives the same `lod.csv` outside the time and memory
-/// columns (the world's bytes depend on its hash tables' history, like a time on the machine).
+/// The same flight on 1 and 2 threads, and without the chunk-tets cache, gives the same
+/// `lod.csv` outside the time and memory columns (the world's bytes depend on its hash tables'
+/// history, like a time on the machine).
 #[test]
 fn a_flight_is_deterministic_outside_times() {
     let dir = tempfile::tempdir().unwrap();
@@ -178,12 +179,21 @@ fn a_flight_is_deterministic_outside_times() {
         "lod.toml",
         &WORLD.replace("threads = 2", "threads = 1"),
     );
+    let uncached = write(
+        dir.path(),
+        "uncached.toml",
+        &format!("{WORLD}tet_cache_mb = 0\n"),
+    );
     let opts = RunOptions {
         quiet: true,
         stop_after: None,
     };
     let mut tables = Vec::new();
-    for (name, threads) in [("a", 1), ("b", 2)] {
+    for (name, threads, manifest) in [
+        ("a", 1, &manifest),
+        ("b", 2, &manifest),
+        ("c", 2, &uncached),
+    ] {
         let folder = dir.path().join(name);
         let overrides = Overrides {
             threads: Some(threads),
@@ -202,6 +212,10 @@ fn a_flight_is_deterministic_outside_times() {
         );
     }
     assert_eq!(tables[0], tables[1], "1 and 2 threads differ");
+    assert_eq!(
+        tables[1], tables[2],
+        "with and without the tets cache differ"
+    );
 }
 
 #[test]
@@ -242,4 +256,6 @@ fn the_lod_workload_refuses_what_it_cannot_mesh() {
         &WORLD.replace("lattices = [\"bcdl\"]", "lattices = [\"simple\"]"),
     );
     assert!(simple.contains("bcdl"), "{simple}");
+    let cache = err("cache.toml", &format!("{WORLD}tet_cache_mb = 2000000\n"));
+    assert!(cache.contains("lod.tet_cache_mb"), "{cache}");
 }

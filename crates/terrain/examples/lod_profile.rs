@@ -6,6 +6,11 @@
 //! `cargo run --release -p rmt-terrain --example lod_profile -- [STEPS] [FIRST] [SAMPLE]`:
 //! STEPS viewer steps of the 400-step path (default 12) from step FIRST (default 1); at most
 //! SAMPLE chunks of each path are timed per step (default 8; 0 times them all).
+//!
+//! `... --example lod_profile -- world STEPS THREADS CACHE_MB`: the world itself flown over the
+//! first STEPS steps on THREADS threads with a chunk-tets cache of CACHE_MB MiB
+//! (`LodWorld::set_tet_cache_bytes`): per step the re-mesh time and the cache's hits and
+//! misses, then the median and the slowest step after step 0.
 
 use std::time::Instant;
 
@@ -13,13 +18,16 @@ use glam::Vec3;
 use rmt_fields::{CaveParams, CaveTerrain, ScalarField};
 use rmt_terrain::lod::mesh::{chunk_tets, is_fast_path, needs_remesh};
 use rmt_terrain::lod::mt::mesh_chunk;
-use rmt_terrain::lod::{march, LevelMap, LodFrame, LodGeometry};
+use rmt_terrain::lod::{march, LevelMap, LodFrame, LodGeometry, LodSettings, LodWorld};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let arg = |i: usize, d: usize| -> anyhow::Result<usize> {
         Ok(args.get(i).map(|a| a.parse()).transpose()?.unwrap_or(d))
     };
+    if args.get(1).map(String::as_str) == Some("world") {
+        return fly(arg(2, 40)?, arg(3, 2)?, arg(4, 1024)?);
+    }
     let (steps, first, sample) = (arg(1, 12)?, arg(2, 1)?, arg(3, 8)?);
     let g = LodGeometry::new(4, 16, [16, 1, 16])?;
     let frame = LodFrame {
@@ -80,6 +88,49 @@ fn main() -> anyhow::Result<()> {
         }
         println!("{row}");
         old = new;
+    }
+    Ok(())
+}
+
+/// The world flown over `steps` steps of the path (see the module doc).
+fn fly(steps: usize, threads: usize, cache_mb: usize) -> anyhow::Result<()> {
+    let g = LodGeometry::new(4, 16, [16, 1, 16])?;
+    let frame = LodFrame {
+        origin: Vec3::new(-64.0, -4.0, -64.0),
+        h: 1.0 / 32.0,
+    };
+    let settings = LodSettings {
+        geometry: g,
+        frame,
+        ratio: 1.5,
+        threads,
+    };
+    let mut world = LodWorld::new(CaveTerrain::new(CaveParams::default()), settings)?;
+    world.set_tet_cache_bytes(cache_mb << 20);
+    let (a, b) = (Vec3::new(-20.0, 1.0, -20.0), Vec3::new(20.0, 1.0, 20.0));
+    let mut times = Vec::new();
+    println!("step remeshed ms hits misses entries MiB");
+    for k in 0..=steps {
+        world.set_viewer(a.lerp(b, k as f32 / 400.0));
+        let t = Instant::now();
+        let r = world.remesh()?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let s = world.tet_cache_stats();
+        println!(
+            "{k:4} {:5} {ms:9.1} {:7} {:7} {:6} {:7.1}",
+            r.remeshed.len(),
+            s.hits,
+            s.misses,
+            s.entries,
+            s.bytes as f64 / (1 << 20) as f64
+        );
+        if k > 0 {
+            times.push(ms);
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    if let (Some(mid), Some(max)) = (times.get(times.len() / 2), times.last()) {
+        println!("steps 1-{steps}: median {mid:.1} ms, slowest {max:.1} ms");
     }
     Ok(())
 }

@@ -291,6 +291,9 @@ fn incremental_remesh_equals_from_scratch() {
     }
     assert!(kept > 0, "no step kept a chunk");
     assert!(remeshed > 0);
+    // The world took some chunks' tets from its cache (the fresh meshing builds them all).
+    let c = world.tet_cache_stats();
+    assert!(c.hits > 0 && c.entries > 0, "{c:?}");
 }
 
 /// The surfaces of a level change meet: every crossing on the seam is one vertex with one

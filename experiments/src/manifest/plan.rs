@@ -630,7 +630,14 @@ fn plan_lod(
         validate_every: e.validate_every.unwrap_or(1),
         validate_max_chunks: e.validate_max_chunks.unwrap_or(4096),
         finest_exact_chunks: e.finest_exact_chunks.unwrap_or(4096),
+        tet_cache_mb: e.tet_cache_mb.unwrap_or(1024),
     };
+    if plan.tet_cache_mb > 1 << 20 {
+        return Err(invalid.at(
+            "lod.tet_cache_mb",
+            format!("must be at most 1048576 (1 TiB), got {}", plan.tet_cache_mb),
+        ));
+    }
     if plan.levels > 12 {
         return Err(invalid.at(
             "lod.levels",

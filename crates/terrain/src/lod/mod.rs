@@ -11,6 +11,8 @@
 //!   chunk tets (mesh.rs)      no finer neighbour: the lattice's tets it owns (fast path);
 //!                             else a window's forest + closure, keeping the tets it owns
 //!        |
+//!   tet cache (tet_cache.rs)  the same tets for the same surroundings, moved: built once
+//!        |
 //!   march (mt.rs)             marching tetrahedra, crossings keyed by their edge's lattice points
 //!        |
 //!   LodWorld (world.rs)       viewer moves -> new map -> re-mesh the chunks whose level or
@@ -36,6 +38,7 @@ pub mod level_map;
 pub mod mesh;
 pub mod mt;
 pub mod refine;
+pub mod tet_cache;
 pub mod world;
 
 pub use edits::{EditedField, Overlay, Stroke};
@@ -44,4 +47,5 @@ pub use level_map::{ChunkKey, LevelMap, LodGeometry};
 pub use mesh::{chunk_tets, world_tets, MeshTet};
 pub use mt::{march, weld, ChunkMesh, LodFrame};
 pub use refine::TetKind;
+pub use tet_cache::{TetCache, TetCacheStats, DEFAULT_TET_CACHE_BYTES};
 pub use world::{mesh_chunks, mesh_whole, thread_pool, LodRemesh, LodSettings, LodWorld};

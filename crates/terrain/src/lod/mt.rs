@@ -33,6 +33,7 @@ use super::error::LodError;
 use super::lattice::{cell_size, Point};
 use super::level_map::{ChunkKey, LevelMap};
 use super::mesh::{chunk_tets, MeshTet};
+use super::tet_cache::TetCache;
 
 /// Where the lattice sits in the world: lattice point `p` (in `u`) is at `origin + p h / 2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -325,6 +326,18 @@ pub fn mesh_chunk(
     field: &dyn ScalarField,
     frame: &LodFrame,
 ) -> Result<ChunkMesh, LodError> {
+    mesh_chunk_with(map, chunk, field, frame, None)
+}
+
+/// [`mesh_chunk`], taking the tets from `cache` when one is given (the same tets, so the
+/// same surface).
+pub fn mesh_chunk_with(
+    map: &LevelMap,
+    chunk: &ChunkKey,
+    field: &dyn ScalarField,
+    frame: &LodFrame,
+    cache: Option<&TetCache>,
+) -> Result<ChunkMesh, LodError> {
     let (lo, hi) = chunk.bounds(map.geometry());
     let s = cell_size(chunk.level);
     let corner = |v: [i64; 3]| -> Option<Point> {
@@ -338,7 +351,11 @@ pub fn mesh_chunk(
             }
         }
     }
-    Ok(march(&chunk_tets(map, chunk)?, field, frame))
+    let tets = match cache {
+        Some(c) => c.chunk_tets(map, chunk)?,
+        None => chunk_tets(map, chunk)?,
+    };
+    Ok(march(&tets, field, frame))
 }
 
 /// Welds chunk meshes (in the given order) into one mesh by crossing key: vertices in order

@@ -30,7 +30,8 @@ use super::error::LodError;
 use super::lattice::Point;
 use super::level_map::{ChunkKey, LevelMap, LodGeometry};
 use super::mesh::{needs_remesh, world_tets, MeshTet};
-use super::mt::{march, mesh_chunk, weld, ChunkMesh, LodFrame};
+use super::mt::{march, mesh_chunk_with, weld, ChunkMesh, LodFrame};
+use super::tet_cache::{TetCache, TetCacheStats, DEFAULT_TET_CACHE_BYTES};
 
 /// What a multiresolution world is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,6 +75,8 @@ pub struct LodWorld<F: ScalarField> {
     edits: Overlay,
     /// Chunks of the current map an edit marked for the next remesh.
     edited: std::collections::HashSet<ChunkKey>,
+    /// Chunk tets by surroundings ([`TetCache`]).
+    tets: TetCache,
 }
 
 /// Meshes every chunk of `map` on `pool`, in map order.
@@ -83,7 +86,7 @@ pub fn mesh_chunks(
     frame: &LodFrame,
     pool: &rayon::ThreadPool,
 ) -> Result<Vec<ChunkMesh>, LodError> {
-    mesh_some(map, map.chunks(), field, frame, pool)
+    mesh_some(map, map.chunks(), field, frame, pool, None)
 }
 
 fn mesh_some(
@@ -92,10 +95,11 @@ fn mesh_some(
     field: &dyn ScalarField,
     frame: &LodFrame,
     pool: &rayon::ThreadPool,
+    cache: Option<&TetCache>,
 ) -> Result<Vec<ChunkMesh>, LodError> {
     pool.install(|| {
         keys.par_iter()
-            .map(|k| mesh_chunk(map, k, field, frame))
+            .map(|k| mesh_chunk_with(map, k, field, frame, cache))
             .collect()
     })
 }
@@ -151,7 +155,20 @@ impl<F: ScalarField> LodWorld<F> {
             meshes: HashMap::new(),
             edits: Overlay::new(settings.frame),
             edited: Default::default(),
+            tets: TetCache::new(DEFAULT_TET_CACHE_BYTES),
         })
+    }
+
+    /// Keeps at most `bytes` of chunk tets by surroundings ([`TetCache`]; 0 keeps none,
+    /// [`DEFAULT_TET_CACHE_BYTES`] by default). The surfaces do not depend on it; it forgets
+    /// what it held.
+    pub fn set_tet_cache_bytes(&mut self, bytes: usize) {
+        self.tets = TetCache::new(bytes);
+    }
+
+    /// What the chunk-tets cache holds and did.
+    pub fn tet_cache_stats(&self) -> TetCacheStats {
+        self.tets.stats()
     }
 
     /// Moves the viewer (world coordinates); the new level map takes effect at the next
@@ -191,7 +208,14 @@ impl<F: ScalarField> LodWorld<F> {
             })
             .collect();
         let field = EditedField::new(&self.field, &self.edits);
-        let meshes = mesh_some(new, &stale, &field, &self.settings.frame, &self.pool)?;
+        let meshes = mesh_some(
+            new,
+            &stale,
+            &field,
+            &self.settings.frame,
+            &self.pool,
+            Some(&self.tets),
+        )?;
         self.edited.clear();
         let mut dropped: Vec<ChunkKey> = self
             .meshes
