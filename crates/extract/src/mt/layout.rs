@@ -168,6 +168,9 @@ pub(crate) struct TetGroup {
     /// tetrahedron, the order [`case_triangles_of`] asks for them), each once: the geometry
     /// pass finds the crossing on each crossed one once per group, not once per triangle corner.
     pub(crate) edges: Vec<GroupEdge>,
+    /// Per edge of `edges`, the storage deltas of its ends from the anchor (`points[from]`,
+    /// `points[to]`): the geometry pass reads the ends' entries without going through `points`.
+    pub(crate) edge_deltas: [[isize; 2]; MAX_GROUP_EDGES],
     /// Per index (as in `triangles`): the edges of `edges` that the group's cycles name (bit k:
     /// edge k), all crossed.
     pub(crate) crossed_edges: Vec<u64>,
@@ -223,6 +226,7 @@ impl TetGroup {
             cases: Vec::new(),
             code_parts: [[0; 128]; 2],
             edges: Vec::new(),
+            edge_deltas: [[0; 2]; MAX_GROUP_EDGES],
             crossed_edges: Vec::new(),
             cycle_start: Vec::new(),
             cycles: Vec::new(),
@@ -286,6 +290,9 @@ impl TetGroup {
             group.edges.len() <= MAX_GROUP_EDGES,
             "a group's edges fit the geometry pass's array"
         );
+        for (deltas, e) in group.edge_deltas.iter_mut().zip(&group.edges) {
+            *deltas = [e.from, e.to].map(|i| group.points[usize::from(i)]);
+        }
         for code in 0..1usize << group.len {
             let mut crossed = 0u64;
             for flip in [0, 15] {
@@ -937,6 +944,12 @@ mod tests {
                     Lattice::Simple => &l.tets[..],
                 };
                 assert!(group.edges.len() <= MAX_GROUP_EDGES, "{lattice:?}");
+                // The geometry pass reads each edge's ends by these deltas.
+                for (k, e) in group.edges.iter().enumerate() {
+                    let ends = [e.from, e.to].map(|i| group.points[usize::from(i)]);
+                    assert_eq!(group.edge_deltas[k], ends, "{lattice:?} group {g} edge {k}");
+                    assert_ne!(ends[0], ends[1], "{lattice:?} group {g} edge {k}");
+                }
                 let point = |d: isize| group.points[..group.len].iter().position(|&p| p == d);
                 for code in 0..1usize << group.len {
                     let mut named = 0u64;
