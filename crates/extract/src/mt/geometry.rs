@@ -18,12 +18,12 @@
 //! naming group edges). Plain MT writes each id straight into place, in its own instance of
 //! the walk (`PLAIN`: no vertex map, listing or cells, so none of their flags is tested per
 //! anchor), and each edge's ends are read by their deltas from the anchor
-//! (`TetGroup::edge_deltas`).
+//! (`TetGroup::edge_reads`).
 
 use rayon::prelude::*;
 
 use super::crossings::{CrossedIndex, CrossedPoint};
-use super::layout::{case_triangles_of, split_quad, Layout, MAX_GROUP_EDGES};
+use super::layout::{case_triangles_of, split_quad, Layout, EDGE_SLOTS};
 use crate::lattice::Offset;
 use crate::util::for_each_bit;
 use crate::{Boundary, CellRange, Lattice};
@@ -317,26 +317,27 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
         // The crossing on each crossed edge of the group, once: the end whose owned bit the
         // vertex pass set (it decided that from the same two values the case would read), as
         // `case_triangles_of` would ask for it, edge (a, b) of a tetrahedron with a < b.
-        let mut ids = [0u32; MAX_GROUP_EDGES];
+        // Indexed by edge masked to 5 bits (`EDGE_SLOTS`): no bounds checks.
+        let mut ids = [0u32; EDGE_SLOTS];
         let mut todo = group.crossed_edges[code];
         while todo != 0 {
-            let e = todo.trailing_zeros() as usize;
+            let e = todo.trailing_zeros() as usize & (EDGE_SLOTS - 1);
             todo &= todo - 1;
-            let edge = group.edges[e];
-            let [from, to] = group.edge_deltas[e];
-            let a = window[(at as isize + from) as usize];
+            let read = group.edge_reads[e];
+            let a = window[(at as isize + read.deltas[0]) as usize];
             debug_assert_eq!(
                 a,
-                crossed.get((anchor as isize + group.points[usize::from(edge.from)]) as usize)
+                crossed.get((anchor as isize + read.deltas[0]) as usize),
+                "edge {e}"
             );
-            debug_assert_ne!(a.crossed >> edge.dir[0] & 1, 0, "edge {edge:?} not crossed");
+            debug_assert_ne!(a.crossed >> read.dir[0] & 1, 0, "edge {e} not crossed");
             // Both ends read, then one picked: which end owns the crossing is data, and a
             // branch on it mispredicts about half the time.
-            let b = window[(at as isize + to) as usize];
-            let (owner, d) = if a.owned >> edge.dir[0] & 1 != 0 {
-                (a, edge.dir[0])
+            let b = window[(at as isize + read.deltas[1]) as usize];
+            let (owner, d) = if a.owned >> read.dir[0] & 1 != 0 {
+                (a, read.dir[0])
             } else {
-                (b, edge.dir[1])
+                (b, read.dir[1])
             };
             ids[e] = owner.id(d);
         }
@@ -366,7 +367,7 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
             // position in a register; the listing's gradient, flags and cells beside them.
             let mut at = w;
             for cycle in &group.cycles[range] {
-                let e = cycle.edges.map(usize::from);
+                let e = cycle.edges.map(|e| usize::from(e) & (EDGE_SLOTS - 1));
                 let q = [ids[e[0]], ids[e[1]], ids[e[2]], 0];
                 let n = if cycle.edges[3] == u8::MAX {
                     if FLIP {

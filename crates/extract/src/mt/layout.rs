@@ -168,9 +168,11 @@ pub(crate) struct TetGroup {
     /// tetrahedron, the order [`case_triangles_of`] asks for them), each once: the geometry
     /// pass finds the crossing on each crossed one once per group, not once per triangle corner.
     pub(crate) edges: Vec<GroupEdge>,
-    /// Per edge of `edges`, the storage deltas of its ends from the anchor (`points[from]`,
-    /// `points[to]`): the geometry pass reads the ends' entries without going through `points`.
-    pub(crate) edge_deltas: [[isize; 2]; MAX_GROUP_EDGES],
+    /// Per edge of `edges` (entry k; the entries past the edges unused), what the geometry
+    /// pass reads to find its crossing: its ends' storage deltas from the anchor and the
+    /// neighbour index of each end seen from the other. [`EDGE_SLOTS`] entries, so that an edge
+    /// index masked to its low 5 bits needs no bounds check.
+    pub(crate) edge_reads: [EdgeRead; EDGE_SLOTS],
     /// Per index (as in `triangles`): the edges of `edges` that the group's cycles name (bit k:
     /// edge k), all crossed.
     pub(crate) crossed_edges: Vec<u64>,
@@ -186,6 +188,19 @@ pub(crate) struct TetGroup {
 /// diagonals and the main diagonal; each named in one direction only), a body-centred face's 4
 /// have 13.
 pub(crate) const MAX_GROUP_EDGES: usize = 19;
+
+/// Entries of [`TetGroup::edge_reads`] and of the geometry pass's crossing ids per group: a
+/// power of two above [`MAX_GROUP_EDGES`], indexed by an edge index masked with
+/// `EDGE_SLOTS - 1`.
+pub(crate) const EDGE_SLOTS: usize = 32;
+
+/// An edge of a [`TetGroup`] as the geometry pass reads it: the storage deltas of its ends
+/// (`from`, `to`) from the anchor, and the neighbour index of each end seen from the other.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct EdgeRead {
+    pub(crate) deltas: [isize; 2],
+    pub(crate) dir: [u8; 2],
+}
 
 /// An edge of a [`TetGroup`]: from point `from` to point `to` (indices into the group's
 /// points), with the neighbour index of each end seen from the other.
@@ -226,7 +241,7 @@ impl TetGroup {
             cases: Vec::new(),
             code_parts: [[0; 128]; 2],
             edges: Vec::new(),
-            edge_deltas: [[0; 2]; MAX_GROUP_EDGES],
+            edge_reads: [EdgeRead::default(); EDGE_SLOTS],
             crossed_edges: Vec::new(),
             cycle_start: Vec::new(),
             cycles: Vec::new(),
@@ -290,8 +305,11 @@ impl TetGroup {
             group.edges.len() <= MAX_GROUP_EDGES,
             "a group's edges fit the geometry pass's array"
         );
-        for (deltas, e) in group.edge_deltas.iter_mut().zip(&group.edges) {
-            *deltas = [e.from, e.to].map(|i| group.points[usize::from(i)]);
+        for (read, e) in group.edge_reads.iter_mut().zip(&group.edges) {
+            *read = EdgeRead {
+                deltas: [e.from, e.to].map(|i| group.points[usize::from(i)]),
+                dir: e.dir,
+            };
         }
         for code in 0..1usize << group.len {
             let mut crossed = 0u64;
@@ -969,7 +987,11 @@ mod tests {
                 // The geometry pass reads each edge's ends by these deltas.
                 for (k, e) in group.edges.iter().enumerate() {
                     let ends = [e.from, e.to].map(|i| group.points[usize::from(i)]);
-                    assert_eq!(group.edge_deltas[k], ends, "{lattice:?} group {g} edge {k}");
+                    let read = EdgeRead {
+                        deltas: ends,
+                        dir: e.dir,
+                    };
+                    assert_eq!(group.edge_reads[k], read, "{lattice:?} group {g} edge {k}");
                     assert_ne!(ends[0], ends[1], "{lattice:?} group {g} edge {k}");
                 }
                 let point = |d: isize| group.points[..group.len].iter().position(|&p| p == d);
