@@ -281,21 +281,28 @@ fn bits_from(words: &[u64], pos: usize) -> u64 {
 }
 
 /// The inside bits of 64 values (bit k set when `values[k] < iso`), as
-/// [`crate::util::inside_word`] gives them: four values per comparison and mask on x86-64 (an
-/// ordered less-than: NaN is outside, as with `<`).
+/// [`crate::util::inside_word`] gives them: on x86-64 four values per comparison (an ordered
+/// less-than: NaN is outside, as with `<`), the masks of 16 values packed to bytes (all ones
+/// or zero, which the signed saturating packs keep) and read with one byte mask.
 #[inline]
 fn inside_word64(values: &[f32; 64], iso: f32) -> u64 {
     #[cfg(target_arch = "x86_64")]
     {
-        use std::arch::x86_64::{_mm_cmplt_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps};
+        use std::arch::x86_64::{
+            _mm_castps_si128, _mm_cmplt_ps, _mm_loadu_ps, _mm_movemask_epi8, _mm_packs_epi16,
+            _mm_packs_epi32, _mm_set1_ps,
+        };
         let mut word = 0u64;
-        // SAFETY: SSE2 is in the x86-64 baseline; each load reads the 4 values of its chunk
+        // SAFETY: SSE2 is in the x86-64 baseline; each load reads 4 values of its chunk of 16
         // (unaligned).
         unsafe {
             let t = _mm_set1_ps(iso);
-            for (i, four) in values.as_chunks::<4>().0.iter().enumerate() {
-                let mask = _mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(four.as_ptr()), t)) as u64;
-                word |= mask << (4 * i);
+            for (i, sixteen) in values.as_chunks::<16>().0.iter().enumerate() {
+                let p = sixteen.as_ptr();
+                let m = |k: usize| _mm_castps_si128(_mm_cmplt_ps(_mm_loadu_ps(p.add(4 * k)), t));
+                let bytes =
+                    _mm_packs_epi16(_mm_packs_epi32(m(0), m(1)), _mm_packs_epi32(m(2), m(3)));
+                word |= u64::from(_mm_movemask_epi8(bytes) as u16) << (16 * i);
             }
         }
         word
