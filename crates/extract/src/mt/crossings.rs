@@ -361,20 +361,22 @@ fn place(
     iso: f32,
     positions: &mut Vec<[f32; 3]>,
 ) -> usize {
-    let v = &l.s.values;
+    let v = &l.s.values[..];
     let f = v[i];
     let delta = &l.delta[(p[0] & 1) as usize];
-    let pp = l.position(p);
+    let offsets = &l.t.offsets;
+    let at = l.positions();
+    let pp = at.at(p);
     let mut near = 0;
     let mut bits = own;
     while bits != 0 {
         let d = bits.trailing_zeros() as usize;
         bits &= bits - 1;
-        let q = add(p, l.t.offsets[d]);
+        let q = add(p, offsets[d]);
         let g = v[(i as isize + delta[d]) as usize];
         let t = (iso - f) / (g - f);
         near += usize::from(t < WELD);
-        positions.push(pp.lerp(l.position(q), t).to_array());
+        positions.push(pp.lerp(at.at(q), t).to_array());
     }
     near
 }

@@ -392,6 +392,22 @@ pub(crate) struct Layout<'a> {
     coords: [Vec<f32>; 3],
 }
 
+/// [`Layout::position`] from borrowed tables ([`Layout::positions`]).
+#[derive(Clone, Copy)]
+pub(crate) struct Positions<'a> {
+    coords: [&'a [f32]; 3],
+    min: glam::Vec3,
+}
+
+impl Positions<'_> {
+    /// World position of lattice point `p`, bit for bit [`Layout::position`].
+    #[inline(always)]
+    pub(crate) fn at(&self, p: Offset) -> glam::Vec3 {
+        let c = |a: usize| self.coords[a][(p[a] + COORD_PAD) as usize];
+        self.min + glam::Vec3::new(c(0), c(1), c(2))
+    }
+}
+
 /// Lattice coordinates below 0 that [`Layout::coords`] covers.
 const COORD_PAD: i32 = 2;
 
@@ -752,6 +768,20 @@ impl<'a> Layout<'a> {
             self.coords[a][i]
         };
         self.s.min + glam::Vec3::new(c(0), c(1), c(2))
+    }
+
+    /// [`Layout::position`]'s tables, to be held in locals by a loop that also writes memory
+    /// (which would otherwise reload them from the layout after every store).
+    #[inline]
+    pub(crate) fn positions(&self) -> Positions<'_> {
+        Positions {
+            coords: [
+                &self.coords[0][..],
+                &self.coords[1][..],
+                &self.coords[2][..],
+            ],
+            min: self.s.min,
+        }
     }
 
     /// The storage planes geometry layer `k` reads (inclusive): body-centred faces perpendicular
