@@ -9,9 +9,9 @@
 //! per slot, a rank per 64 slots, and per crossed point its 14 owned-crossing bits and the id of
 //! its first owned crossing), so `id(C, d) = first(C) + popcount(owned(C) & ((1 << d) - 1))`
 //! with no table per slot beyond those bits. The crossed edges of 64 points at a time come from
-//! the inside bits (one word operation per neighbour, every row of storage, with a checked read
-//! where a neighbour slot lies outside it); only the far ends of crossed edges are read, to
-//! decide the owner. With clustering, the pass also proposes clusters
+//! the inside bits (one word operation per neighbour, with a checked read where a neighbour
+//! slot lies outside storage); only the far ends of crossed edges are read, to decide the
+//! owner. With clustering, the pass also proposes clusters
 //! ([`crate::mt::clustering::proposal`]).
 //!
 //! ```text
@@ -21,13 +21,29 @@
 //!      |
 //!      S3 (out, nearer T than C)
 //! ```
+//!
+//! The steps, as Flying Edges orders its passes (classify, count, prefix-sum, write in place),
+//! each parallel over storage planes:
+//!
+//! ```text
+//!   0   inside bits, 64 values per word (SIMD compares)
+//!   1a  the sides of every storage row: some slot inside, some outside
+//!   1b  per plane, one walk over its rows:
+//!         a row whose slots and whose points' neighbour slots (the rows they fall in) all
+//!         lie on one side is trimmed away: no crossed edge starts in it;
+//!         otherwise its crossed points 64 at a time, and per crossed point in one visit:
+//!         owned crossings, entry (ids from the plane's first crossing), the positions of
+//!         its crossings, the triangles of the groups it anchors -> the plane's own buffers
+//!   2   the planes' counts prefix-summed (crossings, crossed points): the rank directory,
+//!       and each plane's entries (its first id added) and positions copied into place
+//! ```
 
 use rayon::prelude::*;
 
 use super::clustering::proposal::{self, Candidate, PointEdges, ProposalCounts, Rules};
 use super::layout::{add, owns, Layout};
 use crate::lattice::FULL;
-use crate::util::{bits_at_signed, for_each_bit, inside_word, inside_word_finite64};
+use crate::util::{bits_at_signed, inside_word, inside_word_finite64};
 use crate::{ExtractError, Lattice, Stats};
 
 /// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
@@ -43,9 +59,18 @@ pub(crate) struct VertexTables {
     pub(crate) inside: Vec<u64>,
     /// Which points have a crossed edge, and their owned crossings and ids ([`CrossedIndex`]).
     pub(crate) crossed: CrossedIndex,
-    /// Per storage plane, its crossed points in slot order as `owned | crossed << 16` (the vertex
-    /// pass's output, numbered into [`CrossedIndex::points`]).
-    pub(crate) plane_points: Vec<Vec<u32>>,
+    /// Per storage plane, its crossed points in slot order, their ids counted from the plane's
+    /// first crossing (copied into [`CrossedIndex::points`] with the plane's first id added).
+    pub(crate) plane_points: Vec<Vec<CrossedPoint>>,
+    /// Per storage plane, the positions of its crossings (copied into the mesh's positions
+    /// once the planes' first ids are known).
+    pub(crate) plane_positions: Vec<Vec<[f32; 3]>>,
+    /// Per storage row (`z * dy + sy`, entry `SIDES_PAD(dy)` rows later), which sides its
+    /// slots lie on ([`row_sides`]: bit 0 some inside, bit 1 some outside), with rows of padding
+    /// on both ends (outside, as slots past storage read): a row whose slots and whose points'
+    /// neighbour slots all lie on one side has no crossed edge, and the vertex pass skips it
+    /// (Flying Edges' trimming).
+    pub(crate) sides: Vec<u8>,
 }
 
 impl VertexTables {
@@ -58,16 +83,27 @@ impl VertexTables {
         let plane = samples.dims[0] * samples.dims[1];
         let planes = samples.dims[2];
         self.crossed.reset(plane, planes);
+        let pad = sides_pad(samples.dims[1]);
+        self.sides.clear();
+        self.sides
+            .resize(samples.dims[1] * planes + 2 * pad, SOME_OUTSIDE);
         if self.plane_points.len() < planes {
             self.plane_points.resize_with(planes, Vec::new);
+            self.plane_positions.resize_with(planes, Vec::new);
         }
     }
 
     /// Bytes of the tables.
     pub(crate) fn bytes(&self) -> usize {
         self.crossed.bytes()
-            + self.plane_points.iter().map(|o| o.len() * 4).sum::<usize>()
+            + self.plane_points.iter().map(|o| o.len() * 8).sum::<usize>()
+            + self
+                .plane_positions
+                .iter()
+                .map(|o| o.len() * 12)
+                .sum::<usize>()
             + self.inside.len() * 8
+            + self.sides.len()
     }
 }
 
@@ -79,12 +115,14 @@ pub(crate) struct VertexOut<'a> {
     pub(crate) positions: &'a mut Vec<[f32; 3]>,
 }
 
-/// Where [`number_plane`] writes one plane's crossed points and crossings.
+/// Where [`vertex_plane`] writes one plane's crossed points and crossings.
 pub(crate) struct PlaneOut<'a> {
-    /// The plane's crossed-point entries.
-    pub(crate) entries: &'a mut [CrossedPoint],
+    /// The plane's crossed points in slot order (ids from the plane's first crossing).
+    pub(crate) points: &'a mut Vec<CrossedPoint>,
     /// The positions of the plane's crossings.
-    pub(crate) positions: &'a mut [[f32; 3]],
+    pub(crate) positions: &'a mut Vec<[f32; 3]>,
+    /// The plane's crossed-point bits ([`plane_words`] words, all zero on entry).
+    pub(crate) bits: &'a mut [u64],
 }
 
 /// Set bits of every byte.
@@ -243,21 +281,28 @@ fn bits_from(words: &[u64], pos: usize) -> u64 {
 }
 
 /// The inside bits of 64 values (bit k set when `values[k] < iso`), as
-/// [`crate::util::inside_word`] gives them: four values per comparison and mask on x86-64 (an
-/// ordered less-than: NaN is outside, as with `<`).
+/// [`crate::util::inside_word`] gives them: on x86-64 four values per comparison (an ordered
+/// less-than: NaN is outside, as with `<`), the masks of 16 values packed to bytes (all ones
+/// or zero, which the signed saturating packs keep) and read with one byte mask.
 #[inline]
 fn inside_word64(values: &[f32; 64], iso: f32) -> u64 {
     #[cfg(target_arch = "x86_64")]
     {
-        use std::arch::x86_64::{_mm_cmplt_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps};
+        use std::arch::x86_64::{
+            _mm_castps_si128, _mm_cmplt_ps, _mm_loadu_ps, _mm_movemask_epi8, _mm_packs_epi16,
+            _mm_packs_epi32, _mm_set1_ps,
+        };
         let mut word = 0u64;
-        // SAFETY: SSE2 is in the x86-64 baseline; each load reads the 4 values of its chunk
+        // SAFETY: SSE2 is in the x86-64 baseline; each load reads 4 values of its chunk of 16
         // (unaligned).
         unsafe {
             let t = _mm_set1_ps(iso);
-            for (i, four) in values.as_chunks::<4>().0.iter().enumerate() {
-                let mask = _mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(four.as_ptr()), t)) as u64;
-                word |= mask << (4 * i);
+            for (i, sixteen) in values.as_chunks::<16>().0.iter().enumerate() {
+                let p = sixteen.as_ptr();
+                let m = |k: usize| _mm_castps_si128(_mm_cmplt_ps(_mm_loadu_ps(p.add(4 * k)), t));
+                let bytes =
+                    _mm_packs_epi16(_mm_packs_epi32(m(0), m(1)), _mm_packs_epi32(m(2), m(3)));
+                word |= u64::from(_mm_movemask_epi8(bytes) as u16) << (16 * i);
             }
         }
         word
@@ -266,6 +311,74 @@ fn inside_word64(values: &[f32; 64], iso: f32) -> u64 {
     {
         inside_word(values, iso)
     }
+}
+
+/// [`VertexTables::sides`]: some slot of a row inside.
+const SOME_INSIDE: u8 = 1;
+/// [`VertexTables::sides`]: some slot of a row outside (unused slots and slots past storage
+/// read as outside, as their inside bits are clear).
+const SOME_OUTSIDE: u8 = 2;
+
+/// Rows of padding before and after the rows of [`VertexTables::sides`], for rows of `dy` slots
+/// per plane column: more than any neighbour's reach (two planes and a row).
+fn sides_pad(dy: usize) -> usize {
+    2 * dy + 2
+}
+
+/// The sides of the `len` slots from slot `start` ([`SOME_INSIDE`], [`SOME_OUTSIDE`]), from
+/// the inside bits (`words` holds a word past the last slot).
+fn row_sides(words: &[u64], start: usize, len: usize) -> u8 {
+    let (mut any, mut all) = (0u64, !0u64);
+    let mut n = 0;
+    while n < len {
+        let take = (len - n).min(64);
+        let mask = if take < 64 { (1u64 << take) - 1 } else { !0 };
+        let w = bits_from(words, start + n) & mask;
+        any |= w;
+        all &= w | !mask;
+        n += take;
+    }
+    (u8::from(any != 0) * SOME_INSIDE) | (u8::from(all != !0) * SOME_OUTSIDE)
+}
+
+/// Set bits of a 16-bit word, by two byte lookups (no popcount instruction in the baseline
+/// target).
+#[inline(always)]
+fn pop16(x: u16) -> u32 {
+    u32::from(POP8[usize::from(x as u8)]) + u32::from(POP8[usize::from(x >> 8)])
+}
+
+/// Appends the positions of the crossings that the point at lattice coordinates `p` (storage
+/// slot `i`) owns (`own`, by neighbour bit) to `positions`, in id order; returns how many lie
+/// within [`WELD`] of it. Kept out of line: inside the vertex pass's row loop the values spill
+/// to the stack.
+#[inline(never)]
+fn place(
+    l: &Layout,
+    p: crate::lattice::Offset,
+    i: usize,
+    own: u16,
+    iso: f32,
+    positions: &mut Vec<[f32; 3]>,
+) -> usize {
+    let v = &l.s.values[..];
+    let f = v[i];
+    let delta = &l.delta[(p[0] & 1) as usize];
+    let offsets = &l.t.offsets;
+    let at = l.positions();
+    let pp = at.at(p);
+    let mut near = 0;
+    let mut bits = own;
+    while bits != 0 {
+        let d = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        let q = add(p, offsets[d]);
+        let g = v[(i as isize + delta[d]) as usize];
+        let t = (iso - f) / (g - f);
+        near += usize::from(t < WELD);
+        positions.push(pp.lerp(at.at(q), t).to_array());
+    }
+    near
 }
 
 /// Words of the crossed-point bit set per storage plane of `plane` slots: one bit per slot plus
@@ -290,33 +403,98 @@ pub(crate) struct PlaneCounts {
     pub(crate) crossings: usize,
     pub(crate) edges: usize,
     pub(crate) proposals: ProposalCounts,
+    /// Crossings within [`WELD`] of their owner (surfaces through sample points).
+    pub(crate) near_points: usize,
+    /// Per group (face axis, or the cube), the triangles of the groups whose anchors are the
+    /// plane's crossed points ([`CrossedIndex::plane_triangles`]).
+    pub(crate) triangles: [u32; 3],
 }
 
 /// Vertex pass over one storage plane: counts, cluster proposals, the plane's crossed-point bits
-/// (`crossed`, [`plane_words`] words, all zero on entry) and, per crossed point in slot order,
-/// its owned and crossed edges as `owned | crossed << 16` (`owned`). The lattice edges of the
-/// plane are counted only without `work.known_edges` (they depend on the grid alone: the
-/// extractor keeps the count of the last grid).
+/// (`out.bits`), its crossed points in slot order (`out.points`: owned and crossed edges, the
+/// id of the first owned crossing counted from the plane's first) and the positions of its
+/// crossings (`out.positions`, in id order), and per group the triangles its points anchor.
+/// The lattice edges of the plane are counted only without `work.known_edges` (they depend on
+/// the grid alone: the extractor keeps the count of the last grid).
+///
+/// Per row (Flying Edges' trimming, by row): its slots and the slots its points' 14 neighbours
+/// read lie in the row itself and in the rows `row + delta[d]` and the next one fall in; when
+/// the sides of all of them ([`VertexTables::sides`]) are one side, no point of the row has a
+/// crossed edge and the row is skipped. Otherwise 64 points at a time:
+///
+/// ```text
+///   differ[d] = inside(64 points) ^ inside(their neighbours d)       14 word operations
+///   block     = differ[0] | ... | differ[13]                          the crossed points
+///   known[b] |= 1 << d   for each set bit b of differ[d] & block      per crossed edge
+///   per crossed point b: owners of its crossed edges (far ends read), ids counted, the
+///                        anchored groups' triangles counted, owned crossings placed
+/// ```
+// Not inlined into the pass: fewer instructions than inlined.
+#[inline(never)]
 pub(crate) fn vertex_plane(
     l: &Layout,
     inside_bits: &[u64],
+    sides: &[u8],
     z: usize,
     iso: f32,
     work: VertexWork,
-    owned: &mut Vec<u32>,
-    crossed_bits: &mut [u64],
+    mut out: PlaneOut<'_>,
 ) -> (PlaneCounts, Vec<Candidate>) {
     let VertexWork {
         propose,
         known_edges,
     } = work;
     let count_edges = known_edges.is_none();
-    owned.clear();
+    out.points.clear();
+    out.positions.clear();
     let v = &l.s.values;
     let [dx, dy, _] = l.s.dims;
+    let [nx, ny, nz] = l.s.cells;
+    // The groups this plane's points anchor, as `geometry::for_each_group` walks them: per
+    // group, its rows (`sy`) and the slots of each row (`sx`), empty when the plane has none.
+    let none = (1, 0, 1, 0);
+    let anchors: [(usize, usize, usize, usize); 3] = match l.lattice {
+        Lattice::Simple if z < nz => [(0, ny - 1, 0, nx - 1), none, none],
+        Lattice::Simple => [none; 3],
+        Lattice::BodyCentred => {
+            let faces = z.is_multiple_of(2) && z >= 2 && z <= 2 * nz;
+            // Without ghosts, not the faces on the box's upper faces (as the walk).
+            let upper = usize::from(l.s.boundary == crate::Boundary::Pyramids);
+            [
+                // Faces perpendicular to x (layer z / 2 - 1), to y, then to z (layer z / 2).
+                if faces { (1, ny, 0, nx - upper) } else { none },
+                if faces { (0, ny - upper, 1, nx) } else { none },
+                if z.is_multiple_of(2) && z + 2 * upper <= 2 * nz {
+                    (1, ny, 1, nx)
+                } else {
+                    none
+                },
+            ]
+        }
+    };
+    let groups = [0, 1, 2].map(|g| &l.groups[g.min(l.groups.len() - 1)]);
     let slots = v.len();
     let mut counts = PlaneCounts::default();
     let mut cands = Vec::new();
+    // Per parity: the storage rows (relative to a point's own row, each once) that a row's
+    // points and their neighbour slots fall in: for neighbour d, from the row of `delta[d]`
+    // to that of `delta[d] + dx - 1`.
+    let mut near_rows = [([0isize; 32], 0usize); 2];
+    for (par, (offs, n)) in near_rows.iter_mut().enumerate() {
+        let mut add_row = |r: isize| {
+            if !offs[..*n].contains(&r) {
+                offs[*n] = r;
+                *n += 1;
+            }
+        };
+        add_row(0);
+        for &a in &l.delta[par] {
+            for r in a.div_euclid(dx as isize)..=(a + dx as isize - 1).div_euclid(dx as isize) {
+                add_row(r);
+            }
+        }
+    }
+    let pad = sides_pad(dy);
     for sy in 0..dy {
         // The run of points in this row whose 14 neighbours are all regular lattice points: no
         // existence or border tests there.
@@ -334,6 +512,14 @@ pub(crate) fn vertex_plane(
             delta.iter().copied().min().unwrap_or(0),
             delta.iter().copied().max().unwrap_or(0),
         );
+        // The slots of this row that anchor each group (empty: none).
+        let anchor_x = anchors.map(|(y0, y1, x0, x1)| {
+            if sy >= y0 && sy <= y1 {
+                (x0, x1)
+            } else {
+                (1, 0)
+            }
+        });
         // One point with at least one crossed edge: owned crossings, flags, proposals.
         // `known`: the point's crossed edges to all 14 neighbour slots, from the inside bits;
         // `border`: the neighbours whose edges exist, for a point off the regular run (`None`:
@@ -341,8 +527,7 @@ pub(crate) fn vertex_plane(
         let point = |sx: usize,
                      border: Option<u16>,
                      known: u16,
-                     owned: &mut Vec<u32>,
-                     crossed_bits: &mut [u64],
+                     out: &mut PlaneOut<'_>,
                      counts: &mut PlaneCounts,
                      cands: &mut Vec<Candidate>| {
             let local = sy * dx + sx;
@@ -351,6 +536,9 @@ pub(crate) fn vertex_plane(
             let valid = border.unwrap_or(FULL);
             // Only the crossed edges' far ends are read, for the owner.
             let crossed = known & valid;
+            if crossed == 0 {
+                return;
+            }
             let mut own = 0u16;
             let mut bits = crossed;
             while bits != 0 {
@@ -359,15 +547,27 @@ pub(crate) fn vertex_plane(
                 let g = v[(i as isize + delta[d]) as usize];
                 own |= u16::from(owns(f, g, iso)) << d;
             }
-            if crossed != 0 {
-                // Points come in slot order: `owned` stays aligned with the bits.
-                owned.push(u32::from(own) | u32::from(crossed) << 16);
-                crossed_bits[local >> 6] |= 1 << (local & 63);
-            }
-            // Ids within the plane for now; the plane's first id is added when the planes'
-            // candidates are joined.
+            // Ids within the plane for now; the plane's first id is added when the planes are
+            // joined (points and proposals).
             let first = counts.crossings as u32;
-            counts.crossings += own.count_ones() as usize;
+            // Points come in slot order: `points` stays aligned with the bits.
+            out.points.push(CrossedPoint {
+                first,
+                owned: own,
+                crossed,
+            });
+            out.bits[local >> 6] |= 1 << (local & 63);
+            for (g, &(x0, x1)) in anchor_x.iter().enumerate() {
+                if sx >= x0 && sx <= x1 {
+                    let group = groups[g];
+                    counts.triangles[g] += u32::from(group.triangles[group.code(crossed)]);
+                }
+            }
+            if own != 0 {
+                counts.crossings += pop16(own) as usize;
+                let p = l.coords(sx, sy, z);
+                counts.near_points += place(l, p, i, own, iso, out.positions);
+            }
             // Without ghosts, no proposal near the pyramids of the box faces
             // (`Layout::near_pyramid`).
             if let Some(rules) =
@@ -407,6 +607,16 @@ pub(crate) fn vertex_plane(
                 }
             }
         }
+        // The row trimmed away when it and every row its neighbour slots fall in lie on one
+        // side.
+        let r = (pad + z * dy + sy) as isize;
+        let (offs, n) = &near_rows[odd];
+        let around = offs[..*n].iter().fold(0, |acc, &o| {
+            acc | sides.get((r + o) as usize).copied().unwrap_or(SOME_OUTSIDE)
+        });
+        if around != SOME_INSIDE | SOME_OUTSIDE {
+            continue;
+        }
         let mut sx = 0;
         while sx < dx {
             let len = (dx - sx).min(64);
@@ -422,14 +632,25 @@ pub(crate) fn vertex_plane(
             if len < 64 {
                 block &= (1u64 << len) - 1;
             }
+            if block == 0 {
+                sx += len;
+                continue;
+            }
+            // Each point's differing neighbours, edge by edge: a crossed point has a few of its
+            // 14 (about 4 on a smooth surface), cheaper than gathering 14 bits per point.
+            let mut known = [0u16; 64];
+            for (d, &w) in differ.iter().enumerate() {
+                let mut w = w & block;
+                while w != 0 {
+                    known[w.trailing_zeros() as usize & 63] |= 1 << d;
+                    w &= w - 1;
+                }
+            }
             while block != 0 {
                 let b = block.trailing_zeros() as usize;
                 let x = sx + b;
                 block &= block - 1;
-                let known = differ
-                    .iter()
-                    .enumerate()
-                    .fold(0u16, |m, (d, &w)| m | (((w >> b) & 1) as u16) << d);
+                let known = known[b & 63];
                 let border = if x >= lo && x < hi {
                     None
                 } else {
@@ -439,15 +660,7 @@ pub(crate) fn vertex_plane(
                     }
                     Some(valid)
                 };
-                point(
-                    x,
-                    border,
-                    known,
-                    owned,
-                    crossed_bits,
-                    &mut counts,
-                    &mut cands,
-                );
+                point(x, border, known, &mut out, &mut counts, &mut cands);
             }
             sx += len;
         }
@@ -455,107 +668,12 @@ pub(crate) fn vertex_plane(
     (counts, cands)
 }
 
-/// Numbers the crossings of plane `z` (ids from `start` on) and writes its crossed points' entries
-/// (`out.entries`, from the vertex pass's `owned | crossed << 16` words `owned`) and the crossings'
-/// positions (`out.positions`). Returns how many crossings lie within `WELD` of their owner
-/// (surfaces through sample points), and per group (face axis, or the cube) the triangles of
-/// the groups whose anchors are this plane's crossed points
-/// ([`CrossedIndex::plane_triangles`]).
-pub(crate) fn number_plane(
-    l: &Layout,
-    z: usize,
-    iso: f32,
-    owned: &[u32],
-    crossed: &[u64],
-    start: u32,
-    out: PlaneOut<'_>,
-) -> (usize, [u32; 3]) {
-    let PlaneOut {
-        entries,
-        positions: out,
-    } = out;
-    let v = &l.s.values;
-    let [dx, dy, _] = l.s.dims;
-    let [nx, ny, nz] = l.s.cells;
-    let plane = dx * dy;
-    let mut next = start;
-    let (mut w, mut r) = (0, 0);
-    let mut near_points = 0;
-    let mut triangles = [0u32; 3];
-    // The groups this plane's points anchor, as `geometry::for_each_group` walks them: per
-    // group, its rows (`sy`) and the slots of each row (`sx`), empty when the plane has none.
-    let none = (1, 0, 1, 0);
-    let anchors: [(usize, usize, usize, usize); 3] = match l.lattice {
-        Lattice::Simple if z < nz => [(0, ny - 1, 0, nx - 1), none, none],
-        Lattice::Simple => [none; 3],
-        Lattice::BodyCentred => {
-            let faces = z.is_multiple_of(2) && z >= 2 && z <= 2 * nz;
-            // Without ghosts, not the faces on the box's upper faces (as the walk).
-            let upper = usize::from(l.s.boundary == crate::Boundary::Pyramids);
-            [
-                // Faces perpendicular to x (layer z / 2 - 1), to y, then to z (layer z / 2).
-                if faces { (1, ny, 0, nx - upper) } else { none },
-                if faces { (0, ny - upper, 1, nx) } else { none },
-                if z.is_multiple_of(2) && z + 2 * upper <= 2 * nz {
-                    (1, ny, 1, nx)
-                } else {
-                    none
-                },
-            ]
-        }
-    };
-    for sy in 0..dy {
-        for_each_bit(crossed, sy * dx, dx, |sx| {
-            let local = sy * dx + sx;
-            let word = owned[r];
-            let own = word as u16;
-            let crossed = (word >> 16) as u16;
-            entries[r] = CrossedPoint {
-                first: next,
-                owned: own,
-                crossed,
-            };
-            r += 1;
-            for (g, &(y0, y1, x0, x1)) in anchors.iter().enumerate() {
-                if sy >= y0 && sy <= y1 && sx >= x0 && sx <= x1 {
-                    let group = &l.groups[g.min(l.groups.len() - 1)];
-                    triangles[g] += u32::from(group.triangles[group.code(crossed)]);
-                }
-            }
-            if own == 0 {
-                return;
-            }
-            next += own.count_ones();
-            let p = l.coords(sx, sy, z);
-            let i = z * plane + local;
-            let f = v[i];
-            let pp = l.position(p);
-            let mut bits = own;
-            while bits != 0 {
-                let d = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                let q = add(p, l.t.offsets[d]);
-                let g = v[(i as isize + l.delta[(p[0] & 1) as usize][d]) as usize];
-                let t = (iso - f) / (g - f);
-                near_points += (t < WELD) as usize;
-                out[w] = pp.lerp(l.position(q), t).to_array();
-                w += 1;
-            }
-        });
-    }
-    debug_assert_eq!(
-        r,
-        owned.len(),
-        "plane {z}: crossed bits and points disagree"
-    );
-    (near_points, triangles)
-}
-
 /// The vertex pass, after [`VertexTables::allocate`]: step 0, the inside bit of every sample point;
-/// step 1 (parallel over storage planes), each plane's crossed points, their owned crossings
-/// and (with `work.propose`) the cluster proposals ([`crate::mt::clustering::proposal`]),
-/// copied into `out.proposals`; step 2 (parallel over planes), every crossing's id and position
-/// (`out.positions`, one vertex per crossing). Returns how many crossings lie on a sample
+/// step 1 (parallel over storage planes), the sides of every row, then each plane's crossed
+/// points, their owned crossings, the crossings' positions and (with `work.propose`) the
+/// cluster proposals ([`crate::mt::clustering::proposal`]), copied into `out.proposals`;
+/// step 2 (parallel over planes), the planes' crossed points with their ids and the positions
+/// (`out.positions`, one vertex per crossing) copied into place. Returns how many crossings lie on a sample
 /// point (within the weld distance). On the simple lattice, step 0 also checks every value and
 /// errors with [`ExtractError::NonFiniteValue`] (the first in storage order) on NaN or
 /// infinity.
@@ -620,15 +738,41 @@ pub(crate) fn vertex_pass(
         buf.inside[words] = 0;
     }
 
-    // Vertex pass, step 1: owned crossings and proposals per plane.
+    // Vertex pass, step 1a: the sides of every storage row (the trimming of step 1b).
+    {
+        let [dx, dy, _] = samples.dims;
+        let inside = &buf.inside;
+        let pad = sides_pad(dy);
+        pool.install(|| {
+            buf.sides[pad..pad + dy * planes]
+                .par_chunks_mut(dy)
+                .enumerate()
+                .for_each(|(z, sides)| {
+                    for (sy, side) in sides.iter_mut().enumerate() {
+                        *side = row_sides(inside, (z * dy + sy) * dx, dx);
+                    }
+                })
+        });
+    }
+
+    // Vertex pass, step 1b: owned crossings and proposals per plane.
     let inside = &buf.inside;
+    let sides = &buf.sides;
     let wpp = buf.crossed.wpp;
     let per_plane: Vec<(PlaneCounts, Vec<Candidate>)> = pool.install(|| {
         buf.plane_points[..planes]
             .par_iter_mut()
+            .zip(buf.plane_positions[..planes].par_iter_mut())
             .zip(buf.crossed.bits.par_chunks_mut(wpp))
             .enumerate()
-            .map(|(z, (owned, crossed))| vertex_plane(layout, inside, z, iso, work, owned, crossed))
+            .map(|(z, ((points, positions), bits))| {
+                let out = PlaneOut {
+                    points,
+                    positions,
+                    bits,
+                };
+                vertex_plane(layout, inside, sides, z, iso, work, out)
+            })
             .collect()
     });
     let mut starts = Vec::with_capacity(per_plane.len() + 1);
@@ -663,8 +807,8 @@ pub(crate) fn vertex_pass(
         });
     }
     buf.crossed.rank_planes(&point_starts, total_points, pool);
-    // Step 2: number the crossings and place them.
-    let near_points;
+    // Step 2: the planes joined: their crossed points, with the plane's first id added, and
+    // their crossings' positions copied into place.
     out.positions.resize(total, [0.0; 3]);
     {
         let mut rest: &mut [[f32; 3]] = out.positions;
@@ -674,40 +818,36 @@ pub(crate) fn vertex_pass(
             chunks.push(head);
             rest = tail;
         }
-        // Plane z numbers its crossed points.
-        let CrossedIndex { bits, points, .. } = &mut buf.crossed;
-        let mut rest: &mut [CrossedPoint] = points;
+        let mut rest: &mut [CrossedPoint] = &mut buf.crossed.points;
         let mut entries = Vec::with_capacity(per_plane.len());
-        for owned in &buf.plane_points[..planes] {
-            let (head, tail) = rest.split_at_mut(owned.len());
+        for points in &buf.plane_points[..planes] {
+            let (head, tail) = rest.split_at_mut(points.len());
             entries.push(head);
             rest = tail;
         }
-        let (bits, plane_points) = (&*bits, &buf.plane_points);
-        let numbered: Vec<(usize, [u32; 3])> = pool.install(|| {
+        let (plane_points, plane_positions) = (&buf.plane_points, &buf.plane_positions);
+        pool.install(|| {
             entries
                 .into_par_iter()
                 .zip(chunks.into_par_iter())
                 .enumerate()
-                .map(|(z, (entries, positions))| {
-                    number_plane(
-                        layout,
-                        z,
-                        iso,
-                        &plane_points[z],
-                        &bits[z * wpp..(z + 1) * wpp],
-                        starts[z] as u32,
-                        PlaneOut { entries, positions },
-                    )
+                .for_each(|(z, (entries, positions))| {
+                    let start = starts[z] as u32;
+                    for (e, p) in entries.iter_mut().zip(&plane_points[z]) {
+                        *e = CrossedPoint {
+                            first: start + p.first,
+                            ..*p
+                        };
+                    }
+                    positions.copy_from_slice(&plane_positions[z]);
                 })
-                .collect()
         });
-        near_points = numbered.iter().map(|n| n.0).sum();
-        buf.crossed.plane_triangles.clear();
-        buf.crossed
-            .plane_triangles
-            .extend(numbered.iter().map(|n| n.1));
     }
+    let near_points = per_plane.iter().map(|(c, _)| c.near_points).sum();
+    buf.crossed.plane_triangles.clear();
+    buf.crossed
+        .plane_triangles
+        .extend(per_plane.iter().map(|(c, _)| c.triangles));
     // The per-plane proposals were copied into `out.proposals`: free them before the geometry
     // pass and the clustering allocate.
     drop(per_plane);
@@ -865,6 +1005,40 @@ mod tests {
                 "pos {pos}"
             );
         }
+    }
+
+    #[test]
+    fn row_sides_say_whether_some_slot_is_inside_and_some_outside() {
+        // Runs of every length up to three words from every offset of a random bit set with
+        // long runs of one side, against the bits one by one.
+        let mut state = 5u64;
+        let mut bits = vec![0u64; 6];
+        let mut inside = false;
+        for i in 0..5 * 64 {
+            if lcg(&mut state) < 0.05 {
+                inside = !inside;
+            }
+            bits[i >> 6] |= u64::from(inside) << (i & 63);
+        }
+        let mut seen = [0usize; 4];
+        for start in 0..2 * 64 {
+            for len in 1..=3 * 64 {
+                let slots = start..start + len;
+                let any_in = slots.clone().any(|i| bits[i >> 6] >> (i & 63) & 1 == 1);
+                let any_out = slots.clone().any(|i| bits[i >> 6] >> (i & 63) & 1 == 0);
+                let want = (u8::from(any_in) * SOME_INSIDE) | (u8::from(any_out) * SOME_OUTSIDE);
+                assert_eq!(
+                    row_sides(&bits, start, len),
+                    want,
+                    "start {start} len {len}"
+                );
+                seen[usize::from(want)] += 1;
+            }
+        }
+        assert!(
+            seen[1] > 0 && seen[2] > 0 && seen[3] > 0,
+            "every outcome met: {seen:?}"
+        );
     }
 
     #[test]

@@ -15,12 +15,15 @@
 //! belongs to the end whose owned bit the vertex pass set: it decided that from the same two
 //! values), and the triangles are read off the group's cycle table by the anchor's side and
 //! crossed edges (`TetGroup::cycles`: each tetrahedron's case table cycle, in template order,
-//! naming group edges). Plain MT writes each id straight into place.
+//! naming group edges). Plain MT writes each id straight into place, in its own instance of
+//! the walk (`PLAIN`: no vertex map, listing or cells, so none of their flags is tested per
+//! anchor), and each edge's ends are read by their deltas from the anchor
+//! (`TetGroup::edge_reads`).
 
 use rayon::prelude::*;
 
 use super::crossings::{CrossedIndex, CrossedPoint};
-use super::layout::{case_triangles_of, split_quad, Layout, MAX_GROUP_EDGES};
+use super::layout::{case_triangles_of, split_quad, Layout, EDGE_SLOTS};
 use crate::lattice::Offset;
 use crate::util::for_each_bit;
 use crate::{Boundary, CellRange, Lattice};
@@ -222,10 +225,16 @@ pub(crate) fn geometry_layer(
                 r += 1;
             });
         }
-        if out.flip {
-            geometry_in_window::<true>(surface, k, vertices, &window[..], z0, out)
-        } else {
-            geometry_in_window::<false>(surface, k, vertices, &window[..], z0, out)
+        // Plain MT (no vertex map, no listing, no cells) walks without the other modes' flags.
+        let plain = vertices.map.is_none() && out.list.is_none() && out.cells.is_none();
+        match (out.flip, plain) {
+            (true, _) => geometry_in_window::<true, true>(surface, k, vertices, window, z0, out),
+            (false, true) => {
+                geometry_in_window::<false, true>(surface, k, vertices, window, z0, out)
+            }
+            (false, false) => {
+                geometry_in_window::<false, false>(surface, k, vertices, window, z0, out)
+            }
         }
     })
 }
@@ -251,8 +260,9 @@ pub(crate) struct ListOut<'s> {
 /// [`geometry_layer`] once the crossed points of storage planes `z0..` are in `window`; with
 /// `out.cells`, each triangle written gets its anchor cell there (linear index, x fastest).
 /// Returns the tetrahedra with a triangle (when listing in a chunk, those of kept cells) and
-/// the triangles written.
-pub(crate) fn geometry_in_window<const FLIP: bool>(
+/// the triangles written. `PLAIN`: plain MT's walk (no vertex map, no listing, no cells), its
+/// flags known at compile time.
+pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
     surface: &Surface,
     k: usize,
     vertices: Vertices,
@@ -277,6 +287,10 @@ pub(crate) fn geometry_in_window<const FLIP: bool>(
     debug_assert!(
         !FLIP || (map.is_none() && list.is_none()),
         "flip is plain MT's only"
+    );
+    debug_assert!(
+        !PLAIN || (map.is_none() && list.is_none() && cells.is_none()),
+        "the plain walk writes only triangles"
     );
     let v = &l.s.values;
     let plane = l.s.dims[0] * l.s.dims[1];
@@ -303,26 +317,27 @@ pub(crate) fn geometry_in_window<const FLIP: bool>(
         // The crossing on each crossed edge of the group, once: the end whose owned bit the
         // vertex pass set (it decided that from the same two values the case would read), as
         // `case_triangles_of` would ask for it, edge (a, b) of a tetrahedron with a < b.
-        let mut ids = [0u32; MAX_GROUP_EDGES];
+        // Indexed by edge masked to 5 bits (`EDGE_SLOTS`): no bounds checks.
+        let mut ids = [0u32; EDGE_SLOTS];
         let mut todo = group.crossed_edges[code];
         while todo != 0 {
-            let e = todo.trailing_zeros() as usize;
+            let e = todo.trailing_zeros() as usize & (EDGE_SLOTS - 1);
             todo &= todo - 1;
-            let edge = group.edges[e];
-            let entry = |i: u8| window[(at as isize + group.points[usize::from(i)]) as usize];
-            let a = entry(edge.from);
+            let read = group.edge_reads[e];
+            let a = window[(at as isize + read.deltas[0]) as usize];
             debug_assert_eq!(
                 a,
-                crossed.get((anchor as isize + group.points[usize::from(edge.from)]) as usize)
+                crossed.get((anchor as isize + read.deltas[0]) as usize),
+                "edge {e}"
             );
-            debug_assert_ne!(a.crossed >> edge.dir[0] & 1, 0, "edge {edge:?} not crossed");
+            debug_assert_ne!(a.crossed >> read.dir[0] & 1, 0, "edge {e} not crossed");
             // Both ends read, then one picked: which end owns the crossing is data, and a
             // branch on it mispredicts about half the time.
-            let b = entry(edge.to);
-            let (owner, d) = if a.owned >> edge.dir[0] & 1 != 0 {
-                (a, edge.dir[0])
+            let b = window[(at as isize + read.deltas[1]) as usize];
+            let (owner, d) = if a.owned >> read.dir[0] & 1 != 0 {
+                (a, read.dir[0])
             } else {
-                (b, edge.dir[1])
+                (b, read.dir[1])
             };
             ids[e] = owner.id(d);
         }
@@ -333,26 +348,26 @@ pub(crate) fn geometry_in_window<const FLIP: bool>(
             ..usize::from(group.cycle_start[2 * code + side + 1]);
         // Only the listing reads these: whether no corner is a ghost (for the gradient), and in
         // a chunk whether the anchor's cell is kept.
-        let inner = listing && l.inner_anchor(p);
-        let kept = mark.is_none_or(|range| range.contains(l.anchor_cell(p, g)));
-        let cell = if cells_wanted {
+        let inner = !PLAIN && listing && l.inner_anchor(p);
+        let kept = PLAIN || mark.is_none_or(|range| range.contains(l.anchor_cell(p, g)));
+        let cell = if !PLAIN && cells_wanted {
             let c = l.anchor_cell(p, g);
             (c[0] + nx * (c[1] + ny * c[2])) as u32
         } else {
             0
         };
         let first = match l.lattice {
-            Lattice::BodyCentred => 4 * g,
-            Lattice::Simple => 0,
+            Lattice::BodyCentred if !PLAIN => 4 * g,
+            _ => 0,
         };
         processed += if kept { range.len() } else { 0 };
-        if map.is_none() {
+        if PLAIN || map.is_none() {
             // Plain MT's triangles: the ids straight into place, each value stored once (an
             // array of triangles copied over would be read back across its stores), the write
             // position in a register; the listing's gradient, flags and cells beside them.
             let mut at = w;
             for cycle in &group.cycles[range] {
-                let e = cycle.edges.map(usize::from);
+                let e = cycle.edges.map(|e| usize::from(e) & (EDGE_SLOTS - 1));
                 let q = [ids[e[0]], ids[e[1]], ids[e[2]], 0];
                 let n = if cycle.edges[3] == u8::MAX {
                     if FLIP {
@@ -391,7 +406,7 @@ pub(crate) fn geometry_in_window<const FLIP: bool>(
                     }
                     2
                 };
-                if !plain {
+                if !PLAIN && !plain {
                     let t = at / 3;
                     if let Some(list) = list.as_mut() {
                         // The tetrahedron, whose gradient the quotient test's (c) reads.

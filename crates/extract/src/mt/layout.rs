@@ -168,6 +168,11 @@ pub(crate) struct TetGroup {
     /// tetrahedron, the order [`case_triangles_of`] asks for them), each once: the geometry
     /// pass finds the crossing on each crossed one once per group, not once per triangle corner.
     pub(crate) edges: Vec<GroupEdge>,
+    /// Per edge of `edges` (entry k; the entries past the edges unused), what the geometry
+    /// pass reads to find its crossing: its ends' storage deltas from the anchor and the
+    /// neighbour index of each end seen from the other. [`EDGE_SLOTS`] entries, so that an edge
+    /// index masked to its low 5 bits needs no bounds check.
+    pub(crate) edge_reads: [EdgeRead; EDGE_SLOTS],
     /// Per index (as in `triangles`): the edges of `edges` that the group's cycles name (bit k:
     /// edge k), all crossed.
     pub(crate) crossed_edges: Vec<u64>,
@@ -183,6 +188,19 @@ pub(crate) struct TetGroup {
 /// diagonals and the main diagonal; each named in one direction only), a body-centred face's 4
 /// have 13.
 pub(crate) const MAX_GROUP_EDGES: usize = 19;
+
+/// Entries of [`TetGroup::edge_reads`] and of the geometry pass's crossing ids per group: a
+/// power of two above [`MAX_GROUP_EDGES`], indexed by an edge index masked with
+/// `EDGE_SLOTS - 1`.
+pub(crate) const EDGE_SLOTS: usize = 32;
+
+/// An edge of a [`TetGroup`] as the geometry pass reads it: the storage deltas of its ends
+/// (`from`, `to`) from the anchor, and the neighbour index of each end seen from the other.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct EdgeRead {
+    pub(crate) deltas: [isize; 2],
+    pub(crate) dir: [u8; 2],
+}
 
 /// An edge of a [`TetGroup`]: from point `from` to point `to` (indices into the group's
 /// points), with the neighbour index of each end seen from the other.
@@ -223,6 +241,7 @@ impl TetGroup {
             cases: Vec::new(),
             code_parts: [[0; 128]; 2],
             edges: Vec::new(),
+            edge_reads: [EdgeRead::default(); EDGE_SLOTS],
             crossed_edges: Vec::new(),
             cycle_start: Vec::new(),
             cycles: Vec::new(),
@@ -286,6 +305,12 @@ impl TetGroup {
             group.edges.len() <= MAX_GROUP_EDGES,
             "a group's edges fit the geometry pass's array"
         );
+        for (read, e) in group.edge_reads.iter_mut().zip(&group.edges) {
+            *read = EdgeRead {
+                deltas: [e.from, e.to].map(|i| group.points[usize::from(i)]),
+                dir: e.dir,
+            };
+        }
         for code in 0..1usize << group.len {
             let mut crossed = 0u64;
             for flip in [0, 15] {
@@ -367,6 +392,22 @@ pub(crate) struct Layout<'a> {
     coords: [Vec<f32>; 3],
 }
 
+/// [`Layout::position`] from borrowed tables ([`Layout::positions`]).
+#[derive(Clone, Copy)]
+pub(crate) struct Positions<'a> {
+    coords: [&'a [f32]; 3],
+    min: glam::Vec3,
+}
+
+impl Positions<'_> {
+    /// World position of lattice point `p`, bit for bit [`Layout::position`].
+    #[inline(always)]
+    pub(crate) fn at(&self, p: Offset) -> glam::Vec3 {
+        let c = |a: usize| self.coords[a][(p[a] + COORD_PAD) as usize];
+        self.min + glam::Vec3::new(c(0), c(1), c(2))
+    }
+}
+
 /// Lattice coordinates below 0 that [`Layout::coords`] covers.
 const COORD_PAD: i32 = 2;
 
@@ -407,11 +448,17 @@ pub(crate) fn boundary_class(c: i32, max: i32) -> usize {
 
 /// The border table of the last extraction ([`Layout::border_table`]), kept between
 /// extractions: it depends only on the lattice and the cells per axis, and building it costs
-/// about a fifth of a 32^3 chunk's extraction without clustering.
+/// about a fifth of a 32^3 chunk's extraction without clustering. The tetrahedron groups and
+/// the tetrahedra around a point ([`Layout::groups`], [`Layout::around`]) are kept with it:
+/// they depend only on the lattice and the storage layout, and building them cost about 2% of
+/// a 64^3 extraction without clustering.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct BorderCache {
-    key: Option<(Lattice, [usize; 3], crate::Boundary)>,
+    /// Lattice, cells, storage dimensions and boundary of the grid the tables were built for.
+    key: Option<(Lattice, [usize; 3], [usize; 3], crate::Boundary)>,
     table: Vec<u32>,
+    groups: Vec<TetGroup>,
+    around: [Vec<StarTet>; 2],
     /// The lattice edges of the grid (`Stats::edges`), once an extraction counted them.
     pub(crate) edges: Option<usize>,
 }
@@ -420,18 +467,23 @@ impl<'a> Layout<'a> {
     /// The layout of `s` on `lattice`, its border table built anew.
     #[cfg(test)]
     pub(crate) fn new(s: &'a Samples, lattice: Lattice) -> Self {
-        let mut layout = Self::without_border_table(s, lattice);
+        let mut layout = Self::without_border_table(s, lattice, None);
         layout.border_table = layout.build_border_table();
         layout
     }
 
-    /// [`Layout::new`], the border table taken from `cache` when it was built for the same
-    /// lattice and cells (else built and kept there).
+    /// [`Layout::new`], the border table, the groups and the tetrahedra around a point taken
+    /// from `cache` when they were built for the same lattice and storage (else built and kept
+    /// there).
     pub(crate) fn cached(s: &'a Samples, lattice: Lattice, cache: &mut BorderCache) -> Self {
-        let mut layout = Self::without_border_table(s, lattice);
-        let key = Some((lattice, s.cells, s.boundary));
-        if cache.key != key {
+        let key = Some((lattice, s.cells, s.dims, s.boundary));
+        let fresh = cache.key != key;
+        let kept = (!fresh).then_some((&cache.groups[..], &cache.around));
+        let mut layout = Self::without_border_table(s, lattice, kept);
+        if fresh {
             cache.table = layout.build_border_table();
+            cache.groups.clone_from(&layout.groups);
+            cache.around.clone_from(&layout.around);
             cache.key = key;
             cache.edges = None;
         }
@@ -439,8 +491,14 @@ impl<'a> Layout<'a> {
         layout
     }
 
-    /// Everything of the layout but its border table (left empty).
-    fn without_border_table(s: &'a Samples, lattice: Lattice) -> Self {
+    /// Everything of the layout but its border table (left empty); the groups and the
+    /// tetrahedra around a point copied from `kept` when given (built for the same lattice and
+    /// storage).
+    fn without_border_table(
+        s: &'a Samples,
+        lattice: Lattice,
+        kept: Option<(&[TetGroup], &[Vec<StarTet>; 2])>,
+    ) -> Self {
         let t = LatticeTables::get(lattice);
         let idx = |p: Offset| -> isize {
             match lattice {
@@ -491,11 +549,16 @@ impl<'a> Layout<'a> {
             .collect::<Vec<_>>();
         // Groups: a body-centred face's 4 tetrahedra (the table lists them by face axis), a
         // cube's 6.
-        let groups = match lattice {
-            Lattice::BodyCentred => tets.chunks(4).map(TetGroup::new).collect(),
-            Lattice::Simple => vec![TetGroup::new(&tets)],
+        let (groups, around) = match kept {
+            Some((groups, around)) => (groups.to_vec(), around.clone()),
+            None => (
+                match lattice {
+                    Lattice::BodyCentred => tets.chunks(4).map(TetGroup::new).collect(),
+                    Lattice::Simple => vec![TetGroup::new(&tets)],
+                },
+                [0, 1].map(|par| star_tets(lattice, t, refs[par], &idx)),
+            ),
         };
-        let around = [0, 1].map(|par| star_tets(lattice, t, refs[par], &idx));
         // Lattice units per world unit along each axis: half cubes on the body-centred lattice.
         let unit = match lattice {
             Lattice::BodyCentred => s.spacing.as_dvec3() * 0.5,
@@ -705,6 +768,20 @@ impl<'a> Layout<'a> {
             self.coords[a][i]
         };
         self.s.min + glam::Vec3::new(c(0), c(1), c(2))
+    }
+
+    /// [`Layout::position`]'s tables, to be held in locals by a loop that also writes memory
+    /// (which would otherwise reload them from the layout after every store).
+    #[inline]
+    pub(crate) fn positions(&self) -> Positions<'_> {
+        Positions {
+            coords: [
+                &self.coords[0][..],
+                &self.coords[1][..],
+                &self.coords[2][..],
+            ],
+            min: self.s.min,
+        }
     }
 
     /// The storage planes geometry layer `k` reads (inclusive): body-centred faces perpendicular
@@ -937,6 +1014,16 @@ mod tests {
                     Lattice::Simple => &l.tets[..],
                 };
                 assert!(group.edges.len() <= MAX_GROUP_EDGES, "{lattice:?}");
+                // The geometry pass reads each edge's ends by these deltas.
+                for (k, e) in group.edges.iter().enumerate() {
+                    let ends = [e.from, e.to].map(|i| group.points[usize::from(i)]);
+                    let read = EdgeRead {
+                        deltas: ends,
+                        dir: e.dir,
+                    };
+                    assert_eq!(group.edge_reads[k], read, "{lattice:?} group {g} edge {k}");
+                    assert_ne!(ends[0], ends[1], "{lattice:?} group {g} edge {k}");
+                }
                 let point = |d: isize| group.points[..group.len].iter().position(|&p| p == d);
                 for code in 0..1usize << group.len {
                     let mut named = 0u64;
