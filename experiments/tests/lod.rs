@@ -199,7 +199,7 @@ fn a_flight_is_deterministic_outside_times() {
             threads: Some(threads),
             ..Overrides::default()
         };
-        runner::start(&manifest, &overrides, Some(&folder), &opts).unwrap();
+        runner::start(manifest, &overrides, Some(&folder), &opts).unwrap();
         let t = Table::read(&folder.join("lod.csv")).unwrap();
         let keep: Vec<usize> = (0..t.header.len())
             .filter(|&i| !matches!(t.header[i].as_str(), "remesh_s" | "memory_bytes"))
