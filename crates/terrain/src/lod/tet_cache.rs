@@ -52,7 +52,7 @@ const BIAS: i32 = 4;
 pub struct TetCacheStats {
     /// Surroundings kept.
     pub entries: usize,
-    /// Their bytes.
+    /// Their bytes: the entries' tets and the keys' leaves.
     pub bytes: usize,
     /// Chunks answered from the cache.
     pub hits: u64,
@@ -65,6 +65,13 @@ struct Key {
     level: u8,
     leaves: Vec<(u8, [i64; 3])>,
     world: [i64; 6],
+}
+
+impl Key {
+    /// Its heap bytes, counted in the budget with its entry's.
+    fn bytes(&self) -> usize {
+        self.leaves.len() * std::mem::size_of::<(u8, [i64; 3])>()
+    }
 }
 
 struct Entry {
@@ -175,7 +182,7 @@ impl TetCache {
                 // Kept only if it gives back exactly what it was made from.
                 if decode(&e, chunk.level, origin) == tets {
                     if let Ok(mut g) = self.inner.lock() {
-                        let b = e.bytes();
+                        let b = e.bytes() + key.bytes();
                         if g.bytes + b <= self.budget && !g.map.contains_key(&key) {
                             g.bytes += b;
                             g.map.insert(key, Arc::new(e));
