@@ -158,24 +158,26 @@ impl TetCache {
             return chunk_tets(map, chunk);
         }
         let Some(key) = key(map, chunk) else {
-            self.count(false);
+            self.count_miss();
             return chunk_tets(map, chunk);
         };
         let (lo, _) = chunk.bounds(map.geometry());
         let Some(origin) = to_point(lo) else {
-            self.count(false);
+            self.count_miss();
             return chunk_tets(map, chunk);
         };
-        let found = self
-            .inner
-            .lock()
-            .ok()
-            .and_then(|g| g.map.get(&key).cloned());
+        // One lock: the lookup and its count.
+        let found = self.inner.lock().ok().and_then(|mut g| {
+            let e = g.map.get(&key).cloned();
+            match e {
+                Some(_) => g.hits += 1,
+                None => g.misses += 1,
+            }
+            e
+        });
         if let Some(e) = found {
-            self.count(true);
             return Ok(decode(&e, chunk.level, origin));
         }
-        self.count(false);
         let tets = chunk_tets(map, chunk)?;
         if self.budget > 0 {
             if let Some(e) = encode(&tets, chunk.level, origin) {
@@ -194,13 +196,9 @@ impl TetCache {
         Ok(tets)
     }
 
-    fn count(&self, hit: bool) {
+    fn count_miss(&self) {
         if let Ok(mut g) = self.inner.lock() {
-            if hit {
-                g.hits += 1;
-            } else {
-                g.misses += 1;
-            }
+            g.misses += 1;
         }
     }
 }
