@@ -167,6 +167,8 @@ pub struct LodStep {
     pub chunks: usize,
     /// Chunks meshed at this step.
     pub remeshed: usize,
+    /// Chunks the re-mesh rule marked whose tets stayed the same (kept, not meshed).
+    pub unchanged: usize,
     /// Chunks that left the map.
     pub dropped: usize,
     /// Triangles in the world.
@@ -277,7 +279,9 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             || k == 0
             || (plan.validate_every > 0 && k % plan.validate_every == 0);
         let check = if validate {
-            check_world(&world, &r.remeshed, plan.validate_max_chunks)?
+            // The region of every chunk the map change marked, kept or re-meshed.
+            let marked: Vec<ChunkKey> = r.remeshed.iter().chain(&r.unchanged).copied().collect();
+            check_world(&world, &marked, plan.validate_max_chunks)?
         } else {
             None
         };
@@ -289,6 +293,7 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             remesh_s,
             chunks,
             remeshed: r.remeshed.len(),
+            unchanged: r.unchanged.len(),
             dropped: r.dropped.len(),
             triangles: r.triangles,
             memory_bytes: world.memory_bytes(),
@@ -553,6 +558,7 @@ pub fn lod_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
                 format!("{:.9}", st.remesh_s),
                 st.chunks.to_string(),
                 st.remeshed.to_string(),
+                st.unchanged.to_string(),
                 st.dropped.to_string(),
                 st.triangles.to_string(),
                 st.memory_bytes.to_string(),

@@ -147,10 +147,12 @@ pub const EDIT_SUMMARY: [&str; 25] = [
 ];
 
 /// The columns of `lod.csv` (one row per viewer step of the `lod` workload; step 0 is the first
-/// meshing of the world). Validation and seam columns are empty on steps that were not
-/// validated, pop columns on steps where no chunk changed its level. Like `remesh_s`,
+/// meshing of the world). `chunks_remeshed` counts the chunks whose surface was rebuilt,
+/// `chunks_unchanged` those the map change marked whose tets stayed the same (their surface
+/// kept). Validation and seam columns are empty on steps that were not validated, pop columns
+/// on steps where no chunk changed its level. Like `remesh_s`,
 /// `memory_bytes` is a measurement of the run (it follows the world's hash tables' history).
-pub const LOD_STEPS: [&str; 18] = [
+pub const LOD_STEPS: [&str; 19] = [
     "id",
     "step",
     "viewer_x",
@@ -159,6 +161,7 @@ pub const LOD_STEPS: [&str; 18] = [
     "remesh_s",
     "chunks",
     "chunks_remeshed",
+    "chunks_unchanged",
     "chunks_dropped",
     "triangles",
     "memory_bytes",

@@ -9,8 +9,8 @@
 //!
 //! `... --example lod_profile -- world STEPS THREADS CACHE_MB`: the world itself flown over the
 //! first STEPS steps on THREADS threads with a chunk-tets cache of CACHE_MB MiB
-//! (`LodWorld::set_tet_cache_bytes`): per step the re-mesh time and the cache's hits and
-//! misses, then the median and the slowest step after step 0.
+//! (`LodWorld::set_tet_cache_bytes`): per step the chunks re-meshed and kept unchanged, the
+//! re-mesh time and the cache's hits and misses, then the median and the slowest step after step 0.
 
 use std::time::Instant;
 
@@ -109,7 +109,7 @@ fn fly(steps: usize, threads: usize, cache_mb: usize) -> anyhow::Result<()> {
     world.set_tet_cache_bytes(cache_mb << 20);
     let (a, b) = (Vec3::new(-20.0, 1.0, -20.0), Vec3::new(20.0, 1.0, 20.0));
     let mut times = Vec::new();
-    println!("step remeshed ms hits misses entries MiB");
+    println!("step remeshed unchanged ms hits misses entries MiB");
     for k in 0..=steps {
         world.set_viewer(a.lerp(b, k as f32 / 400.0));
         let t = Instant::now();
@@ -117,8 +117,9 @@ fn fly(steps: usize, threads: usize, cache_mb: usize) -> anyhow::Result<()> {
         let ms = t.elapsed().as_secs_f64() * 1e3;
         let s = world.tet_cache_stats();
         println!(
-            "{k:4} {:5} {ms:9.1} {:7} {:7} {:6} {:7.1}",
+            "{k:4} {:5} {:5} {ms:9.1} {:7} {:7} {:6} {:7.1}",
             r.remeshed.len(),
+            r.unchanged.len(),
             s.hits,
             s.misses,
             s.entries,

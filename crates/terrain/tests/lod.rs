@@ -15,8 +15,8 @@ use rmt_fields::{RandomField, ScalarField};
 use rmt_terrain::lod::check::{check_surface, check_tets};
 use rmt_terrain::lod::lattice::{bcc_tet, canonical, cell_size, Point};
 use rmt_terrain::lod::{
-    march, mesh_chunks, mesh_whole, thread_pool, weld, world_tets, ChunkMesh, LevelMap, LodFrame,
-    LodGeometry, LodSettings, LodWorld, MeshTet, TetKind,
+    chunk_tets, march, mesh_chunks, mesh_whole, thread_pool, weld, world_tets, ChunkMesh, LevelMap,
+    LodFrame, LodGeometry, LodSettings, LodWorld, MeshTet, TetKind,
 };
 
 fn cases(default: u32) -> u32 {
@@ -263,6 +263,8 @@ fn incremental_remesh_equals_from_scratch() {
     let pool = thread_pool(1).unwrap();
     let mut kept = 0;
     let mut remeshed = 0;
+    let mut unchanged = 0;
+    let mut old: Option<LevelMap> = None;
     for step in 0..steps {
         if step % 3 == 2 {
             world
@@ -275,7 +277,17 @@ fn incremental_remesh_equals_from_scratch() {
         let r = world.remesh().unwrap();
         kept += r.kept;
         remeshed += r.remeshed.len();
+        unchanged += r.unchanged.len();
         let map = world.level_map().unwrap().clone();
+        // A chunk kept as unchanged has the same tets under both maps, built from scratch.
+        for k in &r.unchanged {
+            let before = old
+                .as_ref()
+                .expect("nothing is unchanged at the first remesh");
+            assert_eq!(chunk_tets(before, k).unwrap(), chunk_tets(&map, k).unwrap());
+            assert!(!r.remeshed.contains(k));
+        }
+        old = Some(map.clone());
         let fresh = mesh_chunks(&map, &field, &frame, &pool).unwrap();
         let mine: Vec<ChunkMesh> = world
             .chunk_meshes()
@@ -291,6 +303,7 @@ fn incremental_remesh_equals_from_scratch() {
     }
     assert!(kept > 0, "no step kept a chunk");
     assert!(remeshed > 0);
+    assert!(unchanged > 0, "no marked chunk kept its tets");
     // The world took some chunks' tets from its cache (the fresh meshing builds them all).
     let c = world.tet_cache_stats();
     assert!(c.hits > 0 && c.entries > 0, "{c:?}");

@@ -33,7 +33,7 @@ use super::error::LodError;
 use super::lattice::{cell_size, Point};
 use super::level_map::{ChunkKey, LevelMap};
 use super::mesh::{chunk_tets, MeshTet};
-use super::tet_cache::TetCache;
+use super::tet_cache::{EncodedTets, TetCache};
 
 /// Where the lattice sits in the world: lattice point `p` (in `u`) is at `origin + p h / 2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -196,6 +196,18 @@ impl PointGrid {
 /// the given order. When the field's bound ([`ScalarField::side`]) puts the tets' bounding
 /// box on one side of 0, the surface is empty and nothing is sampled.
 pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> ChunkMesh {
+    march_reusing(tets, field, frame, None)
+}
+
+/// [`march`], taking the normals of crossings that `before` (a surface marched over the
+/// same field) also has from it instead of probing the field again: a crossing's normal is a
+/// function of its key and the field alone, so the surface is the same, bit for bit.
+pub fn march_reusing(
+    tets: &[MeshTet],
+    field: &dyn ScalarField,
+    frame: &LodFrame,
+    before: Option<&ChunkMesh>,
+) -> ChunkMesh {
     if let Some((lo, hi)) =
         tets.iter()
             .map(|t| super::lattice::bbox(&t.tet))
@@ -250,14 +262,21 @@ pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> Chu
     };
     // Crossings by their edge's two point numbers; positions now, normals after one batch of
     // probes (a batch gives every point the bits a single sample would).
-    let mut crossing: HashMap<u64, u32> = HashMap::default();
-    let mut ends: Vec<(Point, Point, f32, f32)> = Vec::new();
+    // The cases first: the crossed tets bound the crossings (each has 3 or 4 crossed edges,
+    // and an edge is shared by 4 to 6 tets), so the table is sized once.
+    let masks: Vec<u8> = corner
+        .chunks_exact(4)
+        .map(|ids| (0..4).fold(0u8, |m, v| m | u8::from(values[ids[v] as usize] < 0.0) << v))
+        .collect();
+    let crossed = masks.iter().filter(|&&m| m != 0 && m != 15).count();
+    let mut crossing: HashMap<u64, u32> =
+        HashMap::with_capacity_and_hasher(crossed, Default::default());
+    let mut ends: Vec<(Point, Point, f32, f32)> = Vec::with_capacity(crossed);
     let table = case_table();
     for (ti, t) in tets.iter().enumerate() {
         let ids = &corner[4 * ti..4 * ti + 4];
         let f: [f32; 4] = std::array::from_fn(|v| values[ids[v] as usize]);
-        let mask = (0..4).fold(0u8, |m, v| m | u8::from(f[v] < 0.0) << v);
-        let (tris, n) = &table[mask as usize];
+        let (tris, n) = &table[masks[ti] as usize];
         for tri in &tris[..*n] {
             for &(a, b) in tri {
                 let (pa, pb) = (t.tet[a], t.tet[b]);
@@ -282,9 +301,24 @@ pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> Chu
             }
         }
     }
+    // Each crossing's normal from `before` (by key), else from 6 probes around it.
+    let known: HashMap<[Point; 2], u32> = before.map_or_else(HashMap::default, |b| {
+        b.keys
+            .iter()
+            .enumerate()
+            .map(|(i, k)| (*k, i as u32))
+            .collect()
+    });
+    let from_before: Vec<Option<u32>> = mesh.keys.iter().map(|k| known.get(k).copied()).collect();
     let eps = frame.h * 0.25;
-    let mut probe = Vec::with_capacity(6 * mesh.positions.len());
-    for p in &mesh.positions {
+    let probed = from_before.iter().filter(|b| b.is_none()).count();
+    let mut probe = Vec::with_capacity(6 * probed);
+    for (p, _) in mesh
+        .positions
+        .iter()
+        .zip(&from_before)
+        .filter(|(_, b)| b.is_none())
+    {
         let p = Vec3::from(*p);
         for axis in 0..3 {
             let mut d = Vec3::ZERO;
@@ -295,10 +329,15 @@ pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> Chu
     }
     let mut probe_values = vec![0f32; probe.len()];
     field.sample_batch(&probe, &mut probe_values);
-    mesh.normals = probe_values
-        .chunks_exact(6)
+    let mut pv = probe_values.chunks_exact(6);
+    mesh.normals = from_before
+        .iter()
         .zip(&ends)
-        .map(|(pv, &(lo, hi, flo, fhi))| {
+        .map(|(b, &(lo, hi, flo, fhi))| {
+            if let (Some(i), Some(before)) = (b, before) {
+                return before.normals[*i as usize];
+            }
+            let pv = pv.next().unwrap_or(&[0.0; 6]);
             let g = Vec3::new(pv[0] - pv[1], pv[2] - pv[3], pv[4] - pv[5]);
             // Where the differences vanish (flat, quantised fields), the edge's own direction
             // towards the outside: still a function of the key alone.
@@ -312,6 +351,10 @@ pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> Chu
             g.normalize_or_zero().to_array()
         })
         .collect();
+    // The world keeps the surface: hold no spare capacity.
+    mesh.keys.shrink_to_fit();
+    mesh.positions.shrink_to_fit();
+    mesh.indices.shrink_to_fit();
     mesh
 }
 
@@ -338,24 +381,69 @@ pub fn mesh_chunk_with(
     frame: &LodFrame,
     cache: Option<&TetCache>,
 ) -> Result<ChunkMesh, LodError> {
-    let (lo, hi) = chunk.bounds(map.geometry());
-    let s = cell_size(chunk.level);
-    let corner = |v: [i64; 3]| -> Option<Point> {
-        let p: [i32; 3] = std::array::from_fn(|i| i32::try_from(v[i]).unwrap_or(i32::MAX));
-        p.iter().all(|&c| c != i32::MAX).then_some(p)
-    };
-    if map.contains(chunk) {
-        if let (Some(a), Some(b)) = (corner(lo.map(|v| v - s)), corner(hi.map(|v| v + s))) {
-            if field.side(frame.world(a), frame.world(b), 0.0).is_some() {
-                return Ok(ChunkMesh::default());
-            }
-        }
+    if empty_box(map, chunk, field, frame) {
+        return Ok(ChunkMesh::default());
     }
     let tets = match cache {
         Some(c) => c.chunk_tets(map, chunk)?,
         None => chunk_tets(map, chunk)?,
     };
     Ok(march(&tets, field, frame))
+}
+
+/// What [`remesh_chunk`] did.
+#[derive(Debug)]
+pub enum Remeshed {
+    /// The chunk's tets are those `previous` encodes: its surface is the same (the field
+    /// being unchanged), and nothing was marched.
+    Same,
+    /// The new surface, with its tets' encoding when they have one (none for an empty box).
+    Meshed(ChunkMesh, Option<EncodedTets>),
+}
+
+/// [`mesh_chunk_with`] for a chunk last meshed over the same field as `before`, from the
+/// tets `previous` encodes: [`Remeshed::Same`] when its tets under `map` are the same ones,
+/// else the new surface, with the normals of the crossings it shares with `before` taken from
+/// it ([`march_reusing`]).
+pub fn remesh_chunk(
+    map: &LevelMap,
+    chunk: &ChunkKey,
+    field: &dyn ScalarField,
+    frame: &LodFrame,
+    cache: &TetCache,
+    previous: Option<&EncodedTets>,
+    before: Option<&ChunkMesh>,
+) -> Result<Remeshed, LodError> {
+    if empty_box(map, chunk, field, frame) {
+        return Ok(Remeshed::Meshed(ChunkMesh::default(), None));
+    }
+    let tets = cache.encoded_tets(map, chunk)?;
+    if let (Some(p), Some(e)) = (previous, &tets.encoded) {
+        if p == e {
+            return Ok(Remeshed::Same);
+        }
+    }
+    let encoded = tets.encoded.clone();
+    Ok(Remeshed::Meshed(
+        march_reusing(&tets.into_tets(), field, frame, before),
+        encoded,
+    ))
+}
+
+/// Whether the field's bound puts `chunk`'s box grown by one cell of its level on one side
+/// of 0 (see [`mesh_chunk`]).
+fn empty_box(map: &LevelMap, chunk: &ChunkKey, field: &dyn ScalarField, frame: &LodFrame) -> bool {
+    let (lo, hi) = chunk.bounds(map.geometry());
+    let s = cell_size(chunk.level);
+    let corner = |v: [i64; 3]| -> Option<Point> {
+        let p: [i32; 3] = std::array::from_fn(|i| i32::try_from(v[i]).unwrap_or(i32::MAX));
+        p.iter().all(|&c| c != i32::MAX).then_some(p)
+    };
+    map.contains(chunk)
+        && match (corner(lo.map(|v| v - s)), corner(hi.map(|v| v + s))) {
+            (Some(a), Some(b)) => field.side(frame.world(a), frame.world(b), 0.0).is_some(),
+            _ => false,
+        }
 }
 
 /// Welds chunk meshes (in the given order) into one mesh by crossing key: vertices in order
@@ -386,7 +474,66 @@ pub fn weld<'a>(chunks: impl IntoIterator<Item = &'a ChunkMesh>) -> (Mesh, Vec<[
 #[cfg(test)]
 mod tests {
     use super::super::lattice::EDGES;
+    use super::super::level_map::LodGeometry;
     use super::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// A field that counts its samples.
+    struct Counted<F>(F, AtomicUsize);
+
+    impl<F: ScalarField> ScalarField for Counted<F> {
+        fn sample(&self, p: Vec3) -> f32 {
+            self.1.fetch_add(1, Ordering::Relaxed);
+            self.0.sample(p)
+        }
+    }
+
+    /// Reusing a surface's normals gives the surface marched from scratch, bit for bit, and
+    /// probes only the crossings the old surface lacks.
+    #[test]
+    fn reused_normals_equal_probed_ones() {
+        let g = LodGeometry::new(2, 4, [2, 1, 2]).unwrap();
+        let frame = LodFrame {
+            origin: Vec3::splat(-1.0),
+            h: 1.0 / 8.0,
+        };
+        let field = Counted(rmt_fields::RandomField::from_seed(3), AtomicUsize::new(0));
+        let bits = |m: &ChunkMesh| {
+            let f = |v: &Vec<[f32; 3]>| v.iter().flat_map(|p| p.map(f32::to_bits)).collect();
+            (
+                m.keys.clone(),
+                f(&m.positions),
+                f(&m.normals),
+                m.indices.clone(),
+            )
+        };
+        type Bits = (Vec<[Point; 2]>, Vec<u32>, Vec<u32>, Vec<u32>);
+        let (mut reused, mut saved) = (0, 0);
+        // A finer chunk appears beside chunk 0 of level 1 as the maps change.
+        let maps = [
+            LevelMap::uniform(g, 1),
+            LevelMap::build(g, |k| k.level == 2 || k.at[0] > 0),
+            LevelMap::random(g, 5, 0.5),
+        ];
+        for (a, b) in maps.iter().zip(maps.iter().skip(1)) {
+            for k in b.chunks().iter().filter(|k| a.contains(k)) {
+                let old = march(&chunk_tets(a, k).unwrap(), &field, &frame);
+                let tets = chunk_tets(b, k).unwrap();
+                field.1.store(0, Ordering::Relaxed);
+                let fresh = march(&tets, &field, &frame);
+                let n_fresh = field.1.swap(0, Ordering::Relaxed);
+                let again = march_reusing(&tets, &field, &frame, Some(&old));
+                let n_again = field.1.swap(0, Ordering::Relaxed);
+                let (x, y): (Bits, Bits) = (bits(&fresh), bits(&again));
+                assert!(x == y, "chunk {k:?}");
+                let shared = fresh.keys.iter().filter(|q| old.keys.contains(q)).count();
+                assert_eq!(n_fresh - n_again, 6 * shared, "chunk {k:?}");
+                reused += usize::from(shared > 0);
+                saved += shared;
+            }
+        }
+        assert!(reused > 0 && saved > 0, "nothing was reused");
+    }
 
     #[test]
     fn cases_face_the_outside_and_use_crossed_edges_only() {

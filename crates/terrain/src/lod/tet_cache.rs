@@ -74,9 +74,61 @@ impl Key {
     }
 }
 
+#[derive(Debug, PartialEq, Eq)]
 struct Entry {
     codes: Vec<u32>,
     specials: Vec<MeshTet>,
+}
+
+/// A chunk's tets in the cache's encoding, relative to the chunk's lower corner
+/// ([`TetCache::encoded_tets`]). Equal values decode to the same tets: a chunk whose
+/// `EncodedTets` is the same under two maps has the same tets under both, and so the same
+/// surface while the field does not change.
+#[derive(Clone, Debug)]
+pub struct EncodedTets {
+    level: u8,
+    origin: [i32; 3],
+    entry: Arc<Entry>,
+}
+
+impl PartialEq for EncodedTets {
+    fn eq(&self, other: &Self) -> bool {
+        self.level == other.level
+            && self.origin == other.origin
+            && (Arc::ptr_eq(&self.entry, &other.entry) || self.entry == other.entry)
+    }
+}
+
+impl EncodedTets {
+    /// The tets.
+    pub fn tets(&self) -> Vec<MeshTet> {
+        decode(&self.entry, self.level, self.origin)
+    }
+
+    /// Bytes of the encoding (shared with the cache when the cache keeps it).
+    pub fn bytes(&self) -> usize {
+        self.entry.bytes()
+    }
+}
+
+/// A chunk's tets from [`TetCache::encoded_tets`]: encoded when they can be, and the tets
+/// themselves when they were built rather than found.
+#[derive(Debug)]
+pub struct ChunkTets {
+    /// The encoding, checked to decode to the tets (`None`: they have no encoding).
+    pub encoded: Option<EncodedTets>,
+    built: Option<Vec<MeshTet>>,
+}
+
+impl ChunkTets {
+    /// The tets, sorted ([`chunk_tets`]).
+    pub fn into_tets(self) -> Vec<MeshTet> {
+        match (self.built, self.encoded) {
+            (Some(t), _) => t,
+            (None, Some(e)) => e.tets(),
+            (None, None) => Vec::new(),
+        }
+    }
 }
 
 impl Entry {
@@ -154,46 +206,70 @@ impl TetCache {
     /// [`chunk_tets`] of `chunk`, from the cache when a chunk with the same surroundings was
     /// built before: the same tets, in the same order.
     pub fn chunk_tets(&self, map: &LevelMap, chunk: &ChunkKey) -> Result<Vec<MeshTet>, LodError> {
+        Ok(self.encoded_tets(map, chunk)?.into_tets())
+    }
+
+    /// [`TetCache::chunk_tets`] with the tets' encoding at the chunk's lower corner: the
+    /// cache's entry on a hit (nothing decoded yet); otherwise the tets are built, encoded and
+    /// the encoding checked to decode to them, whether or not the cache keeps it.
+    pub fn encoded_tets(&self, map: &LevelMap, chunk: &ChunkKey) -> Result<ChunkTets, LodError> {
         if !map.contains(chunk) {
-            return chunk_tets(map, chunk);
+            return chunk_tets(map, chunk).map(|t| ChunkTets {
+                encoded: None,
+                built: Some(t),
+            });
         }
-        let Some(key) = key(map, chunk) else {
-            self.count_miss();
-            return chunk_tets(map, chunk);
-        };
+        let level = chunk.level;
         let (lo, _) = chunk.bounds(map.geometry());
-        let Some(origin) = to_point(lo) else {
-            self.count_miss();
-            return chunk_tets(map, chunk);
-        };
-        // One lock: the lookup and its count.
-        let found = self.inner.lock().ok().and_then(|mut g| {
-            let e = g.map.get(&key).cloned();
-            match e {
-                Some(_) => g.hits += 1,
-                None => g.misses += 1,
+        let origin = to_point(lo);
+        let key = origin.and_then(|_| key(map, chunk));
+        match (&key, origin) {
+            (Some(key), Some(origin)) => {
+                // One lock: the lookup and its count.
+                let found = self.inner.lock().ok().and_then(|mut g| {
+                    let e = g.map.get(key).cloned();
+                    match e {
+                        Some(_) => g.hits += 1,
+                        None => g.misses += 1,
+                    }
+                    e
+                });
+                if let Some(entry) = found {
+                    return Ok(ChunkTets {
+                        encoded: Some(EncodedTets {
+                            level,
+                            origin,
+                            entry,
+                        }),
+                        built: None,
+                    });
+                }
             }
-            e
-        });
-        if let Some(e) = found {
-            return Ok(decode(&e, chunk.level, origin));
+            _ => self.count_miss(),
         }
         let tets = chunk_tets(map, chunk)?;
-        if self.budget > 0 {
-            if let Some(e) = encode(&tets, chunk.level, origin) {
-                // Kept only if it gives back exactly what it was made from.
-                if decode(&e, chunk.level, origin) == tets {
-                    if let Ok(mut g) = self.inner.lock() {
-                        let b = e.bytes() + key.bytes();
-                        if g.bytes + b <= self.budget && !g.map.contains_key(&key) {
-                            g.bytes += b;
-                            g.map.insert(key, Arc::new(e));
-                        }
-                    }
+        let encoded = origin.and_then(|o| {
+            let e = encode(&tets, level, o)?;
+            // Only an encoding that gives back exactly what it was made from is used.
+            (decode(&e, level, o) == tets).then(|| EncodedTets {
+                level,
+                origin: o,
+                entry: Arc::new(e),
+            })
+        });
+        if let (Some(key), Some(e), true) = (key, &encoded, self.budget > 0) {
+            if let Ok(mut g) = self.inner.lock() {
+                let b = e.entry.bytes() + key.bytes();
+                if g.bytes + b <= self.budget && !g.map.contains_key(&key) {
+                    g.bytes += b;
+                    g.map.insert(key, Arc::clone(&e.entry));
                 }
             }
         }
-        Ok(tets)
+        Ok(ChunkTets {
+            encoded,
+            built: Some(tets),
+        })
     }
 
     fn count_miss(&self) {

@@ -6,9 +6,14 @@
 //!   remesh():  for every chunk K of the new map
 //!                new, or the leaves touching dependency_box(K) differ between the maps
 //!                (chunks of >= LOCAL_CHUNK cells: K's own box, so K's level or a
-//!                neighbour's changed)
-//!                  -> mesh_chunk (in parallel, on the world's threads): nothing when the
-//!                     field's bound puts the chunk on one side of 0, else chunk_tets + march
+//!                neighbour's changed), or an edit marked it
+//!                  -> stale; in parallel, on the world's threads:
+//!                     not edited, and the fast path under both maps   -> same tets: keep
+//!                     nothing when the field's bound puts the chunk on one side of 0
+//!                     else its tets, encoded (TetCache::encoded_tets):
+//!                       not edited, the encoding equal to last time  -> same tets: keep
+//!                       else march (not edited: the normals of crossings the chunk's
+//!                       last surface has are taken from it, not probed again)
 //!                else keep K's surface
 //!              chunks no longer in the map are dropped
 //! ```
@@ -16,7 +21,10 @@
 //! A chunk's tets are a function of the map's leaves inside its dependency box
 //! ([`super::mesh::dependency_box`]), and its surface a function of its tets and the field, so
 //! the incrementally updated world equals a from-scratch meshing of the new map, byte for
-//! byte (tested).
+//! byte (tested). Most chunks the rule marks keep their tets: a neighbour's change of level
+//! reaches only the transition layer, one tet of the coarser level deep. The fast path's tets
+//! are the lattice's over the chunk's box whatever its neighbours, and any other chunk's are
+//! compared in the cache's encoding, exactly.
 
 use std::collections::HashMap;
 
@@ -29,9 +37,9 @@ use super::edits::{chunks_seeing, EditedField, Overlay};
 use super::error::LodError;
 use super::lattice::Point;
 use super::level_map::{ChunkKey, LevelMap, LodGeometry};
-use super::mesh::{needs_remesh, world_tets, MeshTet};
-use super::mt::{march, mesh_chunk_with, weld, ChunkMesh, LodFrame};
-use super::tet_cache::{TetCache, TetCacheStats, DEFAULT_TET_CACHE_BYTES};
+use super::mesh::{is_fast_path, needs_remesh, world_tets, MeshTet};
+use super::mt::{march, mesh_chunk_with, remesh_chunk, weld, ChunkMesh, LodFrame, Remeshed};
+use super::tet_cache::{EncodedTets, TetCache, TetCacheStats, DEFAULT_TET_CACHE_BYTES};
 
 /// What a multiresolution world is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,9 +60,12 @@ pub struct LodSettings {
 pub struct LodRemesh {
     /// Chunks (re-)meshed, in map order.
     pub remeshed: Vec<ChunkKey>,
+    /// Chunks the re-mesh rule marked whose tets turned out the same (not edited): their
+    /// surfaces were kept, in map order.
+    pub unchanged: Vec<ChunkKey>,
     /// Chunks dropped (no longer leaves of the map), sorted.
     pub dropped: Vec<ChunkKey>,
-    /// Chunks whose surface was kept.
+    /// Chunks whose surface was kept (`unchanged` among them).
     pub kept: usize,
     /// Triangles in the world after the step.
     pub triangles: usize,
@@ -71,6 +82,9 @@ pub struct LodWorld<F: ScalarField> {
     /// The map the next remesh moves to.
     pending: LevelMap,
     meshes: HashMap<ChunkKey, ChunkMesh>,
+    /// The encoded tets each chunk's surface was marched from (chunks off the fast path with
+    /// a surface and an encoding).
+    encoded: HashMap<ChunkKey, EncodedTets>,
     /// The brush strokes applied so far ([`LodWorld::edit`]).
     edits: Overlay,
     /// Chunks of the current map an edit marked for the next remesh.
@@ -153,6 +167,7 @@ impl<F: ScalarField> LodWorld<F> {
             map: None,
             pending,
             meshes: HashMap::new(),
+            encoded: HashMap::new(),
             edits: Overlay::new(settings.frame),
             edited: Default::default(),
             tets: TetCache::new(DEFAULT_TET_CACHE_BYTES),
@@ -190,7 +205,8 @@ impl<F: ScalarField> LodWorld<F> {
         Ok(())
     }
 
-    /// Re-meshes the chunks the pending level map changed (all of them the first time).
+    /// Re-meshes the chunks the pending level map changed (all of them the first time),
+    /// keeping the surface of those whose tets stay the same.
     pub fn remesh(&mut self) -> Result<LodRemesh, LodError> {
         let new = &self.pending;
         let stale: Vec<ChunkKey> = new
@@ -208,14 +224,25 @@ impl<F: ScalarField> LodWorld<F> {
             })
             .collect();
         let field = EditedField::new(&self.field, &self.edits);
-        let meshes = mesh_some(
-            new,
-            &stale,
-            &field,
-            &self.settings.frame,
-            &self.pool,
-            Some(&self.tets),
-        )?;
+        let (old, edited, encoded) = (self.map.as_ref(), &self.edited, &self.encoded);
+        let meshes = &self.meshes;
+        let frame = self.settings.frame;
+        let cache = &self.tets;
+        let outcomes: Vec<Remeshed> = self.pool.install(|| {
+            stale
+                .par_iter()
+                .map(|k| {
+                    let before = old.filter(|o| !edited.contains(k) && o.contains(k));
+                    if before.is_some_and(|o| is_fast_path(o, k) && is_fast_path(new, k)) {
+                        // The fast path's tets are the lattice's over the chunk's box.
+                        return Ok(Remeshed::Same);
+                    }
+                    let previous = before.and_then(|_| encoded.get(k));
+                    let mesh = before.and_then(|_| meshes.get(k));
+                    remesh_chunk(new, k, &field, &frame, cache, previous, mesh)
+                })
+                .collect::<Result<_, LodError>>()
+        })?;
         self.edited.clear();
         let mut dropped: Vec<ChunkKey> = self
             .meshes
@@ -226,15 +253,28 @@ impl<F: ScalarField> LodWorld<F> {
         dropped.sort_unstable();
         for k in &dropped {
             self.meshes.remove(k);
+            self.encoded.remove(k);
         }
-        for (k, m) in stale.iter().zip(meshes) {
-            self.meshes.insert(*k, m);
+        let (mut remeshed, mut unchanged) = (Vec::new(), Vec::new());
+        for (k, o) in stale.iter().zip(outcomes) {
+            match o {
+                Remeshed::Same => unchanged.push(*k),
+                Remeshed::Meshed(m, e) => {
+                    self.meshes.insert(*k, m);
+                    match e {
+                        Some(e) => self.encoded.insert(*k, e),
+                        None => self.encoded.remove(k),
+                    };
+                    remeshed.push(*k);
+                }
+            }
         }
         self.map = Some(new.clone());
         let triangles = self.meshes.values().map(ChunkMesh::triangles).sum();
         Ok(LodRemesh {
-            kept: new.chunks().len() - stale.len(),
-            remeshed: stale,
+            kept: new.chunks().len() - remeshed.len(),
+            remeshed,
+            unchanged,
             dropped,
             triangles,
         })
@@ -292,15 +332,20 @@ impl<F: ScalarField> LodWorld<F> {
         weld(self.chunk_meshes().into_iter().map(|(_, m)| m))
     }
 
-    /// Bytes held by the chunk surfaces and the level map (the field is procedural; no
-    /// samples are kept).
+    /// Bytes held by the chunk surfaces, the encoded tets they were marched from, the level
+    /// map and the edits (the field is procedural; no samples are kept; the tet cache is
+    /// apart, [`LodWorld::tet_cache_stats`]).
     pub fn memory_bytes(&self) -> usize {
         let meshes: usize = self.meshes.values().map(ChunkMesh::bytes).sum();
+        // Counted here even where the tet cache shares them.
+        let encoded: usize = self.encoded.values().map(EncodedTets::bytes).sum::<usize>()
+            + self.encoded.capacity() * (16 + std::mem::size_of::<EncodedTets>());
         let map = self.map.as_ref().map_or(0, |m| m.chunks().len()) * 2 * 16;
         meshes
             + map
             + self.meshes.capacity() * (16 + std::mem::size_of::<ChunkMesh>())
             + self.edits.bytes()
+            + encoded
     }
 
     /// The settings.
