@@ -146,7 +146,8 @@ fn case_table() -> &'static [Case; 16] {
 }
 
 /// The distinct lattice points of some tets, numbered in order of first use, on a flat grid
-/// over their bounding box (at the largest power-of-two step dividing every offset).
+/// over their bounding box (at the largest power-of-two step dividing every offset), `x`
+/// fastest: the grid's order is rows of equal `y` and `z`.
 struct PointGrid {
     lo: Point,
     shift: u32,
@@ -188,7 +189,16 @@ impl PointGrid {
     fn slot(&mut self, p: Point) -> &mut u32 {
         let c: [usize; 3] =
             std::array::from_fn(|i| ((p[i] - self.lo[i]) as u32 >> self.shift) as usize);
-        &mut self.slot[(c[0] * self.n[1] + c[1]) * self.n[2] + c[2]]
+        &mut self.slot[(c[2] * self.n[1] + c[1]) * self.n[0] + c[0]]
+    }
+
+    /// The points' numbers in rows: `z`, then `y`, then `x` ascending.
+    fn rows(&self) -> Vec<u32> {
+        self.slot
+            .iter()
+            .copied()
+            .filter(|&i| i != u32::MAX)
+            .collect()
     }
 }
 
@@ -226,7 +236,7 @@ pub fn march_reusing(
     // Sample every distinct lattice point once, in order of first use.
     let mut points: Vec<Vec3> = Vec::with_capacity(tets.len());
     let mut corner: Vec<u32> = Vec::with_capacity(tets.len() * 4);
-    match PointGrid::new(tets) {
+    let rows = match PointGrid::new(tets) {
         Some(mut grid) => {
             for t in tets {
                 for p in t.tet {
@@ -238,6 +248,7 @@ pub fn march_reusing(
                     corner.push(*slot);
                 }
             }
+            grid.rows()
         }
         None => {
             let mut point_index: HashMap<Point, u32> =
@@ -252,10 +263,20 @@ pub fn march_reusing(
                     corner.push(i);
                 }
             }
+            let mut rows: Vec<(Point, u32)> = point_index.into_iter().collect();
+            rows.sort_unstable_by_key(|&([x, y, z], _)| [z, y, x]);
+            rows.into_iter().map(|(_, i)| i).collect()
         }
-    }
+    };
+    // Sampled in rows of equal y and z (a field that shares work along rows, as the noises
+    // do, pays once per row); a value depends on its point alone, so the bits are the same.
+    let in_rows: Vec<Vec3> = rows.iter().map(|&i| points[i as usize]).collect();
+    let mut sampled = vec![0f32; points.len()];
+    field.sample_batch(&in_rows, &mut sampled);
     let mut values = vec![0f32; points.len()];
-    field.sample_batch(&points, &mut values);
+    for (&i, &v) in rows.iter().zip(&sampled) {
+        values[i as usize] = v;
+    }
     let mut mesh = ChunkMesh {
         samples: points.len(),
         ..ChunkMesh::default()

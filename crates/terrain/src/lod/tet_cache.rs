@@ -490,6 +490,33 @@ mod tests {
         }
     }
 
+    /// Equal encodings are equal tets, and unequal tets unequal encodings, with and without
+    /// the cache keeping them.
+    #[test]
+    fn encodings_compare_as_their_tets() {
+        let g = LodGeometry::new(1, 8, [4, 2, 4]).unwrap();
+        let maps = viewer_maps(g, 8);
+        for budget in [0, DEFAULT_TET_CACHE_BYTES] {
+            let cache = TetCache::new(budget);
+            let (mut same, mut differ) = (0, 0);
+            for (a, b) in maps.iter().zip(maps.iter().skip(1)) {
+                for c in b.chunks().iter().filter(|c| a.contains(c)) {
+                    let ea = cache.encoded_tets(a, c).unwrap().encoded.unwrap();
+                    let eb = cache.encoded_tets(b, c).unwrap().encoded.unwrap();
+                    let equal_tets = chunk_tets(a, c).unwrap() == chunk_tets(b, c).unwrap();
+                    assert_eq!(ea == eb, equal_tets, "chunk {c:?}");
+                    assert_eq!(eb.tets(), chunk_tets(b, c).unwrap());
+                    if equal_tets {
+                        same += 1;
+                    } else {
+                        differ += 1;
+                    }
+                }
+            }
+            assert!(same > 0 && differ > 0, "{same} the same, {differ} differ");
+        }
+    }
+
     #[test]
     fn a_chunk_for_another_map_is_refused() {
         let g = LodGeometry::new(1, 4, [2, 2, 2]).unwrap();
