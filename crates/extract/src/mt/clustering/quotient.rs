@@ -659,18 +659,22 @@ impl Quotient<'_> {
     /// the round's tables (`r.labelled`): a triangle that collapsed in this state is skipped
     /// on one byte, and the others' quotient labels are read in one place.
     fn verdict_labelled(&self, gi: usize, s: &mut Star, r: &RoundTables) -> Verdict {
-        let g = &self.groups[gi];
+        let g = self.groups[gi];
         let lones = self.lones_of(gi);
         let me = self.g.leader[gi];
+        let (flips, labels) = (&r.flips[..], &r.labels[..]);
         s.src.clear();
         s.dst.clear();
-        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+        // Each triangle's memo is read once: collapsed, or test (c)'s outcome when known.
+        let mut walk = |x: u32| -> bool {
             for &ti in self.tris_of(x) {
-                if r.flips[ti as usize].load(Ordering::Relaxed) == COLLAPSED {
+                let memo = &flips[ti as usize];
+                let known = memo.load(Ordering::Relaxed);
+                if known == COLLAPSED {
                     continue;
                 }
                 // Three different labels, one of them the group's (`x`'s).
-                let q = r.labels[ti as usize];
+                let q = labels[ti as usize];
                 let k = if q[0] == me {
                     0
                 } else if q[1] == me {
@@ -681,9 +685,20 @@ impl Quotient<'_> {
                 debug_assert_eq!(q[k], me, "triangle {ti} at member {x} of group {gi}");
                 s.src.push(q[(k + 1) % 3]);
                 s.dst.push(q[(k + 2) % 3]);
-                if !self.flip_ok(q, ti, &r.flips) {
-                    return Verdict::FailsLink;
+                let ok = match known {
+                    1 => true,
+                    2 => false,
+                    _ => self.flip_eval(q, ti, memo),
+                };
+                if !ok {
+                    return false;
                 }
+            }
+            true
+        };
+        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+            if !walk(x) {
+                return Verdict::FailsLink;
             }
         }
         if simple_cycle(&s.src, &s.dst) {
@@ -701,17 +716,20 @@ impl Quotient<'_> {
         match memo.load(Ordering::Relaxed) {
             1 => true,
             2 => false,
-            _ => {
-                let ok = match shape(q.map(|x| self.position(x))) {
-                    Shape::Flat => {
-                        shape(self.tri(tri).map(|x| self.cpos[x as usize])) == Shape::Flat
-                    }
-                    Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
-                };
-                memo.store(if ok { 1 } else { 2 }, Ordering::Relaxed);
-                ok
-            }
+            _ => self.flip_eval(q, tri, memo),
         }
+    }
+
+    /// Test (c) on plain MT triangle `tri` evaluated (its memo `memo` not known yet), and the
+    /// outcome stored in the memo.
+    #[inline(never)]
+    fn flip_eval(&self, q: [u32; 3], tri: u32, memo: &AtomicU8) -> bool {
+        let ok = match shape(q.map(|x| self.position(x))) {
+            Shape::Flat => shape(self.tri(tri).map(|x| self.cpos[x as usize])) == Shape::Flat,
+            Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
+        };
+        memo.store(if ok { 1 } else { 2 }, Ordering::Relaxed);
+        ok
     }
 
     /// The gradient of plain MT triangle `tri`'s source tetrahedron (of the linear interpolant
