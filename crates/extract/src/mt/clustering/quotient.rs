@@ -920,12 +920,15 @@ impl Quotient<'_> {
     pub(crate) fn nearest_group(&self, x: u32, allowed: impl Fn(u32) -> bool) -> Option<u32> {
         let px = glam::Vec3::from(self.cpos[x as usize]);
         let mut best: Option<(f32, u32)> = None;
+        // The group just weighed: a corner of the same group again weighs the same.
+        let mut last = NONE;
         for &t in self.tris_of(x) {
             for y in self.tri(t) {
                 let h = self.g.group_of[y as usize];
-                if h == NONE || self.g.active[h as usize] == 0 || !allowed(h) {
+                if h == last || h == NONE || self.g.active[h as usize] == 0 || !allowed(h) {
                     continue;
                 }
+                last = h;
                 let dist = px.distance_squared(glam::Vec3::from(self.g.centroid[h as usize]));
                 if best.is_none_or(|(bd, bh)| (dist, h) < (bd, bh)) {
                     best = Some((dist, h));
