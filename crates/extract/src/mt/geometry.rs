@@ -17,8 +17,9 @@
 //! crossed edges (`TetGroup::cycles`: each tetrahedron's case table cycle, in template order,
 //! naming group edges). Plain MT writes each id straight into place, in its own instance of
 //! the walk (`PLAIN`: no vertex map, listing or cells, so none of their flags is tested per
-//! anchor), and each edge's ends are read by their deltas from the anchor
-//! (`TetGroup::edge_reads`).
+//! anchor), and so does the listing over the whole box (`LIST`: each triangle's source
+//! tetrahedron written beside it, no flag tested per triangle); each edge's ends are read by
+//! their deltas from the anchor (`TetGroup::edge_reads`).
 
 use rayon::prelude::*;
 
