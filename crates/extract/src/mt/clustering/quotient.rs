@@ -164,15 +164,21 @@ impl Groups {
                 .zip(self.vpos.par_chunks_mut(RUN))
                 .enumerate()
                 .for_each(|(k, (labels, positions))| {
-                    for (i, (l, p)) in labels.iter_mut().zip(positions).enumerate() {
-                        let x = k * RUN + i;
-                        let h = group_of[x];
+                    let lo = k * RUN;
+                    let run = lo..lo + labels.len();
+                    let (groups, own) = (&group_of[run.clone()], &f.cpos[run]);
+                    for (i, ((l, p), (&h, &at))) in labels
+                        .iter_mut()
+                        .zip(positions)
+                        .zip(groups.iter().zip(own))
+                        .enumerate()
+                    {
                         if h != NONE && active[h as usize] != 0 {
                             *l = leader[h as usize];
                             *p = centroid[h as usize];
                         } else {
-                            *l = x as u32;
-                            *p = f.cpos[x];
+                            *l = (lo + i) as u32;
+                            *p = at;
                         }
                     }
                 })
