@@ -359,10 +359,12 @@ pub(crate) fn attach(
             .map(|(r, bases)| {
                 let mut total = 0;
                 let mut next = found[part[r]..part[r + 1]].iter().peekable();
-                for (j, base) in bases.iter_mut().enumerate() {
+                let run = r * RUN..r * RUN + bases.len();
+                let (active, lens) = (&active[run.clone()], &lone_len[run]);
+                for (j, ((base, &a), &len)) in bases.iter_mut().zip(active).zip(lens).enumerate() {
                     let gi = r * RUN + j;
                     // A kept group keeps its lones so far; the others start over.
-                    let k = if active[gi] != 0 { lone_len[gi] } else { 0 };
+                    let k = if a != 0 { len } else { 0 };
                     *base = k;
                     let mut new = 0;
                     while next.next_if(|&&(h, _)| h as usize == gi).is_some() {
@@ -404,9 +406,11 @@ pub(crate) fn attach(
                     let gi = r * RUN + j;
                     *start = (first + w) as u32;
                     let k = usize::from(*base);
-                    let from = old_start[gi] as usize;
-                    out[w..w + k].copy_from_slice(&old_lone[from..from + k]);
-                    w += k;
+                    if k > 0 {
+                        let from = old_start[gi] as usize;
+                        out[w..w + k].copy_from_slice(&old_lone[from..from + k]);
+                        w += k;
+                    }
                     let mut n = k;
                     while let Some(&(h, l)) = next.next_if(|&&(h, _)| h as usize == gi) {
                         if n < MAX_LONES {
