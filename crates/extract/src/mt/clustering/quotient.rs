@@ -377,11 +377,9 @@ impl RoundTables {
                             vlabel[t[2] as usize],
                         ];
                         *l = c;
-                        *m.get_mut() = if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
-                            COLLAPSED
-                        } else {
-                            0
-                        };
+                        // Without branches: whether two labels coincide is data.
+                        let collapsed = (c[0] == c[1]) | (c[1] == c[2]) | (c[0] == c[2]);
+                        *m.get_mut() = COLLAPSED * u8::from(collapsed);
                     }
                 })
         });
@@ -679,15 +677,10 @@ impl Quotient<'_> {
                 if known == COLLAPSED {
                     continue;
                 }
-                // Three different labels, one of them the group's (`x`'s).
+                // Three different labels, one of them the group's (`x`'s): its corner found
+                // without branches.
                 let q = labels[ti as usize];
-                let k = if q[0] == me {
-                    0
-                } else if q[1] == me {
-                    1
-                } else {
-                    2
-                };
+                let k = usize::from(q[1] == me) | usize::from(q[2] == me) << 1;
                 debug_assert_eq!(q[k], me, "triangle {ti} at member {x} of group {gi}");
                 s.src.push(q[(k + 1) % 3]);
                 s.dst.push(q[(k + 2) % 3]);
