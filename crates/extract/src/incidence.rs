@@ -32,7 +32,13 @@ impl Incidence {
 
 /// Every vertex's triangles as a CSR table: `inc[inc_start[v]..inc_start[v + 1]]` lists the
 /// triangles of `indices` (three per triangle) holding vertex `v`, in triangle order.
-/// `cursor` is working memory.
+/// `cursor` is working memory (left with `vertex_count` entries, whose values the callers do
+/// not read).
+///
+/// The counts go two places up (`inc_start[v + 2]`), so that after their prefix sums
+/// `inc_start[v + 1]` is where `v`'s triangles start: the fill's cursor, which it leaves where
+/// they end, at `v + 1`'s start. No separate cursor array is copied or read, and `inc` is not
+/// cleared first (every slot is written).
 pub(crate) fn incidence(
     vertex_count: usize,
     indices: &[u32],
@@ -40,24 +46,29 @@ pub(crate) fn incidence(
     inc: &mut Vec<u32>,
     cursor: &mut Vec<u32>,
 ) {
+    let corners = &indices[..indices.len() - indices.len() % 3];
     inc_start.clear();
-    inc_start.resize(vertex_count + 1, 0);
-    for &v in indices {
-        inc_start[v as usize + 1] += 1;
+    inc_start.resize(vertex_count + 2, 0);
+    for &v in corners {
+        inc_start[v as usize + 2] += 1;
     }
-    for i in 0..vertex_count {
-        inc_start[i + 1] += inc_start[i];
+    let mut sum = 0;
+    for s in &mut inc_start[2..] {
+        sum += *s;
+        *s = sum;
     }
-    inc.clear();
-    inc.resize(indices.len() - indices.len() % 3, 0);
-    cursor.clear();
-    cursor.extend_from_slice(&inc_start[..vertex_count]);
-    for (t, tri) in indices.chunks_exact(3).enumerate() {
+    inc.truncate(corners.len());
+    inc.resize(corners.len(), 0);
+    for (t, tri) in corners.chunks_exact(3).enumerate() {
         for &v in tri {
-            inc[cursor[v as usize] as usize] = t as u32;
-            cursor[v as usize] += 1;
+            let c = &mut inc_start[v as usize + 1];
+            inc[*c as usize] = t as u32;
+            *c += 1;
         }
     }
+    inc_start.truncate(vertex_count + 1);
+    cursor.clear();
+    cursor.resize(vertex_count, 0);
 }
 
 /// [`incidence`] on `pool`'s threads into `table`: the same table, bit for bit, for any thread

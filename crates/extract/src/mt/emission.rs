@@ -189,8 +189,19 @@ pub(crate) fn emit(
                 .for_each(|(c, (ts, out))| {
                     out.clear();
                     let first = c * CHUNK / 3;
-                    for (i, t) in ts.chunks_exact(3).enumerate() {
-                        if let Some(q) = mapped(t, first + i) {
+                    if kept.is_some() {
+                        for (i, t) in ts.chunks_exact(3).enumerate() {
+                            if let Some(q) = mapped(t, first + i) {
+                                out.extend_from_slice(&q);
+                            }
+                        }
+                        return;
+                    }
+                    // The whole box: every listed triangle, the collapsed ones dropped (the
+                    // test without branches: collapsing is data).
+                    for t in ts.chunks_exact(3) {
+                        let q = [t[0], t[1], t[2]].map(|i| map[i as usize]);
+                        if !((q[0] == q[1]) | (q[1] == q[2]) | (q[0] == q[2])) {
                             out.extend_from_slice(&q);
                         }
                     }

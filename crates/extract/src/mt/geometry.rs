@@ -17,8 +17,9 @@
 //! crossed edges (`TetGroup::cycles`: each tetrahedron's case table cycle, in template order,
 //! naming group edges). Plain MT writes each id straight into place, in its own instance of
 //! the walk (`PLAIN`: no vertex map, listing or cells, so none of their flags is tested per
-//! anchor), and each edge's ends are read by their deltas from the anchor
-//! (`TetGroup::edge_reads`).
+//! anchor), and so does the listing over the whole box (`LIST`: each triangle's source
+//! tetrahedron written beside it, no flag tested per triangle); each edge's ends are read by
+//! their deltas from the anchor (`TetGroup::edge_reads`).
 
 use rayon::prelude::*;
 
@@ -225,15 +226,24 @@ pub(crate) fn geometry_layer(
                 r += 1;
             });
         }
-        // Plain MT (no vertex map, no listing, no cells) walks without the other modes' flags.
+        // Plain MT (no vertex map, no listing, no cells) walks without the other modes' flags,
+        // and so does the listing over the whole box (no kept cells marked, no cells).
         let plain = vertices.map.is_none() && out.list.is_none() && out.cells.is_none();
-        match (out.flip, plain) {
-            (true, _) => geometry_in_window::<true, true>(surface, k, vertices, window, z0, out),
-            (false, true) => {
-                geometry_in_window::<false, true>(surface, k, vertices, window, z0, out)
+        let list_only = vertices.map.is_none()
+            && out.cells.is_none()
+            && out.list.as_ref().is_some_and(|list| list.kept.is_none());
+        match (out.flip, plain, list_only) {
+            (true, _, _) => {
+                geometry_in_window::<true, true, false>(surface, k, vertices, window, z0, out)
             }
-            (false, false) => {
-                geometry_in_window::<false, false>(surface, k, vertices, window, z0, out)
+            (false, true, _) => {
+                geometry_in_window::<false, true, false>(surface, k, vertices, window, z0, out)
+            }
+            (false, false, true) => {
+                geometry_in_window::<false, false, true>(surface, k, vertices, window, z0, out)
+            }
+            (false, false, false) => {
+                geometry_in_window::<false, false, false>(surface, k, vertices, window, z0, out)
             }
         }
     })
@@ -261,8 +271,9 @@ pub(crate) struct ListOut<'s> {
 /// `out.cells`, each triangle written gets its anchor cell there (linear index, x fastest).
 /// Returns the tetrahedra with a triangle (when listing in a chunk, those of kept cells) and
 /// the triangles written. `PLAIN`: plain MT's walk (no vertex map, no listing, no cells), its
-/// flags known at compile time.
-pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
+/// flags known at compile time; `LIST`: the listing over the whole box (no vertex map, no
+/// kept cells marked, no cells), each triangle's source written straight into place.
+pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool, const LIST: bool>(
     surface: &Surface,
     k: usize,
     vertices: Vertices,
@@ -279,7 +290,7 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
     let Vertices { positions, map } = vertices;
     let LayerOut {
         out,
-        mut list,
+        list,
         mut cells,
         flip,
     } = out;
@@ -292,6 +303,10 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
         !PLAIN || (map.is_none() && list.is_none() && cells.is_none()),
         "the plain walk writes only triangles"
     );
+    debug_assert!(
+        !LIST || (!PLAIN && map.is_none() && cells.is_none()),
+        "the listing's walk writes triangles and sources"
+    );
     let v = &l.s.values;
     let plane = l.s.dims[0] * l.s.dims[1];
     let mut processed = 0;
@@ -303,6 +318,12 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
         .and_then(|list| list.kept.as_ref().map(|k| k.0));
     let cells_wanted = cells.is_some();
     let plain = map.is_none() && !listing && !cells_wanted;
+    // The listing's own walk: the sources slice taken out of `list`, no flag tested per
+    // triangle.
+    let (mut list, source) = match list {
+        Some(ListOut { source, kept: None }) if LIST => (None, source),
+        other => (other, &mut [][..]),
+    };
     let [nx, ny, _] = l.s.cells;
     // The window starts at slot 0 of plane z0.
     let base = z0 * plane;
@@ -366,6 +387,9 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
             // array of triangles copied over would be read back across its stores), the write
             // position in a register; the listing's gradient, flags and cells beside them.
             let mut at = w;
+            // The listing's first triangle of this anchor.
+            let mut t = if LIST { w / 3 } else { 0 };
+            let tet_flag = u8::from(inner) << 7;
             for cycle in &group.cycles[range] {
                 let e = cycle.edges.map(|e| usize::from(e) & (EDGE_SLOTS - 1));
                 let q = [ids[e[0]], ids[e[1]], ids[e[2]], 0];
@@ -406,7 +430,15 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool>(
                     }
                     2
                 };
-                if !PLAIN && !plain {
+                if LIST {
+                    // The tetrahedron, whose gradient the quotient test's (c) reads.
+                    let tet = (first + usize::from(cycle.tet)) as u8 | tet_flag;
+                    source[t] = (anchor as u32, tet);
+                    if n == 2 {
+                        source[t + 1] = (anchor as u32, tet);
+                    }
+                    t += n;
+                } else if !PLAIN && !plain {
                     let t = at / 3;
                     if let Some(list) = list.as_mut() {
                         // The tetrahedron, whose gradient the quotient test's (c) reads.

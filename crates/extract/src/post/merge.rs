@@ -170,7 +170,7 @@ impl MergeBuffers {
         self.tris.clear();
         self.tris
             .extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
-        // `next_member` serves as the fill cursors first (no separate array).
+        // `next_member` serves as the table's working memory first (no separate array).
         crate::incidence::incidence(
             vertex_count,
             indices,

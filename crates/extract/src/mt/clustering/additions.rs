@@ -85,7 +85,7 @@ pub(crate) fn revive(
             .map_init(Box::<Star>::default, |s, k| {
                 (variant_of[k]..variant_of[k + 1]).find(|&v| q.passes_all(v as usize, s))
             })
-            .flatten()
+            .flatten_iter()
             .collect()
     });
     for &v in &taken {
@@ -112,7 +112,7 @@ pub(crate) fn around(f: &Fixed, g: &Groups, groups: &[u32], pool: &rayon::Thread
                 q.neighbours(gi as usize, s, &mut out);
                 out
             })
-            .flatten()
+            .flatten_iter()
             .collect()
     });
     out.sort_unstable();
@@ -221,9 +221,11 @@ pub(crate) fn sliver_proposals(
             .enumerate()
             .map(|(k, out)| {
                 let mut picked = Vec::new();
-                for (i, c) in out.iter_mut().enumerate() {
+                let group_of = &g.group_of[k * RUN..k * RUN + out.len()];
+                for (i, (c, &h)) in out.iter_mut().zip(group_of).enumerate() {
                     let x = (k * RUN + i) as u32;
-                    if q.alone(x) {
+                    // Left alone: in no group, or in one not kept (`Quotient::alone`).
+                    if h == NONE || g.active[h as usize] == 0 {
                         *c = pick(x);
                         if *c != NONE {
                             picked.push(x);
@@ -274,10 +276,16 @@ pub(crate) fn give_lones(
         (0..edge_of.len().div_ceil(RUN))
             .into_par_iter()
             .map(|k| {
-                (k * RUN..((k + 1) * RUN).min(edge_of.len()))
-                    .filter(|&x| q.alone(x as u32))
-                    .filter_map(give)
-                    .collect()
+                let lo = k * RUN;
+                let group_of = &q.g.group_of[lo..((k + 1) * RUN).min(edge_of.len())];
+                let mut found = Vec::new();
+                for (i, &h) in group_of.iter().enumerate() {
+                    // Left alone: in no group, or in one not kept (`Quotient::alone`).
+                    if h == NONE || q.g.active[h as usize] == 0 {
+                        found.extend(give(lo + i));
+                    }
+                }
+                found
             })
             .collect()
     });
@@ -351,10 +359,12 @@ pub(crate) fn attach(
             .map(|(r, bases)| {
                 let mut total = 0;
                 let mut next = found[part[r]..part[r + 1]].iter().peekable();
-                for (j, base) in bases.iter_mut().enumerate() {
+                let run = r * RUN..r * RUN + bases.len();
+                let (active, lens) = (&active[run.clone()], &lone_len[run]);
+                for (j, ((base, &a), &len)) in bases.iter_mut().zip(active).zip(lens).enumerate() {
                     let gi = r * RUN + j;
                     // A kept group keeps its lones so far; the others start over.
-                    let k = if active[gi] != 0 { lone_len[gi] } else { 0 };
+                    let k = if a != 0 { len } else { 0 };
                     *base = k;
                     let mut new = 0;
                     while next.next_if(|&&(h, _)| h as usize == gi).is_some() {
@@ -396,9 +406,11 @@ pub(crate) fn attach(
                     let gi = r * RUN + j;
                     *start = (first + w) as u32;
                     let k = usize::from(*base);
-                    let from = old_start[gi] as usize;
-                    out[w..w + k].copy_from_slice(&old_lone[from..from + k]);
-                    w += k;
+                    if k > 0 {
+                        let from = old_start[gi] as usize;
+                        out[w..w + k].copy_from_slice(&old_lone[from..from + k]);
+                        w += k;
+                    }
                     let mut n = k;
                     while let Some(&(h, l)) = next.next_if(|&&(h, _)| h as usize == gi) {
                         if n < MAX_LONES {

@@ -619,11 +619,12 @@ pub(crate) fn vertex_map(
     // Every entry is written below.
     overwritten(vertex_of, n, 0, pool);
     positions.clear();
+    let (vlabel, vpos, vertex_of) = (&g.vlabel[..n], &g.vpos[..n], &mut vertex_of[..n]);
     for x in 0..n {
-        let l = g.vlabel[x] as usize;
+        let l = vlabel[x] as usize;
         if l == x {
             vertex_of[x] = positions.len() as u32;
-            positions.push(g.vpos[x]);
+            positions.push(vpos[x]);
         } else {
             debug_assert!(
                 l < x,

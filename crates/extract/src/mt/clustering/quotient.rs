@@ -164,15 +164,21 @@ impl Groups {
                 .zip(self.vpos.par_chunks_mut(RUN))
                 .enumerate()
                 .for_each(|(k, (labels, positions))| {
-                    for (i, (l, p)) in labels.iter_mut().zip(positions).enumerate() {
-                        let x = k * RUN + i;
-                        let h = group_of[x];
+                    let lo = k * RUN;
+                    let run = lo..lo + labels.len();
+                    let (groups, own) = (&group_of[run.clone()], &f.cpos[run]);
+                    for (i, ((l, p), (&h, &at))) in labels
+                        .iter_mut()
+                        .zip(positions)
+                        .zip(groups.iter().zip(own))
+                        .enumerate()
+                    {
                         if h != NONE && active[h as usize] != 0 {
                             *l = leader[h as usize];
                             *p = centroid[h as usize];
                         } else {
-                            *l = x as u32;
-                            *p = f.cpos[x];
+                            *l = (lo + i) as u32;
+                            *p = at;
                         }
                     }
                 })
@@ -371,11 +377,9 @@ impl RoundTables {
                             vlabel[t[2] as usize],
                         ];
                         *l = c;
-                        *m.get_mut() = if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
-                            COLLAPSED
-                        } else {
-                            0
-                        };
+                        // Without branches: whether two labels coincide is data.
+                        let collapsed = (c[0] == c[1]) | (c[1] == c[2]) | (c[0] == c[2]);
+                        *m.get_mut() = COLLAPSED * u8::from(collapsed);
                     }
                 })
         });
@@ -659,31 +663,41 @@ impl Quotient<'_> {
     /// the round's tables (`r.labelled`): a triangle that collapsed in this state is skipped
     /// on one byte, and the others' quotient labels are read in one place.
     fn verdict_labelled(&self, gi: usize, s: &mut Star, r: &RoundTables) -> Verdict {
-        let g = &self.groups[gi];
+        let g = self.groups[gi];
         let lones = self.lones_of(gi);
         let me = self.g.leader[gi];
+        let (flips, labels) = (&r.flips[..], &r.labels[..]);
         s.src.clear();
         s.dst.clear();
-        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+        // Each triangle's memo is read once: collapsed, or test (c)'s outcome when known.
+        let mut walk = |x: u32| -> bool {
             for &ti in self.tris_of(x) {
-                if r.flips[ti as usize].load(Ordering::Relaxed) == COLLAPSED {
+                let memo = &flips[ti as usize];
+                let known = memo.load(Ordering::Relaxed);
+                if known == COLLAPSED {
                     continue;
                 }
-                // Three different labels, one of them the group's (`x`'s).
-                let q = r.labels[ti as usize];
-                let k = if q[0] == me {
-                    0
-                } else if q[1] == me {
-                    1
-                } else {
-                    2
-                };
+                // Three different labels, one of them the group's (`x`'s): its corner found
+                // without branches.
+                let q = labels[ti as usize];
+                let k = usize::from(q[1] == me) | usize::from(q[2] == me) << 1;
                 debug_assert_eq!(q[k], me, "triangle {ti} at member {x} of group {gi}");
                 s.src.push(q[(k + 1) % 3]);
                 s.dst.push(q[(k + 2) % 3]);
-                if !self.flip_ok(q, ti, &r.flips) {
-                    return Verdict::FailsLink;
+                let ok = match known {
+                    1 => true,
+                    2 => false,
+                    _ => self.flip_eval(q, ti, memo),
+                };
+                if !ok {
+                    return false;
                 }
+            }
+            true
+        };
+        for x in g.ids().chain(lones.iter().map(|l| l.id)) {
+            if !walk(x) {
+                return Verdict::FailsLink;
             }
         }
         if simple_cycle(&s.src, &s.dst) {
@@ -701,17 +715,20 @@ impl Quotient<'_> {
         match memo.load(Ordering::Relaxed) {
             1 => true,
             2 => false,
-            _ => {
-                let ok = match shape(q.map(|x| self.position(x))) {
-                    Shape::Flat => {
-                        shape(self.tri(tri).map(|x| self.cpos[x as usize])) == Shape::Flat
-                    }
-                    Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
-                };
-                memo.store(if ok { 1 } else { 2 }, Ordering::Relaxed);
-                ok
-            }
+            _ => self.flip_eval(q, tri, memo),
         }
+    }
+
+    /// Test (c) on plain MT triangle `tri` evaluated (its memo `memo` not known yet), and the
+    /// outcome stored in the memo.
+    #[inline(never)]
+    fn flip_eval(&self, q: [u32; 3], tri: u32, memo: &AtomicU8) -> bool {
+        let ok = match shape(q.map(|x| self.position(x))) {
+            Shape::Flat => shape(self.tri(tri).map(|x| self.cpos[x as usize])) == Shape::Flat,
+            Shape::Normal(n) => n.dot(DVec3::from(self.gradient(tri).map(f64::from))) > 0.0,
+        };
+        memo.store(if ok { 1 } else { 2 }, Ordering::Relaxed);
+        ok
     }
 
     /// The gradient of plain MT triangle `tri`'s source tetrahedron (of the linear interpolant
@@ -902,12 +919,15 @@ impl Quotient<'_> {
     pub(crate) fn nearest_group(&self, x: u32, allowed: impl Fn(u32) -> bool) -> Option<u32> {
         let px = glam::Vec3::from(self.cpos[x as usize]);
         let mut best: Option<(f32, u32)> = None;
+        // The group just weighed: a corner of the same group again weighs the same.
+        let mut last = NONE;
         for &t in self.tris_of(x) {
             for y in self.tri(t) {
                 let h = self.g.group_of[y as usize];
-                if h == NONE || self.g.active[h as usize] == 0 || !allowed(h) {
+                if h == last || h == NONE || self.g.active[h as usize] == 0 || !allowed(h) {
                     continue;
                 }
+                last = h;
                 let dist = px.distance_squared(glam::Vec3::from(self.g.centroid[h as usize]));
                 if best.is_none_or(|(bd, bh)| (dist, h) < (bd, bh)) {
                     best = Some((dist, h));

@@ -114,7 +114,7 @@ pub(crate) fn settle(
                         Verdict::FailsContractible => Some((gi, 2)),
                     }
                 })
-                .flatten()
+                .flatten_iter()
                 .collect()
         });
         if first {
