@@ -534,7 +534,7 @@ impl Backend for StudioBackend {
         let mut world = rmt_terrain::lod::LodWorld::new(field, settings)
             .map_err(|err| invalid(err.to_string()))?;
         // Up to four sessions live at once: a quarter of the runner's budget each.
-        world.set_tet_cache_bytes(STUDIO_TET_CACHE_BYTES);
+        world.set_tet_cache_bytes(plan.tet_cache_mb << 20);
         let (min, max) = (e.bounds.min, e.bounds.max);
         let centre = (min + max) * 0.5;
         // At the top of the box, a quarter of the way in from its near corner.
