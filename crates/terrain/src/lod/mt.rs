@@ -8,13 +8,17 @@
 //!   every triangle faces the outside (f >= 0)
 //!   crossing key = its edge's two lattice points (lo, hi) sorted;  position from (lo, hi,
 //!   f(lo), f(hi)) alone:  t = f(lo) / (f(lo) - f(hi)),  p = lo + t (hi - lo)   (f64)
-//!   normal = the field's gradient at p by central differences (step h / 4), normalised
-//!            (where those differences vanish: the edge's direction lo -> hi towards f >= 0)
+//!   normal = the field's gradient at p from 4 probes at the corners of a regular tet,
+//!            p + (h / 4) k for k in PROBE_DIRECTIONS: g = sum_k k f(p + (h / 4) k), second
+//!            order like central differences (6 probes); normalised (where g vanishes: the
+//!            edge's direction lo -> hi towards f >= 0)
 //! ```
 //!
 //! Speed without changing a bit: lattice points are numbered on a flat grid over the tets'
-//! box, the triangles of each inside mask come from a table, all normal probes of a chunk go
-//! to the field in one batch (a batch gives every point the bits a single sample gives), and
+//! box and sampled in rows, the triangles of each inside mask come from a table, all normal
+//! probes of a chunk go to the field in one batch (a batch gives every point the bits a single
+//! sample gives), a re-meshed chunk takes the normals of the crossings it keeps from its last
+//! surface ([`march_reusing`]), and
 //! a chunk whose box the field's bound ([`ScalarField::side`]) puts on one side of 0 is not
 //! sampled at all (its surface is empty either way).
 //!
@@ -67,7 +71,7 @@ pub struct ChunkMesh {
     /// Per vertex, its world position.
     pub positions: Vec<[f32; 3]>,
     /// Per vertex, the unit normal (the field's gradient, or the crossed edge's direction
-    /// where the central differences vanish).
+    /// where the probes' differences vanish).
     pub normals: Vec<[f32; 3]>,
     /// Three vertex indices per triangle, facing the outside (`f >= 0`).
     pub indices: Vec<u32>,
@@ -202,6 +206,17 @@ impl PointGrid {
     }
 }
 
+/// Where a normal's probes sit around a crossing, in steps of `h / 4`: the corners of a
+/// regular tet centred on it. Their sum is 0 and the sum of their outer products is 4 I, so
+/// `sum_k k f(p + e k) = 4 e grad f(p) + O(e^3)`: the gradient's direction to second order,
+/// from 4 samples.
+pub const PROBE_DIRECTIONS: [[f32; 3]; 4] = [
+    [1.0, 1.0, 1.0],
+    [1.0, -1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+];
+
 /// Marching tetrahedra over `tets`. Deterministic: vertices in order of first use, tets in
 /// the given order. When the field's bound ([`ScalarField::side`]) puts the tets' bounding
 /// box on one side of 0, the surface is empty and nothing is sampled.
@@ -322,7 +337,7 @@ pub fn march_reusing(
             }
         }
     }
-    // Each crossing's normal from `before` (by key), else from 6 probes around it.
+    // Each crossing's normal from `before` (by key), else from its probes.
     let known: HashMap<[Point; 2], u32> = before.map_or_else(HashMap::default, |b| {
         b.keys
             .iter()
@@ -333,7 +348,7 @@ pub fn march_reusing(
     let from_before: Vec<Option<u32>> = mesh.keys.iter().map(|k| known.get(k).copied()).collect();
     let eps = frame.h * 0.25;
     let probed = from_before.iter().filter(|b| b.is_none()).count();
-    let mut probe = Vec::with_capacity(6 * probed);
+    let mut probe = Vec::with_capacity(PROBE_DIRECTIONS.len() * probed);
     for (p, _) in mesh
         .positions
         .iter()
@@ -341,16 +356,11 @@ pub fn march_reusing(
         .filter(|(_, b)| b.is_none())
     {
         let p = Vec3::from(*p);
-        for axis in 0..3 {
-            let mut d = Vec3::ZERO;
-            d[axis] = eps;
-            probe.push(p + d);
-            probe.push(p - d);
-        }
+        probe.extend(PROBE_DIRECTIONS.map(|k| p + Vec3::from(k) * eps));
     }
     let mut probe_values = vec![0f32; probe.len()];
     field.sample_batch(&probe, &mut probe_values);
-    let mut pv = probe_values.chunks_exact(6);
+    let mut pv = probe_values.chunks_exact(PROBE_DIRECTIONS.len());
     mesh.normals = from_before
         .iter()
         .zip(&ends)
@@ -358,8 +368,11 @@ pub fn march_reusing(
             if let (Some(i), Some(before)) = (b, before) {
                 return before.normals[*i as usize];
             }
-            let pv = pv.next().unwrap_or(&[0.0; 6]);
-            let g = Vec3::new(pv[0] - pv[1], pv[2] - pv[3], pv[4] - pv[5]);
+            let pv = pv.next().unwrap_or(&[0.0; 4]);
+            let g = PROBE_DIRECTIONS
+                .iter()
+                .zip(pv)
+                .fold(Vec3::ZERO, |g, (&k, &v)| g + Vec3::from(k) * v);
             // Where the differences vanish (flat, quantised fields), the edge's own direction
             // towards the outside: still a function of the key alone.
             let g = if g.length_squared() > 0.0 && g.is_finite() {
@@ -548,12 +561,37 @@ mod tests {
                 let (x, y): (Bits, Bits) = (bits(&fresh), bits(&again));
                 assert!(x == y, "chunk {k:?}");
                 let shared = fresh.keys.iter().filter(|q| old.keys.contains(q)).count();
-                assert_eq!(n_fresh - n_again, 6 * shared, "chunk {k:?}");
+                assert_eq!(
+                    n_fresh - n_again,
+                    PROBE_DIRECTIONS.len() * shared,
+                    "chunk {k:?}"
+                );
                 reused += usize::from(shared > 0);
                 saved += shared;
             }
         }
         assert!(reused > 0 && saved > 0, "nothing was reused");
+    }
+
+    /// The probe directions sum to 0 and their outer products to 4 I, so a linear field's
+    /// probes give its gradient exactly (up to the factor), in any direction.
+    #[test]
+    fn probes_give_a_linear_fields_gradient() {
+        let sum = PROBE_DIRECTIONS
+            .iter()
+            .fold(Vec3::ZERO, |s, &k| s + Vec3::from(k));
+        assert_eq!(sum, Vec3::ZERO);
+        for i in 0..3 {
+            for j in 0..3 {
+                let m: f32 = PROBE_DIRECTIONS.iter().map(|k| k[i] * k[j]).sum();
+                assert_eq!(m, if i == j { 4.0 } else { 0.0 }, "({i}, {j})");
+            }
+        }
+        let a = Vec3::new(0.3, -1.7, 0.9);
+        let g = PROBE_DIRECTIONS.iter().fold(Vec3::ZERO, |g, &k| {
+            g + Vec3::from(k) * a.dot(Vec3::from(k) * 0.25)
+        });
+        assert!((g - a).length() < 1e-6, "{g} against {a}");
     }
 
     #[test]

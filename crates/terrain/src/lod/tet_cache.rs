@@ -17,6 +17,9 @@
 //!               lexicographic order of the sorted tets)
 //!   miss:       chunk_tets, encode relative to K's lower corner, keep it while the byte budget
 //!               allows (first come, first kept), return the tets
+//!   encoded_tets: the same lookup, answering with the encoding (any chunk's, kept or not):
+//!               equal encodings at one corner are equal tets, which is how the world finds
+//!               that a chunk the map change marked keeps its tets
 //!   entry:      one u32 per tet, in the tets' order:
 //!                 bit 31 = 0: a body-centred tet of level k (bit 30 = 0) or k - 1 (bit 30 = 1),
 //!                             template j (bits 26-29, canonical bcc_tet(level, 0, j / 4, j % 4))
