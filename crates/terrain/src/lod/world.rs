@@ -82,8 +82,8 @@ pub struct LodWorld<F: ScalarField> {
     /// The map the next remesh moves to.
     pending: LevelMap,
     meshes: HashMap<ChunkKey, ChunkMesh>,
-    /// The encoded tets each chunk's surface was marched from (chunks off the fast path with
-    /// a surface and an encoding).
+    /// The encoded tets each chunk's surface was marched from (every chunk marched from tets
+    /// that have an encoding; none for an empty box).
     encoded: HashMap<ChunkKey, EncodedTets>,
     /// The brush strokes applied so far ([`LodWorld::edit`]).
     edits: Overlay,
