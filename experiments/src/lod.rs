@@ -36,7 +36,7 @@ use rmt_mesh::distance::{one_sided, TriangleGrid};
 use rmt_terrain::lod::check::{check_surface, check_tets};
 use rmt_terrain::lod::{
     chunk_tets, mesh_chunks, thread_pool, weld, ChunkKey, ChunkMesh, LevelMap, LodFrame,
-    LodGeometry, LodSettings, LodWorld,
+    LodGeometry, LodSettings, LodWorld, MorphSettings,
 };
 
 use crate::config::Extraction;
@@ -83,6 +83,18 @@ pub fn lod_settings(e: &Extraction, plan: &LodPlan, threads: usize) -> Result<Lo
         },
         ratio: plan.ratio,
         threads,
+        // The morph is made for the path's longest step (a hair longer, for rounding).
+        morph: (plan.morph > 0.0).then(|| {
+            let path = viewer_path(e, plan);
+            let step = path
+                .windows(2)
+                .map(|w| w[0].distance(w[1]))
+                .fold(0.0f32, f32::max);
+            MorphSettings {
+                band: plan.morph,
+                lead: step * (1.0 + 1e-4) + spacing.x * 1e-4,
+            }
+        }),
     })
 }
 
@@ -175,8 +187,13 @@ pub struct LodStep {
     pub triangles: usize,
     /// Bytes held by the world ([`LodWorld::memory_bytes`]).
     pub memory_bytes: usize,
-    /// The pop, when some chunk changed level.
+    /// The pop, when some chunk changed level (under a morph: the old map's surfaces with the
+    /// new values against the new surfaces, the change of tets alone at one viewer).
     pub pop: Option<Pop>,
+    /// Under a morph, how far the surface moved over the step with the values: every chunk
+    /// re-meshed in place against its surface before the step, and every chunk that left the
+    /// map with the old values against itself with the new ones.
+    pub morph: Option<Pop>,
     /// The checks, on validated steps.
     pub check: Option<WorldCheck>,
     /// Per level `0..=levels`: chunks in the map and their triangles.
@@ -236,10 +253,14 @@ pub fn run_lod_session<F: ScalarField + Copy>(
     let frame = settings.frame;
     let mut world = LodWorld::new(field, settings).context("building the multiresolution world")?;
     world.set_tet_cache_bytes(plan.tet_cache_mb.saturating_mul(1 << 20));
+    let morphing = plan.morph > 0.0;
+    world.set_keep_replaced(morphing);
     let path = viewer_path(e, plan);
     let mut steps = Vec::with_capacity(path.len());
     for (k, &viewer) in path.iter().enumerate() {
-        let map = LevelMap::from_viewer(geom, to_lattice(&frame, viewer), plan.ratio);
+        // The viewer's map (`LevelMap::from_viewer`); the morph follows the viewer too.
+        world.set_viewer(viewer);
+        let map = world.pending_map().clone();
         // The old surfaces a pop is measured against: every chunk leaving the map and the
         // chunks touching it, before the re-mesh replaces them.
         let (leaving, old_near) = match world.level_map() {
@@ -263,18 +284,44 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             }
             None => (Vec::new(), None),
         };
-        world
-            .set_level_map(map)
-            .context("setting the viewer's level map")?;
         let t = Instant::now();
         let r = world.remesh().context("re-meshing the world")?;
         let remesh_s = t.elapsed().as_secs_f64();
-        let pop = match &old_near {
-            Some((old, near)) if !leaving.is_empty() => {
-                Some(measure_pop(&world, old, near, &leaving, &geom, frame.h))
+        let replaced = world.take_replaced();
+        // Under a morph, the old map's surfaces again with the new values: the pop is then
+        // the change of tets alone, and the change of values is the morph.
+        let old_now: Option<HashMap<ChunkKey, ChunkMesh>> = match &old_near {
+            Some((old, near)) if morphing => {
+                let keys: Vec<ChunkKey> = near.keys().copied().collect();
+                let meshes: Vec<ChunkMesh> = world.pool().install(|| {
+                    keys.par_iter()
+                        .map(|k| world.mesh_under(old, k))
+                        .collect::<Result<_, _>>()
+                })?;
+                Some(keys.into_iter().zip(meshes).collect())
             }
             _ => None,
         };
+        let pop = match &old_near {
+            Some((old, near)) if !leaving.is_empty() => {
+                let before = old_now.as_ref().unwrap_or(near);
+                Some(measure_pop(&world, old, before, &leaving, &geom, frame.h))
+            }
+            _ => None,
+        };
+        let morph = match (&old_near, &old_now) {
+            (Some((old, near)), Some(now)) => {
+                let moved = Moved {
+                    old,
+                    before: near,
+                    now,
+                    replaced: &replaced,
+                };
+                Some(measure_morph(&world, &moved, &leaving, &geom, frame.h))
+            }
+            _ => None,
+        };
+        drop(replaced);
         let validate = k + 1 == path.len()
             || k == 0
             || (plan.validate_every > 0 && k % plan.validate_every == 0);
@@ -298,6 +345,7 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             triangles: r.triangles,
             memory_bytes: world.memory_bytes(),
             pop,
+            morph,
             check,
             levels,
         });
@@ -349,12 +397,6 @@ fn map_chunks<F: ScalarField>(
         .collect()
 }
 
-/// A world position in lattice units `u = h / 2` from the frame's origin.
-fn to_lattice(frame: &LodFrame, p: Vec3) -> [f64; 3] {
-    let u = f64::from(frame.h) * 0.5;
-    ((p.as_dvec3() - frame.origin.as_dvec3()) / u).to_array()
-}
-
 /// Whether the closed boxes `a` and `b` share a volume (not only a face, edge or corner).
 fn overlaps(a: ([i64; 3], [i64; 3]), b: ([i64; 3], [i64; 3])) -> bool {
     (0..3).all(|i| a.0[i] < b.1[i] && b.0[i] < a.1[i])
@@ -402,8 +444,34 @@ fn pop_side<'a>(
     }
 }
 
-/// The pop of one step: every chunk that left the map against the new surface around it, and
-/// every chunk that entered against the old surface around it.
+/// A chunk's surface on one side of a comparison.
+type Surface<'a> = dyn Fn(&ChunkKey) -> Option<&'a ChunkMesh> + Sync + 'a;
+
+/// [`pop_side`] of every chunk of `keys` with a surface in `mine`, against the surfaces
+/// `theirs` of the leaves of `other` around it: chunk by chunk on the world's threads, summed
+/// in the order of `keys` (the same bits on any thread count).
+fn sides<F: ScalarField>(
+    world: &LodWorld<F>,
+    keys: &[ChunkKey],
+    mine: &Surface<'_>,
+    other: &LevelMap,
+    theirs: &Surface<'_>,
+    (geom, h): (&LodGeometry, f32),
+) -> Pop {
+    let each: Vec<Pop> = world.pool().install(|| {
+        keys.par_iter()
+            .filter_map(|k| Some(pop_side(k, mine(k)?, other, theirs, geom, h)))
+            .collect()
+    });
+    let mut pop = Pop::default();
+    for side in each {
+        pop.add(side);
+    }
+    pop
+}
+
+/// The pop of one step: every chunk that left the map (its surface in `old_meshes`) against
+/// the new surface around it, and every chunk that entered against the old surface around it.
 fn measure_pop<F: ScalarField>(
     world: &LodWorld<F>,
     old: &LevelMap,
@@ -412,31 +480,80 @@ fn measure_pop<F: ScalarField>(
     geom: &LodGeometry,
     h: f32,
 ) -> Pop {
-    let mut pop = Pop::default();
     let Some(new) = world.level_map() else {
-        return pop;
+        return Pop::default();
     };
-    // Chunk by chunk in parallel, summed in chunk order (the same bits on any thread count).
-    // Old surface -> new surface.
-    let leaving: Vec<Pop> = leaving
-        .par_iter()
-        .filter_map(|k| {
-            let mesh = old_meshes.get(k)?;
-            Some(pop_side(k, mesh, new, |n| world.chunk_mesh(n), geom, h))
-        })
+    let (old_surface, new_surface) = (
+        |n: &ChunkKey| old_meshes.get(n),
+        |n: &ChunkKey| world.chunk_mesh(n),
+    );
+    let entering: Vec<ChunkKey> = new
+        .chunks()
+        .iter()
+        .copied()
+        .filter(|c| !old.contains(c))
         .collect();
-    // New surface -> old surface.
-    let entering: Vec<&ChunkKey> = new.chunks().iter().filter(|c| !old.contains(c)).collect();
-    let entering: Vec<Pop> = entering
-        .par_iter()
-        .filter_map(|k| {
-            let mesh = world.chunk_mesh(k)?;
-            Some(pop_side(k, mesh, old, |n| old_meshes.get(n), geom, h))
-        })
-        .collect();
-    for side in leaving.into_iter().chain(entering) {
-        pop.add(side);
-    }
+    let mut pop = sides(world, leaving, &old_surface, new, &new_surface, (geom, h));
+    pop.add(sides(
+        world,
+        &entering,
+        &new_surface,
+        old,
+        &old_surface,
+        (geom, h),
+    ));
+    pop
+}
+
+/// The surfaces a morph's motion over one step is measured between.
+struct Moved<'a> {
+    /// The map before the step.
+    old: &'a LevelMap,
+    /// Chunks of `old` (the leaving ones and their neighbours) before the step.
+    before: &'a HashMap<ChunkKey, ChunkMesh>,
+    /// The same chunks of `old` with the values after the step.
+    now: &'a HashMap<ChunkKey, ChunkMesh>,
+    /// The chunks the step re-meshed in place, with their surfaces before it.
+    replaced: &'a [(ChunkKey, ChunkMesh)],
+}
+
+/// How far a morph moved the surface over one step (see [`LodStep::morph`]): every chunk
+/// re-meshed in place against the surface before the step around it, both ways; every chunk
+/// that left the map, with the old values against the new, both ways.
+fn measure_morph<F: ScalarField>(
+    world: &LodWorld<F>,
+    m: &Moved<'_>,
+    leaving: &[ChunkKey],
+    geom: &LodGeometry,
+    h: f32,
+) -> Pop {
+    let Some(new) = world.level_map() else {
+        return Pop::default();
+    };
+    let replaced: HashMap<ChunkKey, &ChunkMesh> = m.replaced.iter().map(|(k, c)| (*k, c)).collect();
+    let keys: Vec<ChunkKey> = m.replaced.iter().map(|(k, _)| *k).collect();
+    // Any chunk of the old map before the step: replaced, left, or kept as it is.
+    let old_surface = |n: &ChunkKey| {
+        replaced
+            .get(n)
+            .copied()
+            .or_else(|| m.before.get(n))
+            .or_else(|| world.chunk_mesh(n))
+    };
+    let new_surface = |n: &ChunkKey| world.chunk_mesh(n);
+    let (before, now) = (|n: &ChunkKey| m.before.get(n), |n: &ChunkKey| m.now.get(n));
+    let at = (geom, h);
+    let mut pop = sides(
+        world,
+        &keys,
+        &|n| replaced.get(n).copied(),
+        new,
+        &new_surface,
+        at,
+    );
+    pop.add(sides(world, &keys, &new_surface, m.old, &old_surface, at));
+    pop.add(sides(world, leaving, &before, m.old, &now, at));
+    pop.add(sides(world, leaving, &now, m.old, &before, at));
     pop
 }
 
@@ -577,6 +694,8 @@ pub fn lod_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
                 opt(st.pop.map(|p| format!("{:.4}", p.max_cells))),
                 opt(st.pop.map(|p| format!("{:.4}", p.mean_cells()))),
                 opt(st.pop.map(|p| p.points.to_string())),
+                opt(st.morph.map(|p| format!("{:.4}", p.max_cells))),
+                opt(st.morph.map(|p| format!("{:.4}", p.mean_cells()))),
                 opt(st.check.map(|c| c.open_edges.to_string())),
                 opt(st.check.map(|c| c.non_manifold_edges.to_string())),
                 opt(st.check.map(|c| c.orientation_errors.to_string())),
@@ -649,6 +768,11 @@ pub fn lod_summary_row(
     for p in s.steps.iter().filter_map(|st| st.pop) {
         pop.add(p);
     }
+    let mut morph = Pop::default();
+    for p in s.steps.iter().filter_map(|st| st.morph) {
+        morph.add(p);
+    }
+    let morphed = |v: String| if plan.morph > 0.0 { v } else { String::new() };
     let checks: Vec<WorldCheck> = s.steps.iter().filter_map(|st| st.check).collect();
     let max_of = |f: fn(&WorldCheck) -> usize| checks.iter().map(f).max().unwrap_or(0);
     let seam = checks
@@ -669,6 +793,7 @@ pub fn lod_summary_row(
         plan.levels.to_string(),
         plan.chunk.to_string(),
         plan.ratio.to_string(),
+        plan.morph.to_string(),
         threads.to_string(),
         moves.len().to_string(),
         format!("{:.6}", s.steps.first().map_or(0.0, |st| st.remesh_s)),
@@ -687,6 +812,8 @@ pub fn lod_summary_row(
         max_of(|c| c.orientation_errors).to_string(),
         format!("{:.4}", pop.max_cells),
         format!("{:.4}", pop.mean_cells()),
+        morphed(format!("{:.4}", morph.max_cells)),
+        morphed(format!("{:.4}", morph.mean_cells())),
         format!("{seam:.4}"),
         format!("{:.0}", s.finest_triangles),
         s.finest_source.to_string(),
@@ -742,6 +869,7 @@ mod tests {
             validate_max_chunks: 4096,
             finest_exact_chunks: 4096,
             tet_cache_mb: 1024,
+            morph: 0.0,
         }
     }
 

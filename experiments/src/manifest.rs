@@ -82,6 +82,9 @@
 //!                           # finest chunks, else estimate them from the world's levels
 //! tet_cache_mb = 1024       # keep chunk tetrahedra by surroundings up to this many MiB
 //!                           # (rmt_terrain::lod::TetCache; 0 keeps none; meshes unchanged)
+//! morph = 0.0               # 0: no morph; in (0, 1]: each level's values blend towards the
+//!                           # coarser level's over a band this fraction of `ratio` chunk edges
+//!                           # wide (rmt_terrain::lod::Morph): no pop when a chunk changes level
 //! ```
 //!
 //! **Naming rule** (reproduces the dissertation's ids): object code, `_`, lattice letter (`b`
@@ -470,6 +473,9 @@ pub struct LodEntry {
     /// The chunk-tets cache's budget, MiB.
     #[serde(default)]
     pub tet_cache_mb: Option<usize>,
+    /// The morph band (0: none).
+    #[serde(default)]
+    pub morph: Option<f64>,
 }
 
 /// The checked `lod` workload of a plan.
@@ -495,6 +501,10 @@ pub struct LodPlan {
     /// The world's chunk-tets cache budget, MiB (default 1024; 0 keeps none). The meshes do
     /// not depend on it.
     pub tet_cache_mb: usize,
+    /// The morph band (default 0, none; else in `(0, 1]`, `rmt_terrain::lod::Morph`): each
+    /// level's values blend towards the coarser level's over a band of this fraction of `ratio`
+    /// chunk edges, so a change of level does not pop.
+    pub morph: f64,
 }
 
 /// `[matrix]`: objects x methods x lattices x clustering.

@@ -258,4 +258,69 @@ fn the_lod_workload_refuses_what_it_cannot_mesh() {
     assert!(simple.contains("bcdl"), "{simple}");
     let cache = err("cache.toml", &format!("{WORLD}tet_cache_mb = 2000000\n"));
     assert!(cache.contains("lod.tet_cache_mb"), "{cache}");
+    for bad in ["1.5", "-0.5", "nan"] {
+        let morph = err("morph.toml", &format!("{WORLD}morph = {bad}\n"));
+        assert!(morph.contains("lod.morph"), "{bad}: {morph}");
+    }
+    let still = err(
+        "still.toml",
+        &format!("{WORLD}morph = 0.5\n").replace("ratio = 1.0", "ratio = 0.0"),
+    );
+    assert!(
+        still.contains("lod.morph") && still.contains("ratio"),
+        "{still}"
+    );
+}
+
+/// The same flight with a morph: the surface stays closed, the pop (the change of tets at one
+/// viewer) shrinks to rounding where without the morph it jumps, and the morph's own motion per
+/// step is measured; without a morph its columns are empty.
+#[test]
+fn a_morphed_flight_does_not_pop() {
+    let dir = tempfile::tempdir().unwrap();
+    // Short steps (about a finest cell each) so the viewer moves less than a band per step.
+    let slow = WORLD
+        .replace("steps = 4", "steps = 12")
+        .replace(
+            "path = [[-0.9, 0.2, -0.9], [0.9, 0.2, 0.9]]",
+            "path = [[-0.3, 0.0, -0.3], [0.2, 0.0, 0.2]]",
+        )
+        .replace("save_meshes = true", "");
+    let opts = RunOptions {
+        quiet: true,
+        stop_after: None,
+    };
+    let mut pops = Vec::new();
+    for (name, text) in [
+        ("plain", slow.clone()),
+        ("morph", format!("{slow}morph = 1.0\n")),
+    ] {
+        let manifest = write(dir.path(), &format!("{name}.toml"), &text);
+        let folder = dir.path().join(name);
+        runner::start(&manifest, &Overrides::default(), Some(&folder), &opts).unwrap();
+        let steps = Table::read(&folder.join("lod.csv")).unwrap();
+        let summary = Table::read(&folder.join("summary.csv")).unwrap();
+        for r in 0..steps.rows.len() {
+            for col in ["open_edges", "non_manifold_edges", "orientation_errors"] {
+                assert_eq!(steps.get(r, col), Some("0"), "{name} step {r} {col}");
+            }
+        }
+        let cell = |c: &str| summary.get(0, c).unwrap().to_string();
+        if name == "plain" {
+            assert_eq!(cell("morph"), "0");
+            assert_eq!(cell("morph_max_cells"), "");
+            assert!((0..steps.rows.len()).all(|r| steps.get(r, "morph_max_cells") == Some("")));
+        } else {
+            assert_eq!(cell("morph"), "1");
+            let moved: f64 = cell("morph_max_cells").parse().unwrap();
+            assert!(moved > 0.0, "the morph moved nothing");
+        }
+        let changed = (1..steps.rows.len())
+            .filter(|&r| !steps.get(r, "pop_max_cells").unwrap().is_empty())
+            .count();
+        assert!(changed > 2, "{name}: {changed} steps changed a level");
+        pops.push(cell("pop_max_cells").parse::<f64>().unwrap());
+    }
+    assert!(pops[0] > 0.1, "no pop without the morph: {pops:?}");
+    assert!(pops[1] < 0.25 * pops[0], "the morph left the pop: {pops:?}");
 }

@@ -649,7 +649,7 @@ pub fn lod_tables(run: &LodRun) -> Vec<TextTable> {
             format::count(l.mean_triangles.round()),
         ]);
     }
-    let measures: [(&str, &str); 13] = [
+    let mut measures: Vec<(&str, &str)> = vec![
         ("steps", "viewer steps"),
         (
             "remesh_p50_ms",
@@ -676,6 +676,14 @@ pub fn lod_tables(run: &LodRun) -> Vec<TextTable> {
             "triangles over the finest level everywhere",
         ),
     ];
+    // A morphed flight (`morph` > 0): its band and the surface's motion per step.
+    if run.value("morph").parse::<f64>().is_ok_and(|m| m > 0.0) {
+        measures.extend([
+            ("morph", "morph band (fraction of ratio x chunk edge)"),
+            ("morph_max_cells", "morph per step, max (finer cells)"),
+            ("morph_mean_cells", "morph per step, mean (finer cells)"),
+        ]);
+    }
     let mut summary = TextTable {
         name: "lod_summary".into(),
         title: format!("The flight's measures ({})", run.info.name),

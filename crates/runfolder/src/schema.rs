@@ -152,7 +152,7 @@ pub const EDIT_SUMMARY: [&str; 25] = [
 /// kept). Validation and seam columns are empty on steps that were not validated, pop columns
 /// on steps where no chunk changed its level. Like `remesh_s`,
 /// `memory_bytes` is a measurement of the run (it follows the world's hash tables' history).
-pub const LOD_STEPS: [&str; 19] = [
+pub const LOD_STEPS: [&str; 21] = [
     "id",
     "step",
     "viewer_x",
@@ -168,6 +168,8 @@ pub const LOD_STEPS: [&str; 19] = [
     "pop_max_cells",
     "pop_mean_cells",
     "pop_points",
+    "morph_max_cells",
+    "morph_mean_cells",
     "open_edges",
     "non_manifold_edges",
     "orientation_errors",
@@ -199,7 +201,7 @@ pub const LOD_MAP: [&str; 13] = [
 ];
 
 /// The columns of a `lod` run's `summary.csv` (one row per configuration).
-pub const LOD_SUMMARY: [&str; 32] = [
+pub const LOD_SUMMARY: [&str; 35] = [
     "id",
     "object",
     "method",
@@ -211,6 +213,7 @@ pub const LOD_SUMMARY: [&str; 32] = [
     "levels",
     "chunk",
     "ratio",
+    "morph",
     "threads",
     "steps",
     "t_initial_s",
@@ -226,6 +229,8 @@ pub const LOD_SUMMARY: [&str; 32] = [
     "orientation_errors",
     "pop_max_cells",
     "pop_mean_cells",
+    "morph_max_cells",
+    "morph_mean_cells",
     "normal_seam_max_deg",
     "finest_triangles",
     "finest_source",

@@ -24,6 +24,7 @@ fn main() -> anyhow::Result<()> {
         frame: LodFrame { origin, h },
         ratio: 1.5,
         threads: 2,
+        morph: None,
     };
     let mut world = LodWorld::new(CaveTerrain::new(CaveParams::default()), settings)?;
     world.set_viewer(Vec3::new(-0.9, 0.3, -0.9));

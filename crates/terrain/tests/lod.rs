@@ -258,6 +258,7 @@ fn incremental_remesh_equals_from_scratch() {
         frame,
         ratio: 0.5,
         threads: 2,
+        morph: None,
     };
     let mut world = LodWorld::new(field.clone(), settings).unwrap();
     let pool = thread_pool(1).unwrap();

@@ -39,6 +39,7 @@ fn settings(roots: u32, threads: usize) -> LodSettings {
         },
         ratio: 0.5,
         threads,
+        morph: None,
     }
 }
 
@@ -366,6 +367,7 @@ proptest::proptest! {
             frame: LodFrame { origin: Vec3::splat(-1.0), h: 0.125 },
             ratio: 0.5,
             threads: 2,
+            morph: None,
         };
         let g = s.geometry;
         let mut world = LodWorld::new(field.clone(), s).unwrap();

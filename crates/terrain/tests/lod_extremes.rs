@@ -33,6 +33,7 @@ fn settings() -> LodSettings {
         },
         ratio: 0.5,
         threads: 2,
+        morph: None,
     }
 }
 

@@ -631,7 +631,20 @@ fn plan_lod(
         validate_max_chunks: e.validate_max_chunks.unwrap_or(4096),
         finest_exact_chunks: e.finest_exact_chunks.unwrap_or(4096),
         tet_cache_mb: e.tet_cache_mb.unwrap_or(1024),
+        morph: e.morph.unwrap_or(0.0),
     };
+    if !(plan.morph == 0.0 || (plan.morph > 0.0 && plan.morph <= 1.0)) {
+        return Err(invalid.at(
+            "lod.morph",
+            format!("must be 0 (no morph) or in (0, 1], got {}", plan.morph),
+        ));
+    }
+    if plan.morph > 0.0 && plan.ratio <= 0.0 {
+        return Err(invalid.at(
+            "lod.morph",
+            "a morph needs a distance rule: set lod.ratio > 0",
+        ));
+    }
     if plan.tet_cache_mb > 1 << 20 {
         return Err(invalid.at(
             "lod.tet_cache_mb",

@@ -13,6 +13,9 @@
 //!        |
 //!   tet cache (tet_cache.rs)  the same tets for the same surroundings, moved: built once
 //!        |
+//!   morph (morph.rs)          optional: a point's value blended towards the coarser level's
+//!                             interpolant with the viewer's distance (no pop at a level change)
+//!        |
 //!   march (mt.rs)             marching tetrahedra, crossings keyed by their edge's lattice points
 //!        |
 //!   LodWorld (world.rs)       viewer moves -> new map -> re-mesh the chunks whose level or
@@ -28,7 +31,7 @@
 //! Edits are an overlay of brush strokes over the procedural field ([`edits`]), sampled by
 //! every level at its own lattice points.
 //!
-//! Not here (yet): clustering across levels (plain marching tetrahedra only), morphing.
+//! Not here (yet): clustering across levels (plain marching tetrahedra only).
 
 pub mod check;
 pub mod edits;
@@ -36,6 +39,7 @@ pub mod error;
 pub mod lattice;
 pub mod level_map;
 pub mod mesh;
+pub mod morph;
 pub mod mt;
 pub mod refine;
 pub mod tet_cache;
@@ -45,7 +49,11 @@ pub use edits::{EditedField, Overlay, Stroke};
 pub use error::LodError;
 pub use level_map::{ChunkKey, LevelMap, LodGeometry};
 pub use mesh::{chunk_tets, world_tets, MeshTet};
+pub use morph::Morph;
 pub use mt::{march, weld, ChunkMesh, LodFrame};
 pub use refine::TetKind;
 pub use tet_cache::{TetCache, TetCacheStats, DEFAULT_TET_CACHE_BYTES};
-pub use world::{mesh_chunks, mesh_whole, thread_pool, LodRemesh, LodSettings, LodWorld};
+pub use world::{
+    mesh_chunks, mesh_chunks_morphed, mesh_whole, thread_pool, LodRemesh, LodSettings, LodWorld,
+    MorphSettings,
+};

@@ -37,6 +37,7 @@ use super::error::LodError;
 use super::lattice::{cell_size, Point};
 use super::level_map::{ChunkKey, LevelMap};
 use super::mesh::{chunk_tets, MeshTet};
+use super::morph::Morph;
 use super::tet_cache::{EncodedTets, TetCache};
 
 /// Where the lattice sits in the world: lattice point `p` (in `u`) is at `origin + p h / 2`.
@@ -196,6 +197,23 @@ impl PointGrid {
         &mut self.slot[(c[2] * self.n[1] + c[1]) * self.n[0] + c[0]]
     }
 
+    /// The number of `p`, when it is one of the points.
+    fn get(&self, p: Point) -> Option<u32> {
+        let mut c = [0usize; 3];
+        for i in 0..3 {
+            let d = p[i].checked_sub(self.lo[i]).filter(|&d| d >= 0)? as u32;
+            if d & ((1u32 << self.shift) - 1) != 0 {
+                return None;
+            }
+            c[i] = (d >> self.shift) as usize;
+            if c[i] >= self.n[i] {
+                return None;
+            }
+        }
+        let i = self.slot[(c[2] * self.n[1] + c[1]) * self.n[0] + c[0]];
+        (i != u32::MAX).then_some(i)
+    }
+
     /// The points' numbers in rows: `z`, then `y`, then `x` ascending.
     fn rows(&self) -> Vec<u32> {
         self.slot
@@ -203,6 +221,21 @@ impl PointGrid {
             .copied()
             .filter(|&i| i != u32::MAX)
             .collect()
+    }
+}
+
+/// The numbers of a chunk's lattice points, on a grid or in a hash.
+enum PointIndex {
+    Grid(PointGrid),
+    Map(HashMap<Point, u32>),
+}
+
+impl PointIndex {
+    fn get(&self, p: Point) -> Option<u32> {
+        match self {
+            PointIndex::Grid(g) => g.get(p),
+            PointIndex::Map(m) => m.get(&p).copied(),
+        }
     }
 }
 
@@ -221,17 +254,20 @@ pub const PROBE_DIRECTIONS: [[f32; 3]; 4] = [
 /// the given order. When the field's bound ([`ScalarField::side`]) puts the tets' bounding
 /// box on one side of 0, the surface is empty and nothing is sampled.
 pub fn march(tets: &[MeshTet], field: &dyn ScalarField, frame: &LodFrame) -> ChunkMesh {
-    march_reusing(tets, field, frame, None)
+    march_reusing(tets, field, frame, None, None)
 }
 
-/// [`march`], taking the normals of crossings that `before` (a surface marched over the
-/// same field) also has from it instead of probing the field again: a crossing's normal is a
-/// function of its key and the field alone, so the surface is the same, bit for bit.
+/// [`march`] on the values `morph` makes of the field's ([`Morph::apply`]; the field's own
+/// without one), taking the normal of every crossing that `before` (a surface marched over the
+/// same field) also has, at the same position, from it instead of probing the field again: a
+/// crossing's normal is a function of its position and the field alone, so the surface is the
+/// same, bit for bit.
 pub fn march_reusing(
     tets: &[MeshTet],
     field: &dyn ScalarField,
     frame: &LodFrame,
     before: Option<&ChunkMesh>,
+    morph: Option<&Morph>,
 ) -> ChunkMesh {
     if let Some((lo, hi)) =
         tets.iter()
@@ -243,7 +279,13 @@ pub fn march_reusing(
                 )
             })
     {
-        // World positions round monotonically, so the box holds every sample point.
+        // World positions round monotonically, so the box holds every sample point (and
+        // every parent a morphed value reads, within the morph's reach).
+        let r = morph.map_or(0, |m| m.reach(lo.map(i64::from), hi.map(i64::from)) as i32);
+        let (lo, hi) = (
+            lo.map(|v| v.saturating_sub(r)),
+            hi.map(|v| v.saturating_add(r)),
+        );
         if field.side(frame.world(lo), frame.world(hi), 0.0).is_some() {
             return ChunkMesh::default();
         }
@@ -251,7 +293,10 @@ pub fn march_reusing(
     // Sample every distinct lattice point once, in order of first use.
     let mut points: Vec<Vec3> = Vec::with_capacity(tets.len());
     let mut corner: Vec<u32> = Vec::with_capacity(tets.len() * 4);
-    let rows = match PointGrid::new(tets) {
+    // The lattice points too, when a morph needs them.
+    let mut lattice: Vec<Point> = Vec::new();
+    let keep = morph.is_some();
+    let (rows, index) = match PointGrid::new(tets) {
         Some(mut grid) => {
             for t in tets {
                 for p in t.tet {
@@ -259,11 +304,14 @@ pub fn march_reusing(
                     if *slot == u32::MAX {
                         *slot = points.len() as u32;
                         points.push(frame.world(p));
+                        if keep {
+                            lattice.push(p);
+                        }
                     }
                     corner.push(*slot);
                 }
             }
-            grid.rows()
+            (grid.rows(), PointIndex::Grid(grid))
         }
         None => {
             let mut point_index: HashMap<Point, u32> =
@@ -273,14 +321,20 @@ pub fn march_reusing(
                     let next = points.len() as u32;
                     let i = *point_index.entry(p).or_insert_with(|| {
                         points.push(frame.world(p));
+                        if keep {
+                            lattice.push(p);
+                        }
                         next
                     });
                     corner.push(i);
                 }
             }
-            let mut rows: Vec<(Point, u32)> = point_index.into_iter().collect();
+            let mut rows: Vec<(Point, u32)> = point_index.iter().map(|(&p, &i)| (p, i)).collect();
             rows.sort_unstable_by_key(|&([x, y, z], _)| [z, y, x]);
-            rows.into_iter().map(|(_, i)| i).collect()
+            (
+                rows.into_iter().map(|(_, i)| i).collect(),
+                PointIndex::Map(point_index),
+            )
         }
     };
     // Sampled in rows of equal y and z (a field that shares work along rows, as the noises
@@ -291,6 +345,11 @@ pub fn march_reusing(
     let mut values = vec![0f32; points.len()];
     for (&i, &v) in rows.iter().zip(&sampled) {
         values[i as usize] = v;
+    }
+    if let Some(m) = morph {
+        let fields = values.clone();
+        let known = |p: Point| index.get(p).map(|i| fields[i as usize]);
+        m.apply(&lattice, &mut values, &known, field, frame);
     }
     let mut mesh = ChunkMesh {
         samples: points.len(),
@@ -337,7 +396,8 @@ pub fn march_reusing(
             }
         }
     }
-    // Each crossing's normal from `before` (by key), else from its probes.
+    // Each crossing's normal from `before` (by key, at the same position), else from its
+    // probes.
     let known: HashMap<[Point; 2], u32> = before.map_or_else(HashMap::default, |b| {
         b.keys
             .iter()
@@ -345,7 +405,18 @@ pub fn march_reusing(
             .map(|(i, k)| (*k, i as u32))
             .collect()
     });
-    let from_before: Vec<Option<u32>> = mesh.keys.iter().map(|k| known.get(k).copied()).collect();
+    let from_before: Vec<Option<u32>> = mesh
+        .keys
+        .iter()
+        .zip(&mesh.positions)
+        .map(|(k, p)| {
+            known.get(k).copied().filter(|&i| {
+                before.is_some_and(|b| {
+                    b.positions[i as usize].map(f32::to_bits) == p.map(f32::to_bits)
+                })
+            })
+        })
+        .collect();
     let eps = frame.h * 0.25;
     let probed = from_before.iter().filter(|b| b.is_none()).count();
     let mut probe = Vec::with_capacity(PROBE_DIRECTIONS.len() * probed);
@@ -403,26 +474,27 @@ pub fn mesh_chunk(
     field: &dyn ScalarField,
     frame: &LodFrame,
 ) -> Result<ChunkMesh, LodError> {
-    mesh_chunk_with(map, chunk, field, frame, None)
+    mesh_chunk_with(map, chunk, field, frame, None, None)
 }
 
-/// [`mesh_chunk`], taking the tets from `cache` when one is given (the same tets, so the
-/// same surface).
+/// [`mesh_chunk`] on the values `morph` makes of the field's, taking the tets from `cache`
+/// when one is given (the same tets, so the same surface).
 pub fn mesh_chunk_with(
     map: &LevelMap,
     chunk: &ChunkKey,
     field: &dyn ScalarField,
     frame: &LodFrame,
     cache: Option<&TetCache>,
+    morph: Option<&Morph>,
 ) -> Result<ChunkMesh, LodError> {
-    if empty_box(map, chunk, field, frame) {
+    if empty_box(map, chunk, field, frame, morph) {
         return Ok(ChunkMesh::default());
     }
     let tets = match cache {
         Some(c) => c.chunk_tets(map, chunk)?,
         None => chunk_tets(map, chunk)?,
     };
-    Ok(march(&tets, field, frame))
+    Ok(march_reusing(&tets, field, frame, None, morph))
 }
 
 /// What [`remesh_chunk`] did.
@@ -435,20 +507,30 @@ pub enum Remeshed {
     Meshed(ChunkMesh, Option<EncodedTets>),
 }
 
-/// [`mesh_chunk_with`] for a chunk last meshed over the same field as `before`, from the
-/// tets `previous` encodes: [`Remeshed::Same`] when its tets under `map` are the same ones,
-/// else the new surface, with the normals of the crossings it shares with `before` taken from
-/// it ([`march_reusing`]).
+/// What a chunk's last meshing left, for [`remesh_chunk`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Last<'a> {
+    /// The encoding of the tets its surface was marched from, when the values it was marched
+    /// on are the ones it is re-meshed on (none when they can differ).
+    pub tets: Option<&'a EncodedTets>,
+    /// Its surface, over the same field.
+    pub mesh: Option<&'a ChunkMesh>,
+}
+
+/// [`mesh_chunk_with`] for a chunk last meshed as `last` says: [`Remeshed::Same`] when its
+/// tets under `map` are the ones `last.tets` encodes, else the new surface, with the normals of
+/// the crossings it shares with `last.mesh` taken from it ([`march_reusing`]).
 pub fn remesh_chunk(
     map: &LevelMap,
     chunk: &ChunkKey,
     field: &dyn ScalarField,
     frame: &LodFrame,
     cache: &TetCache,
-    previous: Option<&EncodedTets>,
-    before: Option<&ChunkMesh>,
+    last: Last<'_>,
+    morph: Option<&Morph>,
 ) -> Result<Remeshed, LodError> {
-    if empty_box(map, chunk, field, frame) {
+    let (previous, before) = (last.tets, last.mesh);
+    if empty_box(map, chunk, field, frame, morph) {
         return Ok(Remeshed::Meshed(ChunkMesh::default(), None));
     }
     let tets = cache.encoded_tets(map, chunk)?;
@@ -459,16 +541,24 @@ pub fn remesh_chunk(
     }
     let encoded = tets.encoded.clone();
     Ok(Remeshed::Meshed(
-        march_reusing(&tets.into_tets(), field, frame, before),
+        march_reusing(&tets.into_tets(), field, frame, before, morph),
         encoded,
     ))
 }
 
-/// Whether the field's bound puts `chunk`'s box grown by one cell of its level on one side
-/// of 0 (see [`mesh_chunk`]).
-fn empty_box(map: &LevelMap, chunk: &ChunkKey, field: &dyn ScalarField, frame: &LodFrame) -> bool {
+/// Whether the field's bound puts `chunk`'s box grown by one cell of its level (and the
+/// morph's reach) on one side of 0 (see [`mesh_chunk`]): a morphed value is a mean of values
+/// within the reach.
+fn empty_box(
+    map: &LevelMap,
+    chunk: &ChunkKey,
+    field: &dyn ScalarField,
+    frame: &LodFrame,
+    morph: Option<&Morph>,
+) -> bool {
     let (lo, hi) = chunk.bounds(map.geometry());
     let s = cell_size(chunk.level);
+    let s = s + morph.map_or(0, |m| m.reach(lo.map(|v| v - s), hi.map(|v| v + s)));
     let corner = |v: [i64; 3]| -> Option<Point> {
         let p: [i32; 3] = std::array::from_fn(|i| i32::try_from(v[i]).unwrap_or(i32::MAX));
         p.iter().all(|&c| c != i32::MAX).then_some(p)
@@ -556,7 +646,7 @@ mod tests {
                 field.1.store(0, Ordering::Relaxed);
                 let fresh = march(&tets, &field, &frame);
                 let n_fresh = field.1.swap(0, Ordering::Relaxed);
-                let again = march_reusing(&tets, &field, &frame, Some(&old));
+                let again = march_reusing(&tets, &field, &frame, Some(&old), None);
                 let n_again = field.1.swap(0, Ordering::Relaxed);
                 let (x, y): (Bits, Bits) = (bits(&fresh), bits(&again));
                 assert!(x == y, "chunk {k:?}");

@@ -38,7 +38,8 @@ use super::error::LodError;
 use super::lattice::Point;
 use super::level_map::{ChunkKey, LevelMap, LodGeometry};
 use super::mesh::{is_fast_path, needs_remesh, world_tets, MeshTet};
-use super::mt::{march, mesh_chunk_with, remesh_chunk, weld, ChunkMesh, LodFrame, Remeshed};
+use super::morph::Morph;
+use super::mt::{march, mesh_chunk_with, remesh_chunk, weld, ChunkMesh, Last, LodFrame, Remeshed};
 use super::tet_cache::{EncodedTets, TetCache, TetCacheStats, DEFAULT_TET_CACHE_BYTES};
 
 /// What a multiresolution world is.
@@ -53,6 +54,19 @@ pub struct LodSettings {
     pub ratio: f64,
     /// Worker threads (>= 1); the meshes do not depend on it.
     pub threads: usize,
+    /// The morph between levels, if any.
+    pub morph: Option<MorphSettings>,
+}
+
+/// A world's morph between levels ([`Morph`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MorphSettings {
+    /// In `(0, 1]`: the depth of each level's band as a fraction of `ratio` times its chunk
+    /// edge.
+    pub band: f64,
+    /// The longest viewer step (world units) that changes a level without a pop; it must be
+    /// shorter than level 0's band.
+    pub lead: f32,
 }
 
 /// What one [`LodWorld::remesh`] did.
@@ -81,6 +95,10 @@ pub struct LodWorld<F: ScalarField> {
     map: Option<LevelMap>,
     /// The map the next remesh moves to.
     pending: LevelMap,
+    /// The viewer (in `u`) of the pending map, for the morph.
+    viewer: [f64; 3],
+    /// The morph the surfaces were marched with.
+    morphed: Option<Morph>,
     meshes: HashMap<ChunkKey, ChunkMesh>,
     /// The encoded tets each chunk's surface was marched from (every chunk marched from tets
     /// that have an encoding; none for an empty box).
@@ -91,6 +109,10 @@ pub struct LodWorld<F: ScalarField> {
     edited: std::collections::HashSet<ChunkKey>,
     /// Chunk tets by surroundings ([`TetCache`]).
     tets: TetCache,
+    /// Whether [`LodWorld::remesh`] keeps the surfaces it replaces ([`LodWorld::take_replaced`]).
+    keep_replaced: bool,
+    /// The surfaces the last remeshes replaced, when kept.
+    replaced: Vec<(ChunkKey, ChunkMesh)>,
 }
 
 /// Meshes every chunk of `map` on `pool`, in map order.
@@ -100,20 +122,21 @@ pub fn mesh_chunks(
     frame: &LodFrame,
     pool: &rayon::ThreadPool,
 ) -> Result<Vec<ChunkMesh>, LodError> {
-    mesh_some(map, map.chunks(), field, frame, pool, None)
+    mesh_chunks_morphed(map, field, frame, None, pool)
 }
 
-fn mesh_some(
+/// [`mesh_chunks`] on the values `morph` makes of the field's.
+pub fn mesh_chunks_morphed(
     map: &LevelMap,
-    keys: &[ChunkKey],
     field: &dyn ScalarField,
     frame: &LodFrame,
+    morph: Option<&Morph>,
     pool: &rayon::ThreadPool,
-    cache: Option<&TetCache>,
 ) -> Result<Vec<ChunkMesh>, LodError> {
     pool.install(|| {
-        keys.par_iter()
-            .map(|k| mesh_chunk_with(map, k, field, frame, cache))
+        map.chunks()
+            .par_iter()
+            .map(|k| mesh_chunk_with(map, k, field, frame, None, morph))
             .collect()
     })
 }
@@ -137,6 +160,15 @@ pub fn mesh_whole(
     Ok(out)
 }
 
+/// The morph of a world with `settings` (which have one) for a viewer at `viewer` (in `u`).
+fn morph_at(settings: &LodSettings, viewer: [f64; 3]) -> Result<Morph, LodError> {
+    let m = settings
+        .morph
+        .ok_or_else(|| LodError::Invalid("the world has no morph".into()))?;
+    let lead = f64::from(m.lead) / (f64::from(settings.frame.h) * 0.5);
+    Morph::new(&settings.geometry, settings.ratio, m.band, lead, viewer)
+}
+
 /// A rayon pool of `threads` threads.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, LodError> {
     rayon::ThreadPoolBuilder::new()
@@ -158,6 +190,9 @@ impl<F: ScalarField> LodWorld<F> {
         if settings.threads == 0 {
             return Err(LodError::Invalid("threads must be >= 1".into()));
         }
+        if settings.morph.is_some() {
+            morph_at(&settings, [0.0; 3])?;
+        }
         let pool = thread_pool(settings.threads)?;
         let pending = LevelMap::from_viewer(settings.geometry, [0.0; 3], settings.ratio);
         Ok(LodWorld {
@@ -166,11 +201,15 @@ impl<F: ScalarField> LodWorld<F> {
             pool,
             map: None,
             pending,
+            viewer: [0.0; 3],
+            morphed: None,
             meshes: HashMap::new(),
             encoded: HashMap::new(),
             edits: Overlay::new(settings.frame),
             edited: Default::default(),
             tets: TetCache::new(DEFAULT_TET_CACHE_BYTES),
+            keep_replaced: false,
+            replaced: Vec::new(),
         })
     }
 
@@ -192,11 +231,18 @@ impl<F: ScalarField> LodWorld<F> {
         let f = &self.settings.frame;
         let u = f64::from(f.h) * 0.5;
         let p = (pos.as_dvec3() - f.origin.as_dvec3()) / u;
+        self.viewer = p.to_array();
         self.pending =
-            LevelMap::from_viewer(self.settings.geometry, p.to_array(), self.settings.ratio);
+            LevelMap::from_viewer(self.settings.geometry, self.viewer, self.settings.ratio);
     }
 
-    /// Sets the next level map directly (it must have the world's geometry).
+    /// The level map the next [`LodWorld::remesh`] moves to.
+    pub fn pending_map(&self) -> &LevelMap {
+        &self.pending
+    }
+
+    /// Sets the next level map directly (it must have the world's geometry). A morph keeps
+    /// the last viewer ([`LodWorld::set_viewer`]).
     pub fn set_level_map(&mut self, map: LevelMap) -> Result<(), LodError> {
         if *map.geometry() != self.settings.geometry {
             return Err(LodError::Invalid("level map of another geometry".into()));
@@ -209,18 +255,30 @@ impl<F: ScalarField> LodWorld<F> {
     /// keeping the surface of those whose tets stay the same.
     pub fn remesh(&mut self) -> Result<LodRemesh, LodError> {
         let new = &self.pending;
-        let stale: Vec<ChunkKey> = new
+        let geom = self.settings.geometry;
+        let morph = self.morph()?;
+        // Whether the values at a chunk's points can have changed with the viewer.
+        let revalued = |k: &ChunkKey| match (&morph, &self.morphed) {
+            (None, None) => false,
+            (Some(a), Some(b)) => {
+                let (lo, hi) = k.bounds(&geom);
+                let s = super::lattice::cell_size(k.level);
+                a.may_differ(b, lo.map(|v| v - s), hi.map(|v| v + s))
+            }
+            _ => true,
+        };
+        let stale: Vec<(ChunkKey, bool)> = new
             .chunks()
             .iter()
-            .copied()
-            .filter(|k| match (&self.map, self.meshes.contains_key(k)) {
-                (Some(old), true) => {
-                    if self.edited.contains(k) {
-                        return true;
+            .filter_map(|k| {
+                let revalued = revalued(k);
+                let stale = match (&self.map, self.meshes.contains_key(k)) {
+                    (Some(old), true) => {
+                        revalued || self.edited.contains(k) || needs_remesh(old, new, k)
                     }
-                    needs_remesh(old, new, k)
-                }
-                _ => true,
+                    _ => true,
+                };
+                stale.then_some((*k, revalued))
             })
             .collect();
         let field = EditedField::new(&self.field, &self.edits);
@@ -228,18 +286,22 @@ impl<F: ScalarField> LodWorld<F> {
         let meshes = &self.meshes;
         let frame = self.settings.frame;
         let cache = &self.tets;
+        let morph_now = morph.as_ref();
         let outcomes: Vec<Remeshed> = self.pool.install(|| {
             stale
                 .par_iter()
-                .map(|k| {
+                .map(|(k, revalued)| {
                     let before = old.filter(|o| !edited.contains(k) && o.contains(k));
-                    if before.is_some_and(|o| is_fast_path(o, k) && is_fast_path(new, k)) {
+                    let same_values = before.filter(|_| !revalued);
+                    if same_values.is_some_and(|o| is_fast_path(o, k) && is_fast_path(new, k)) {
                         // The fast path's tets are the lattice's over the chunk's box.
                         return Ok(Remeshed::Same);
                     }
-                    let previous = before.and_then(|_| encoded.get(k));
-                    let mesh = before.and_then(|_| meshes.get(k));
-                    remesh_chunk(new, k, &field, &frame, cache, previous, mesh)
+                    let last = Last {
+                        tets: same_values.and_then(|_| encoded.get(k)),
+                        mesh: before.and_then(|_| meshes.get(k)),
+                    };
+                    remesh_chunk(new, k, &field, &frame, cache, last, morph_now)
                 })
                 .collect::<Result<_, LodError>>()
         })?;
@@ -256,11 +318,13 @@ impl<F: ScalarField> LodWorld<F> {
             self.encoded.remove(k);
         }
         let (mut remeshed, mut unchanged) = (Vec::new(), Vec::new());
-        for (k, o) in stale.iter().zip(outcomes) {
+        for ((k, _), o) in stale.iter().zip(outcomes) {
             match o {
                 Remeshed::Same => unchanged.push(*k),
                 Remeshed::Meshed(m, e) => {
-                    self.meshes.insert(*k, m);
+                    if let (Some(old), true) = (self.meshes.insert(*k, m), self.keep_replaced) {
+                        self.replaced.push((*k, old));
+                    }
                     match e {
                         Some(e) => self.encoded.insert(*k, e),
                         None => self.encoded.remove(k),
@@ -270,6 +334,7 @@ impl<F: ScalarField> LodWorld<F> {
             }
         }
         self.map = Some(new.clone());
+        self.morphed = morph;
         let triangles = self.meshes.values().map(ChunkMesh::triangles).sum();
         Ok(LodRemesh {
             kept: new.chunks().len() - remeshed.len(),
@@ -278,6 +343,49 @@ impl<F: ScalarField> LodWorld<F> {
             dropped,
             triangles,
         })
+    }
+
+    /// The morph for the pending map's viewer (none when the settings have none).
+    fn morph(&self) -> Result<Option<Morph>, LodError> {
+        if self.settings.morph.is_none() {
+            return Ok(None);
+        }
+        morph_at(&self.settings, self.viewer).map(Some)
+    }
+
+    /// The morph the current surfaces were marched with.
+    pub fn morph_now(&self) -> Option<&Morph> {
+        self.morphed.as_ref()
+    }
+
+    /// Chunk `key` of `map` (any map of the world's geometry) meshed as the world meshes now:
+    /// its field, its edits and the current morph. For a chunk of the current map, its surface.
+    pub fn mesh_under(&self, map: &LevelMap, key: &ChunkKey) -> Result<ChunkMesh, LodError> {
+        let field = EditedField::new(&self.field, &self.edits);
+        let frame = self.settings.frame;
+        mesh_chunk_with(
+            map,
+            key,
+            &field,
+            &frame,
+            Some(&self.tets),
+            self.morphed.as_ref(),
+        )
+    }
+
+    /// Whether [`LodWorld::remesh`] keeps the surfaces it replaces, for
+    /// [`LodWorld::take_replaced`] (off by default; turning it off forgets them).
+    pub fn set_keep_replaced(&mut self, keep: bool) {
+        self.keep_replaced = keep;
+        if !keep {
+            self.replaced = Vec::new();
+        }
+    }
+
+    /// The surfaces the remeshes since the last call replaced (chunks re-meshed in place),
+    /// in the order they were replaced.
+    pub fn take_replaced(&mut self) -> Vec<(ChunkKey, ChunkMesh)> {
+        std::mem::take(&mut self.replaced)
     }
 
     /// Applies `brush` for a frame of `dt` seconds to the world's overlay of edits and marks
@@ -294,6 +402,12 @@ impl<F: ScalarField> LodWorld<F> {
             return Ok(0);
         };
         self.edits.add(*brush, dt)?;
+        // A morphed value reads its parents' values, within one coarsest cell.
+        let r = match self.settings.morph {
+            None => 0,
+            Some(_) => super::lattice::cell_size(self.settings.geometry.levels),
+        };
+        let (lo, hi) = (lo.map(|v| v - r), hi.map(|v| v + r));
         let marked = self
             .map
             .as_ref()
@@ -346,6 +460,12 @@ impl<F: ScalarField> LodWorld<F> {
             + self.meshes.capacity() * (16 + std::mem::size_of::<ChunkMesh>())
             + self.edits.bytes()
             + encoded
+    }
+
+    /// The world's worker threads (the settings' `threads`), for work beside the world's
+    /// that should share them.
+    pub fn pool(&self) -> &rayon::ThreadPool {
+        &self.pool
     }
 
     /// The settings.
