@@ -41,7 +41,7 @@
 use rayon::prelude::*;
 
 use super::clustering::proposal::{self, Candidate, PointEdges, ProposalCounts, Rules};
-use super::layout::{add, owns, Layout};
+use super::layout::{owns, Layout, AROUND};
 use crate::lattice::FULL;
 use crate::util::{bits_at_signed, inside_word, inside_word_finite64};
 use crate::{ExtractError, Lattice, Stats};
@@ -351,7 +351,9 @@ fn pop16(x: u16) -> u32 {
 /// Appends the positions of the crossings that the point at lattice coordinates `p` (storage
 /// slot `i`) owns (`own`, by neighbour bit) to `positions`, in id order; returns how many lie
 /// within [`WELD`] of it. Kept out of line: inside the vertex pass's row loop the values spill
-/// to the stack.
+/// to the stack. The far end's coordinates are read from the point's window of each axis table
+/// ([`super::layout::Positions::around`], by [`Layout::far`]) and the positions written into
+/// capacity reserved once: no bounds or capacity check per crossing.
 #[inline(never)]
 fn place(
     l: &Layout,
@@ -363,21 +365,30 @@ fn place(
 ) -> usize {
     let v = &l.s.values[..];
     let f = v[i];
-    let delta = &l.delta[(p[0] & 1) as usize];
-    let offsets = &l.t.offsets;
+    let far = &l.far[(p[0] & 1) as usize];
     let at = l.positions();
-    let pp = at.at(p);
+    let [cx, cy, cz] = at.around(p);
+    let c = AROUND as usize;
+    let pp = at.min_plus(cx[c], cy[c], cz[c]);
+    let n = pop16(own) as usize;
+    positions.reserve(n);
     let mut near = 0;
     let mut bits = own;
-    while bits != 0 {
-        let d = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        let q = add(p, offsets[d]);
-        let g = v[(i as isize + delta[d]) as usize];
+    for slot in &mut positions.spare_capacity_mut()[..n] {
+        let (delta, o) = far[bits.trailing_zeros() as usize & 15];
+        bits &= bits.wrapping_sub(1);
+        let q = at.min_plus(
+            cx[usize::from(o[0]) & 7],
+            cy[usize::from(o[1]) & 7],
+            cz[usize::from(o[2]) & 7],
+        );
+        let g = v[(i as isize + delta) as usize];
         let t = (iso - f) / (g - f);
         near += usize::from(t < WELD);
-        positions.push(pp.lerp(at.at(q), t).to_array());
+        slot.write(pp.lerp(q, t).to_array());
     }
+    // SAFETY: the `n` slots past the length were reserved and written just above.
+    unsafe { positions.set_len(positions.len() + n) };
     near
 }
 

@@ -368,6 +368,10 @@ pub(crate) struct Layout<'a> {
     pub(crate) t: &'static LatticeTables,
     /// Storage-index delta of neighbour d, for even (`[0]`) and odd (`[1]`) points.
     pub(crate) delta: [[isize; 14]; 2],
+    /// Per parity and neighbour d (16 entries, the last two unused, so that `d & 15` needs no
+    /// bounds check): its storage delta, and per axis the index of its coordinate in the
+    /// point's window of the axis tables ([`Positions::around`]).
+    pub(crate) far: [[(isize, [u8; 3]); 16]; 2],
     pub(crate) tets: Vec<TetTemplate>,
     /// The tetrahedra visited together: per face axis (body-centred) or the cube (simple).
     pub(crate) groups: Vec<TetGroup>,
@@ -400,16 +404,37 @@ pub(crate) struct Positions<'a> {
 }
 
 impl Positions<'_> {
-    /// World position of lattice point `p`, bit for bit [`Layout::position`].
+    /// The corner plus the axis offsets `(x, y, z)` read from the tables: the position of
+    /// the point they belong to, bit for bit [`Layout::position`] (the same additions).
     #[inline(always)]
-    pub(crate) fn at(&self, p: Offset) -> glam::Vec3 {
-        let c = |a: usize| self.coords[a][(p[a] + COORD_PAD) as usize];
-        self.min + glam::Vec3::new(c(0), c(1), c(2))
+    pub(crate) fn min_plus(&self, x: f32, y: f32, z: f32) -> glam::Vec3 {
+        self.min + glam::Vec3::new(x, y, z)
+    }
+
+    /// Per axis, the 8 table entries from coordinate `p[a] - AROUND`: entry `o + AROUND` is
+    /// the offset of coordinate `p[a] + o` (`|o| <= AROUND`, a neighbour's), read without a
+    /// bounds check once the index is masked to 3 bits. `p` is a lattice point or a ghost
+    /// (at most one unit outside the box).
+    #[inline(always)]
+    pub(crate) fn around(&self, p: Offset) -> [&[f32; 8]; 3] {
+        let window = |a: usize| {
+            let from = (p[a] + COORD_PAD - AROUND) as usize;
+            let w: &[f32; 8] = self.coords[a][from..from + 8]
+                .try_into()
+                .expect("eight entries");
+            w
+        };
+        [window(0), window(1), window(2)]
     }
 }
 
-/// Lattice coordinates below 0 that [`Layout::coords`] covers.
-const COORD_PAD: i32 = 2;
+/// Lattice coordinates below 0 (and above the largest) that [`Layout::coords`] covers: enough
+/// for the window of a ghost ([`Positions::around`]: from 3 below 0 to 6 above the largest).
+const COORD_PAD: i32 = 8;
+
+/// How far a neighbour's coordinate lies from the point's on one axis, at most (body-centred:
+/// 2 along the axes, 1 on the diagonals; simple: 1).
+pub(crate) const AROUND: i32 = 2;
 
 /// One of the tetrahedra around a lattice point (which edges of the point have all their
 /// tetrahedra: [`Layout::inner_dirs`]): corners in the positive orientation of the lattice's
@@ -597,11 +622,21 @@ impl<'a> Layout<'a> {
                 })
                 .collect()
         });
+        let far = [0, 1].map(|par| {
+            let mut far = [(0, [AROUND as u8; 3]); 16];
+            for (d, slot) in far.iter_mut().take(14).enumerate() {
+                let o = t.offsets[d];
+                debug_assert!(o.iter().all(|c| c.abs() <= AROUND), "offset {o:?}");
+                *slot = (delta[par][d], o.map(|c| (c + AROUND) as u8));
+            }
+            far
+        });
         Self {
             s,
             lattice,
             t,
             delta,
+            far,
             reach,
             tets,
             groups,
