@@ -320,6 +320,8 @@ const SOME_INSIDE: u8 = 1;
 /// [`VertexTables::sides`]: some slot of a row outside (unused slots and slots past storage
 /// read as outside, as their inside bits are clear).
 const SOME_OUTSIDE: u8 = 2;
+/// [`VertexTables::sides`]: slots on both sides.
+const BOTH_SIDES: u8 = SOME_INSIDE | SOME_OUTSIDE;
 /// [`VertexTables::sides`] of a padding row: outside, for the whole row and its last block.
 const PAD_SIDES: u8 = SOME_OUTSIDE | SOME_OUTSIDE << TAIL;
 /// The shift of the sides of a row's last block in [`VertexTables::sides`].
@@ -563,7 +565,23 @@ pub(crate) fn vertex_plane(
         delta.iter().all(|&a| (a + 1).rem_euclid(dx as isize) <= 2),
         "a neighbour lies at most one slot along the row from its point"
     );
-    for sy in 0..dy {
+    // Per row of the plane, the sides of the rows its points and their neighbour slots read
+    // (the near rows' entries of `sides` OR-ed, a row offset at a time over the whole plane).
+    // Near rows past the padding (never, for the lattices' reach) count as both sides: the
+    // row is then walked.
+    let mut around = vec![0u8; dy];
+    for &o in near {
+        let from = first_side.wrapping_add_signed(o);
+        match sides.get(from..from + dy) {
+            Some(near_sides) => {
+                for (a, &s) in around.iter_mut().zip(near_sides) {
+                    *a |= s;
+                }
+            }
+            None => around.fill(BOTH_SIDES | BOTH_SIDES << TAIL),
+        }
+    }
+    for (sy, &around) in around.iter().enumerate() {
         // The run of points in this row whose 14 neighbours are all regular lattice points: no
         // existence or border tests there.
         let run = || {
@@ -592,19 +610,12 @@ pub(crate) fn vertex_plane(
         }
         // The row trimmed away when it and every row its neighbour slots fall in lie on one
         // side (before anything else is computed for it).
-        let r = first_side + sy;
-        let around = near.iter().fold(0, |acc, &o| {
-            acc | sides
-                .get(r.wrapping_add_signed(o))
-                .copied()
-                .unwrap_or(PAD_SIDES)
-        });
-        if around & 3 != SOME_INSIDE | SOME_OUTSIDE {
+        if around & BOTH_SIDES != BOTH_SIDES {
             continue;
         }
         // The row's last block (of several) skipped likewise: where its rows all lie on one
         // side, no neighbour of its points differs from them.
-        let end = if tail > 0 && around >> TAIL != SOME_INSIDE | SOME_OUTSIDE {
+        let end = if tail > 0 && around >> TAIL != BOTH_SIDES {
             tail
         } else {
             dx
