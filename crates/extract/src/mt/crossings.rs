@@ -392,11 +392,11 @@ fn pop16(x: u16) -> u32 {
 
 /// Appends the positions of the crossings that the point at lattice coordinates `p` (storage
 /// slot `i`) owns (`own`, by neighbour bit) to `positions`, in id order; returns how many lie
-/// within [`WELD`] of it. Kept out of line: inside the vertex pass's row loop the values spill
-/// to the stack. The far end's coordinates are read from the point's window of each axis table
-/// ([`super::layout::Positions::around`], by [`Layout::far`]) and the positions written into
-/// capacity reserved once: no bounds or capacity check per crossing.
-#[inline(never)]
+/// within [`WELD`] of it. The far end's coordinates are read from the point's window of each
+/// axis table ([`super::layout::Positions::around`], by [`Layout::far`]) and the positions
+/// written into capacity reserved once: no bounds or capacity check per crossing. Inlined into
+/// the vertex pass's point visit (fewer instructions than a call since it has no such checks).
+#[inline(always)]
 fn place(
     l: &Layout,
     p: crate::lattice::Offset,
@@ -552,6 +552,8 @@ pub(crate) fn vertex_plane(
     // those fall in.
     let odd = (l.coords(0, 0, z)[2] & 1) as usize;
     let delta = &l.delta[odd];
+    // The deltas again, 16 entries: `d & 15` is read without a bounds check.
+    let far = &l.far[odd];
     let (dmin, dmax) = (
         delta.iter().copied().min().unwrap_or(0),
         delta.iter().copied().max().unwrap_or(0),
@@ -630,6 +632,9 @@ pub(crate) fn vertex_plane(
                 (1, 0)
             }
         });
+        // Whether some group is anchored in this row at all (none in half the body-centred
+        // planes).
+        let anchoring = anchor_x.iter().any(|&(x0, x1)| x0 <= x1);
         // One point with at least one crossed edge: owned crossings, flags, proposals.
         // `known`: the point's crossed edges to all 14 neighbour slots, from the inside bits;
         // `border`: the neighbours whose edges exist, for a point off the regular run (`None`:
@@ -654,7 +659,7 @@ pub(crate) fn vertex_plane(
             while bits != 0 {
                 let d = bits.trailing_zeros() as usize;
                 bits &= bits - 1;
-                let g = v[(i as isize + delta[d]) as usize];
+                let g = v[(i as isize + far[d & 15].0) as usize];
                 own |= u16::from(owns(f, g, iso)) << d;
             }
             // Ids within the plane for now; the plane's first id is added when the planes are
@@ -667,10 +672,12 @@ pub(crate) fn vertex_plane(
                 crossed,
             });
             out.bits[local >> 6] |= 1 << (local & 63);
-            for (g, &(x0, x1)) in anchor_x.iter().enumerate() {
-                if sx >= x0 && sx <= x1 {
-                    let group = groups[g];
-                    counts.triangles[g] += u32::from(group.triangles[group.code(crossed)]);
+            if anchoring {
+                for (g, &(x0, x1)) in anchor_x.iter().enumerate() {
+                    if sx >= x0 && sx <= x1 {
+                        let group = groups[g];
+                        counts.triangles[g] += u32::from(group.triangles[group.code(crossed)]);
+                    }
                 }
             }
             if own != 0 {
