@@ -220,10 +220,13 @@ pub(crate) fn geometry_layer(
         }
         for z in z0..=z1 {
             let base = (z - z0) * plane;
-            let mut r = crossed.rank_in(z, 0);
+            // The plane's crossed points in rank order, beside its bits in slot order.
+            let mut points = crossed.points[crossed.rank_in(z, 0)..].iter();
+            let dense = &mut window[base..base + plane];
             for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
-                window[base + local] = crossed.points[r];
-                r += 1;
+                if let (Some(slot), Some(&p)) = (dense.get_mut(local), points.next()) {
+                    *slot = p;
+                }
             });
         }
         // Plain MT (no vertex map, no listing, no cells) walks without the other modes' flags,
@@ -352,13 +355,11 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool, const LIST
                 "edge {e}"
             );
             debug_assert_ne!(a.crossed >> read.dir[0] & 1, 0, "edge {e} not crossed");
-            // Both ends read, then one picked: which end owns the crossing is data, and a
-            // branch on it mispredicts about half the time.
-            let b = window[(at as isize + read.deltas[1]) as usize];
+            // The far end read only when the near one does not own the crossing.
             let (owner, d) = if a.owned >> read.dir[0] & 1 != 0 {
                 (a, read.dir[0])
             } else {
-                (b, read.dir[1])
+                (window[(at as isize + read.deltas[1]) as usize], read.dir[1])
             };
             ids[e] = owner.id(d);
         }
