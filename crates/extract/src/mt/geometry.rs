@@ -91,49 +91,41 @@ pub(crate) fn for_each_group<const RANK: bool>(
             visit(start + n, r, g, p);
         });
     };
-    match l.lattice {
-        Lattice::Simple => {
-            // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface
-            // in the cube.
-            for j in 0..ny {
-                row(
-                    l.s.simple_index(0, j, k),
-                    k,
-                    nx,
-                    0,
-                    [0, j as i32, k as i32],
-                    1,
-                );
-            }
-        }
+    // The layer's runs of rows, in walk order: (rows, group, row length, the first anchor's
+    // x and y, the row step of y, its z). One loop over them calls `row` from one place, so
+    // that it is compiled into the loop (no call per row).
+    let none = (0, 0, 0, 0, 0, 0, 0);
+    let runs: [(usize, usize, usize, i32, i32, i32, i32); 3] = match l.lattice {
+        // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface in
+        // the cube.
+        Lattice::Simple => [(ny, 0, nx, 0, 0, 1, k as i32), none, none],
         Lattice::BodyCentred => {
-            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by their
-            // anchor A, the centre below (B and the 4 face corners are neighbours of A: without
-            // a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a face anchor
-            // moves by one storage slot (two lattice units).
+            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by
+            // their anchor A, the centre below (B and the 4 face corners are neighbours of A:
+            // without a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a
+            // face anchor moves by one storage slot (two lattice units). Without ghosts, the
+            // faces on the box's upper faces (whose centre above is a ghost) are not walked:
+            // their pyramids are `pyramids`' (those on the lower faces have a ghost anchor,
+            // which has no crossed edge).
             let ki = k as i32;
-            let mut faces = |first: Offset, len: usize, axis: usize| {
-                // Storage plane (see `Samples::bcdl_index`).
-                let z = (first[2] + 1) as usize;
-                row(l.s.bcdl_index(first), z, len, axis, first, 2);
-            };
-            // Without ghosts, the faces on the box's upper faces (whose centre above is a
-            // ghost) are not walked: their pyramids are `pyramids`' (those on the lower faces
-            // have a ghost anchor, which has no crossed edge).
             let upper = usize::from(l.s.boundary == Boundary::Pyramids);
-            if k + upper <= nz {
-                for j in 0..ny as i32 {
-                    faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
-                }
-            }
-            if k < nz {
-                for j in 0..ny as i32 {
-                    faces([-1, 2 * j + 1, 2 * ki + 1], nx + 1 - upper, 0);
-                }
-                for f in 0..=(ny - upper) as i32 {
-                    faces([1, 2 * f - 1, 2 * ki + 1], nx, 1);
-                }
-            }
+            let rows = |walked: bool, n: usize| if walked { n } else { 0 };
+            [
+                (rows(k + upper <= nz, ny), 2, nx, 1, 1, 2, 2 * ki - 1),
+                (rows(k < nz, ny), 0, nx + 1 - upper, -1, 1, 2, 2 * ki + 1),
+                (rows(k < nz, ny + 1 - upper), 1, nx, 1, -1, 2, 2 * ki + 1),
+            ]
+        }
+    };
+    for (rows, g, len, x, y, dy, z) in runs {
+        for j in 0..rows {
+            let first = [x, y + dy * j as i32, z];
+            let (start, plane_z, step) = match l.lattice {
+                Lattice::Simple => (l.s.simple_index(0, j, k), k, 1),
+                // Storage plane (see `Samples::bcdl_index`).
+                Lattice::BodyCentred => (l.s.bcdl_index(first), (z + 1) as usize, 2),
+            };
+            row(start, plane_z, len, g, first, step);
         }
     }
 }
