@@ -154,8 +154,9 @@ pub(crate) struct TetGroup {
     /// Triangles of its tetrahedra when the points with bit i set in the index are inside.
     /// A tetrahedron gives as many triangles with its sides swapped, so this is also the count
     /// when bit i says "point i is on the other side from the anchor", i.e. the anchor's
-    /// crossed edges: no sample value needs reading.
-    pub(crate) triangles: Vec<u8>,
+    /// crossed edges: no sample value needs reading. [`CODES`] entries (those past the group's
+    /// codes zero), so that a code, below 256, needs no bounds check.
+    pub(crate) triangles: Box<[u8; CODES]>,
     /// Per index (as in `triangles`) and tetrahedron of the group (template order), the
     /// tetrahedron's case (bit i: its corner i inside) when the anchor is outside: entry
     /// `code * tets + j`. With the anchor inside every bit flips. The geometry pass reads a
@@ -174,15 +175,19 @@ pub(crate) struct TetGroup {
     /// index masked to its low 5 bits needs no bounds check.
     pub(crate) edge_reads: [EdgeRead; EDGE_SLOTS],
     /// Per index (as in `triangles`): the edges of `edges` that the group's cycles name (bit k:
-    /// edge k), all crossed.
-    pub(crate) crossed_edges: Vec<u64>,
+    /// edge k), all crossed. [`CODES`] entries, as `triangles`.
+    pub(crate) crossed_edges: Box<[u64; CODES]>,
     /// Per index and anchor side (entry `2 * code + inside`), the range of `cycles` holding its
-    /// tetrahedra's cycles (`cycle_start[i]..cycle_start[i + 1]`).
-    pub(crate) cycle_start: Vec<u16>,
+    /// tetrahedra's cycles (`cycle_start[i]..cycle_start[i + 1]`); for every code below
+    /// [`CODES`] (those past the group's codes empty), so that no bound is checked.
+    pub(crate) cycle_start: Box<[u16; 2 * CODES + 1]>,
     /// The cycles of crossed edges of the group's tetrahedra, in template order, each the
     /// case table's cycle ([`CASES`]) with its tetrahedron's edges replaced by the group's.
     pub(crate) cycles: Vec<GroupCycle>,
 }
+
+/// Entries of a [`TetGroup`]'s tables by code: every value of a code (a byte).
+pub(crate) const CODES: usize = 256;
 
 /// The most edges a [`TetGroup`] has: a cube's 6 tetrahedra have 19 (its 12 edges, 6 face
 /// diagonals and the main diagonal; each named in one direction only), a body-centred face's 4
@@ -237,13 +242,13 @@ impl TetGroup {
             points: [0; 8],
             dirs: [u8::MAX; 8],
             len: 1,
-            triangles: Vec::new(),
+            triangles: Box::new([0; CODES]),
             cases: Vec::new(),
             code_parts: [[0; 128]; 2],
             edges: Vec::new(),
             edge_reads: [EdgeRead::default(); EDGE_SLOTS],
-            crossed_edges: Vec::new(),
-            cycle_start: Vec::new(),
+            crossed_edges: Box::new([0; CODES]),
+            cycle_start: Box::new([0; 2 * CODES + 1]),
             cycles: Vec::new(),
         };
         let mut corners = Vec::with_capacity(tets.len());
@@ -314,7 +319,7 @@ impl TetGroup {
         for code in 0..1usize << group.len {
             let mut crossed = 0u64;
             for flip in [0, 15] {
-                group.cycle_start.push(group.cycles.len() as u16);
+                group.cycle_start[2 * code + usize::from(flip != 0)] = group.cycles.len() as u16;
                 for (j, c) in corners.iter().enumerate() {
                     let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i) ^ flip;
                     if case == 0 || case == 15 {
@@ -334,20 +339,20 @@ impl TetGroup {
                     });
                 }
             }
-            group.crossed_edges.push(crossed);
+            group.crossed_edges[code] = crossed;
         }
-        group.cycle_start.push(group.cycles.len() as u16);
-        group.triangles = (0..1usize << group.len)
-            .map(|code| {
-                corners
-                    .iter()
-                    .map(|c| {
-                        let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i);
-                        case_triangles(case)
-                    })
-                    .sum()
-            })
-            .collect();
+        // The codes past the group's: empty ranges at the end.
+        let end = group.cycles.len() as u16;
+        group.cycle_start[2 << group.len..].fill(end);
+        for (code, t) in group.triangles[..1 << group.len].iter_mut().enumerate() {
+            *t = corners
+                .iter()
+                .map(|c| {
+                    let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i);
+                    case_triangles(case)
+                })
+                .sum();
+        }
         group
     }
 }
