@@ -343,6 +343,24 @@ fn tail_start(dx: usize) -> usize {
 /// a neighbour lies at most one slot along the row from the point; the slot past the last is
 /// the next row's first, or past storage, outside).
 fn row_and_tail_sides(words: &[u64], start: usize, dx: usize, slots: usize) -> u8 {
+    let sides =
+        |any: bool, all: bool| (u8::from(any) * SOME_INSIDE) | (u8::from(!all) * SOME_OUTSIDE);
+    if dx > 64 && dx <= 125 {
+        // Two blocks, the last one short (as on a 64^3 body-centred grid): the row's first 64
+        // slots in one read, and slots 63 to `dx` (the last block's reach, the row's other
+        // slots among them: bits 1 to `dx - 64`) in another.
+        let first = bits_from(words, start);
+        let from = start + 63;
+        let len = (dx - 62).min(slots + 1 - from);
+        let reach = (1u64 << len) - 1;
+        let last = bits_from(words, from) & reach;
+        let rest = ((1u64 << (dx - 63)) - 1) & !1;
+        let row = sides(
+            (first | (last & rest)) != 0,
+            first == !0 && last & rest == rest,
+        );
+        return row | sides(last != 0, last == reach) << TAIL;
+    }
     let row = row_sides(words, start, dx);
     let tail = tail_start(dx);
     if tail == 0 {
