@@ -76,24 +76,9 @@ pub(crate) fn for_each_group<const RANK: bool>(
 ) {
     let [nx, ny, nz] = l.s.cells;
     let plane = l.s.dims[0] * l.s.dims[1];
-    // The anchors of one row are consecutive storage slots, at lattice points `first + (step n,
-    // 0, 0)`: scan their bits, visit only the crossed ones.
-    let mut row = |start: usize, z: usize, len: usize, g: usize, first: Offset, step: i32| {
-        let local = start - z * plane;
-        let mut rank = if RANK { crossed.rank_in(z, local) } else { 0 };
-        for_each_bit(crossed.plane_bits(z), local, len, |n| {
-            let r = rank;
-            rank += 1;
-            let p = [first[0] + step * n as i32, first[1], first[2]];
-            if keep.is_some_and(|range| !range.contains(l.anchor_cell(p, g))) {
-                return;
-            }
-            visit(start + n, r, g, p);
-        });
-    };
     // The layer's runs of rows, in walk order: (rows, group, row length, the first anchor's
-    // x and y, the row step of y, its z). One loop over them calls `row` from one place, so
-    // that it is compiled into the loop (no call per row).
+    // x and y, the row step of y, its z), walked by one loop (the row walk compiled into it,
+    // not called per row).
     let none = (0, 0, 0, 0, 0, 0, 0);
     let runs: [(usize, usize, usize, i32, i32, i32, i32); 3] = match l.lattice {
         // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface in
@@ -117,15 +102,46 @@ pub(crate) fn for_each_group<const RANK: bool>(
             ]
         }
     };
+    let row_slots = l.s.dims[0];
     for (rows, g, len, x, y, dy, z) in runs {
+        if rows == 0 {
+            continue;
+        }
+        // The run's storage plane, its first row's first anchor, and the lattice step
+        // between anchors along a row; each next row starts one storage row further.
+        let (start0, plane_z, step) = match l.lattice {
+            Lattice::Simple => (l.s.simple_index(0, 0, k), k, 1),
+            // Storage plane (see `Samples::bcdl_index`).
+            Lattice::BodyCentred => (l.s.bcdl_index([x, y, z]), (z + 1) as usize, 2),
+        };
+        let bits = crossed.plane_bits(plane_z);
         for j in 0..rows {
             let first = [x, y + dy * j as i32, z];
-            let (start, plane_z, step) = match l.lattice {
-                Lattice::Simple => (l.s.simple_index(0, j, k), k, 1),
-                // Storage plane (see `Samples::bcdl_index`).
-                Lattice::BodyCentred => (l.s.bcdl_index(first), (z + 1) as usize, 2),
+            let start = start0 + j * row_slots;
+            debug_assert_eq!(
+                start,
+                match l.lattice {
+                    Lattice::Simple => l.s.simple_index(0, j, k),
+                    Lattice::BodyCentred => l.s.bcdl_index(first),
+                }
+            );
+            // The anchors of one row are consecutive storage slots, at lattice points
+            // `first + (step n, 0, 0)`: scan their bits, visit only the crossed ones.
+            let local = start - plane_z * plane;
+            let mut rank = if RANK {
+                crossed.rank_in(plane_z, local)
+            } else {
+                0
             };
-            row(start, plane_z, len, g, first, step);
+            for_each_bit(bits, local, len, |n| {
+                let r = rank;
+                rank += 1;
+                let p = [first[0] + step * n as i32, first[1], first[2]];
+                if keep.is_some_and(|range| !range.contains(l.anchor_cell(p, g))) {
+                    return;
+                }
+                visit(start + n, r, g, p);
+            });
         }
     }
 }
