@@ -41,7 +41,7 @@
 use rayon::prelude::*;
 
 use super::clustering::proposal::{self, Candidate, PointEdges, ProposalCounts, Rules};
-use super::layout::{add, owns, Layout};
+use super::layout::{owns, Layout, AROUND};
 use crate::lattice::FULL;
 use crate::util::{bits_at_signed, inside_word, inside_word_finite64};
 use crate::{ExtractError, Lattice, Stats};
@@ -69,7 +69,9 @@ pub(crate) struct VertexTables {
     /// slots lie on ([`row_sides`]: bit 0 some inside, bit 1 some outside), with rows of padding
     /// on both ends (outside, as slots past storage read): a row whose slots and whose points'
     /// neighbour slots all lie on one side has no crossed edge, and the vertex pass skips it
-    /// (Flying Edges' trimming).
+    /// (Flying Edges' trimming). Bits 2 and 3 are the same for the slots a row's last block of
+    /// 64 points and their neighbours read in that row ([`tail_start`]; rows of one block
+    /// leave them clear): a last block whose rows all lie on one side there is skipped too.
     pub(crate) sides: Vec<u8>,
 }
 
@@ -86,7 +88,7 @@ impl VertexTables {
         let pad = sides_pad(samples.dims[1]);
         self.sides.clear();
         self.sides
-            .resize(samples.dims[1] * planes + 2 * pad, SOME_OUTSIDE);
+            .resize(samples.dims[1] * planes + 2 * pad, PAD_SIDES);
         if self.plane_points.len() < planes {
             self.plane_points.resize_with(planes, Vec::new);
             self.plane_positions.resize_with(planes, Vec::new);
@@ -318,6 +320,64 @@ const SOME_INSIDE: u8 = 1;
 /// [`VertexTables::sides`]: some slot of a row outside (unused slots and slots past storage
 /// read as outside, as their inside bits are clear).
 const SOME_OUTSIDE: u8 = 2;
+/// [`VertexTables::sides`]: slots on both sides.
+const BOTH_SIDES: u8 = SOME_INSIDE | SOME_OUTSIDE;
+/// [`VertexTables::sides`] of a padding row: outside, for the whole row and its last block.
+const PAD_SIDES: u8 = SOME_OUTSIDE | SOME_OUTSIDE << TAIL;
+/// The shift of the sides of a row's last block in [`VertexTables::sides`].
+const TAIL: u32 = 2;
+
+/// The first slot of the last block of 64 points of a row of `dx` slots, when the row has more
+/// than one block (else 0: the row check covers it).
+fn tail_start(dx: usize) -> usize {
+    if dx > 64 {
+        64 * ((dx - 1) / 64)
+    } else {
+        0
+    }
+}
+
+/// [`VertexTables::sides`] of the row of `dx` slots from slot `start`, of `slots` in storage:
+/// the row's sides, and with more than one block ([`tail_start`]) the sides of the slots that
+/// its last block's points and their neighbours read in the row (one slot more on both ends:
+/// a neighbour lies at most one slot along the row from the point; the slot past the last is
+/// the next row's first, or past storage, outside).
+fn row_and_tail_sides(words: &[u64], start: usize, dx: usize, slots: usize) -> u8 {
+    let sides =
+        |any: bool, all: bool| (u8::from(any) * SOME_INSIDE) | (u8::from(!all) * SOME_OUTSIDE);
+    if dx > 64 && dx <= 125 {
+        // Two blocks, the last one short (as on a 64^3 body-centred grid): the row's first 64
+        // slots in one read, and slots 63 to `dx` (the last block's reach, the row's other
+        // slots among them: bits 1 to `dx - 64`) in another.
+        let first = bits_from(words, start);
+        let from = start + 63;
+        let len = (dx - 62).min(slots + 1 - from);
+        let reach = (1u64 << len) - 1;
+        let last = bits_from(words, from) & reach;
+        let rest = ((1u64 << (dx - 63)) - 1) & !1;
+        let row = sides(
+            (first | (last & rest)) != 0,
+            first == !0 && last & rest == rest,
+        );
+        return row | sides(last != 0, last == reach) << TAIL;
+    }
+    let row = row_sides(words, start, dx);
+    let tail = tail_start(dx);
+    if tail == 0 {
+        return row;
+    }
+    let from = start + tail - 1;
+    let len = (dx + 2 - tail).min(slots + 1 - from);
+    let sides = if len < 64 {
+        // One read (the common case: a short last block).
+        let mask = (1u64 << len) - 1;
+        let w = bits_from(words, from) & mask;
+        (u8::from(w != 0) * SOME_INSIDE) | (u8::from(w != mask) * SOME_OUTSIDE)
+    } else {
+        row_sides(words, from, len)
+    };
+    row | sides << TAIL
+}
 
 /// Rows of padding before and after the rows of [`VertexTables::sides`], for rows of `dy` slots
 /// per plane column: more than any neighbour's reach (two planes and a row).
@@ -350,9 +410,11 @@ fn pop16(x: u16) -> u32 {
 
 /// Appends the positions of the crossings that the point at lattice coordinates `p` (storage
 /// slot `i`) owns (`own`, by neighbour bit) to `positions`, in id order; returns how many lie
-/// within [`WELD`] of it. Kept out of line: inside the vertex pass's row loop the values spill
-/// to the stack.
-#[inline(never)]
+/// within [`WELD`] of it. The far end's coordinates are read from the point's window of each
+/// axis table ([`super::layout::Positions::around`], by [`Layout::far`]) and the positions
+/// written into capacity reserved once: no bounds or capacity check per crossing. Inlined into
+/// the vertex pass's point visit (fewer instructions than a call since it has no such checks).
+#[inline(always)]
 fn place(
     l: &Layout,
     p: crate::lattice::Offset,
@@ -363,21 +425,30 @@ fn place(
 ) -> usize {
     let v = &l.s.values[..];
     let f = v[i];
-    let delta = &l.delta[(p[0] & 1) as usize];
-    let offsets = &l.t.offsets;
+    let far = &l.far[(p[0] & 1) as usize];
     let at = l.positions();
-    let pp = at.at(p);
+    let [cx, cy, cz] = at.around(p);
+    let c = AROUND as usize;
+    let pp = at.min_plus(cx[c], cy[c], cz[c]);
+    let n = pop16(own) as usize;
+    positions.reserve(n);
     let mut near = 0;
     let mut bits = own;
-    while bits != 0 {
-        let d = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        let q = add(p, offsets[d]);
-        let g = v[(i as isize + delta[d]) as usize];
+    for slot in &mut positions.spare_capacity_mut()[..n] {
+        let (delta, o) = far[bits.trailing_zeros() as usize & 15];
+        bits &= bits.wrapping_sub(1);
+        let q = at.min_plus(
+            cx[usize::from(o[0]) & 7],
+            cy[usize::from(o[1]) & 7],
+            cz[usize::from(o[2]) & 7],
+        );
+        let g = v[(i as isize + delta) as usize];
         let t = (iso - f) / (g - f);
         near += usize::from(t < WELD);
-        positions.push(pp.lerp(at.at(q), t).to_array());
+        slot.write(pp.lerp(q, t).to_array());
     }
+    // SAFETY: the `n` slots past the length were reserved and written just above.
+    unsafe { positions.set_len(positions.len() + n) };
     near
 }
 
@@ -495,23 +566,82 @@ pub(crate) fn vertex_plane(
         }
     }
     let pad = sides_pad(dy);
-    for sy in 0..dy {
+    // The parity of the plane's points (every row's), their neighbour deltas and the rows
+    // those fall in.
+    let odd = (l.coords(0, 0, z)[2] & 1) as usize;
+    let delta = &l.delta[odd];
+    // The deltas again, 16 entries: `d & 15` is read without a bounds check.
+    let far = &l.far[odd];
+    let (dmin, dmax) = (
+        delta.iter().copied().min().unwrap_or(0),
+        delta.iter().copied().max().unwrap_or(0),
+    );
+    let (offs, n) = &near_rows[odd];
+    let near = &offs[..*n];
+    // The first row of the plane in `sides`: every near row lies inside its padding.
+    let first_side = pad + z * dy;
+    let tail = tail_start(dx);
+    debug_assert!(
+        delta.iter().all(|&a| (a + 1).rem_euclid(dx as isize) <= 2),
+        "a neighbour lies at most one slot along the row from its point"
+    );
+    // Per row of the plane, the sides of the rows its points and their neighbour slots read
+    // (the near rows' entries of `sides` OR-ed, a row offset at a time over the whole plane).
+    // Near rows past the padding (never, for the lattices' reach) count as both sides: the
+    // row is then walked.
+    let mut around = vec![0u8; dy];
+    for &o in near {
+        let from = first_side.wrapping_add_signed(o);
+        match sides.get(from..from + dy) {
+            Some(near_sides) => {
+                for (a, &s) in around.iter_mut().zip(near_sides) {
+                    *a |= s;
+                }
+            }
+            None => around.fill(BOTH_SIDES | BOTH_SIDES << TAIL),
+        }
+    }
+    for (sy, &around) in around.iter().enumerate() {
         // The run of points in this row whose 14 neighbours are all regular lattice points: no
         // existence or border tests there.
-        let (p0, _) = l.point(0, sy, z);
-        let odd = (p0[2] & 1) as usize;
-        let (lo, hi) = match l.lattice {
-            Lattice::BodyCentred => (1 + odd, l.s.cells[0]),
-            Lattice::Simple => (1, l.s.cells[0]),
+        let run = || {
+            let (lo, hi) = match l.lattice {
+                Lattice::BodyCentred => (1 + odd, l.s.cells[0]),
+                Lattice::Simple => (1, l.s.cells[0]),
+            };
+            let row_regular = lo < hi && l.is_regular(l.point(lo, sy, z).0);
+            if row_regular {
+                (lo, hi)
+            } else {
+                (dx, dx)
+            }
         };
-        let row_regular = lo < hi && l.is_regular(l.point(lo, sy, z).0);
-        let (lo, hi) = if row_regular { (lo, hi) } else { (dx, dx) };
+        if count_edges {
+            let (lo, hi) = run();
+            if lo < hi {
+                counts.edges += 14 * (hi - lo);
+            }
+            for sx in (0..lo.min(dx)).chain(hi.max(lo)..dx) {
+                let (exists, valid) = l.border_info(l.coords(sx, sy, z));
+                if exists {
+                    counts.edges += valid.count_ones() as usize;
+                }
+            }
+        }
+        // The row trimmed away when it and every row its neighbour slots fall in lie on one
+        // side (before anything else is computed for it).
+        if around & BOTH_SIDES != BOTH_SIDES {
+            continue;
+        }
+        // The row's last block (of several) skipped likewise: where its rows all lie on one
+        // side, no neighbour of its points differs from them.
+        let end = if tail > 0 && around >> TAIL != BOTH_SIDES {
+            tail
+        } else {
+            dx
+        };
+        let (lo, hi) = run();
         let row = z * dx * dy + sy * dx;
-        let delta = &l.delta[odd];
-        let (dmin, dmax) = (
-            delta.iter().copied().min().unwrap_or(0),
-            delta.iter().copied().max().unwrap_or(0),
-        );
         // The slots of this row that anchor each group (empty: none).
         let anchor_x = anchors.map(|(y0, y1, x0, x1)| {
             if sy >= y0 && sy <= y1 {
@@ -520,6 +650,9 @@ pub(crate) fn vertex_plane(
                 (1, 0)
             }
         });
+        // Whether some group is anchored in this row at all (none in half the body-centred
+        // planes).
+        let anchoring = anchor_x.iter().any(|&(x0, x1)| x0 <= x1);
         // One point with at least one crossed edge: owned crossings, flags, proposals.
         // `known`: the point's crossed edges to all 14 neighbour slots, from the inside bits;
         // `border`: the neighbours whose edges exist, for a point off the regular run (`None`:
@@ -544,7 +677,7 @@ pub(crate) fn vertex_plane(
             while bits != 0 {
                 let d = bits.trailing_zeros() as usize;
                 bits &= bits - 1;
-                let g = v[(i as isize + delta[d]) as usize];
+                let g = v[(i as isize + far[d & 15].0) as usize];
                 own |= u16::from(owns(f, g, iso)) << d;
             }
             // Ids within the plane for now; the plane's first id is added when the planes are
@@ -557,10 +690,12 @@ pub(crate) fn vertex_plane(
                 crossed,
             });
             out.bits[local >> 6] |= 1 << (local & 63);
-            for (g, &(x0, x1)) in anchor_x.iter().enumerate() {
-                if sx >= x0 && sx <= x1 {
-                    let group = groups[g];
-                    counts.triangles[g] += u32::from(group.triangles[group.code(crossed)]);
+            if anchoring {
+                for (g, &(x0, x1)) in anchor_x.iter().enumerate() {
+                    if sx >= x0 && sx <= x1 {
+                        let group = groups[g];
+                        counts.triangles[g] += u32::from(group.triangles[group.code(crossed)]);
+                    }
                 }
             }
             if own != 0 {
@@ -596,30 +731,9 @@ pub(crate) fn vertex_plane(
         // first and last planes), the bits are read with that check (slots outside read as
         // outside points: never a real neighbour).
         let safe = row as isize + dmin >= 0 && (row + dx) as isize + dmax <= slots as isize;
-        if lo < hi {
-            counts.edges += 14 * (hi - lo);
-        }
-        if count_edges {
-            for sx in (0..lo.min(dx)).chain(hi.max(lo)..dx) {
-                let (exists, valid) = l.border_info(l.coords(sx, sy, z));
-                if exists {
-                    counts.edges += valid.count_ones() as usize;
-                }
-            }
-        }
-        // The row trimmed away when it and every row its neighbour slots fall in lie on one
-        // side.
-        let r = (pad + z * dy + sy) as isize;
-        let (offs, n) = &near_rows[odd];
-        let around = offs[..*n].iter().fold(0, |acc, &o| {
-            acc | sides.get((r + o) as usize).copied().unwrap_or(SOME_OUTSIDE)
-        });
-        if around != SOME_INSIDE | SOME_OUTSIDE {
-            continue;
-        }
         let mut sx = 0;
-        while sx < dx {
-            let len = (dx - sx).min(64);
+        while sx < end {
+            let len = (end - sx).min(64);
             // Per neighbour, which of the 64 points differ from it.
             let own_bits = bits_from(inside_bits, row + sx);
             let at = (row + sx) as isize;
@@ -749,7 +863,7 @@ pub(crate) fn vertex_pass(
                 .enumerate()
                 .for_each(|(z, sides)| {
                     for (sy, side) in sides.iter_mut().enumerate() {
-                        *side = row_sides(inside, (z * dy + sy) * dx, dx);
+                        *side = row_and_tail_sides(inside, (z * dy + sy) * dx, dx, slots);
                     }
                 })
         });
@@ -909,6 +1023,8 @@ mod tests {
                 [5, 2, 7],
                 [9, 8, 6],
                 [40, 3, 5],
+                // Rows of two blocks of 64 points (the last one checked on its own).
+                [70, 3, 4],
             ] {
                 let (settings, samples, buf, mesh) = plain_mt(&field, lattice, cells, &pool);
                 let l = Layout::new(&samples, lattice);
@@ -1033,6 +1149,51 @@ mod tests {
                     "start {start} len {len}"
                 );
                 seen[usize::from(want)] += 1;
+            }
+        }
+        assert!(
+            seen[1] > 0 && seen[2] > 0 && seen[3] > 0,
+            "every outcome met: {seen:?}"
+        );
+    }
+
+    #[test]
+    fn the_sides_of_a_rows_last_block_cover_the_slots_its_points_and_neighbours_read() {
+        // Rows of one block and of several, every row of a random bit set with long runs
+        // (storage ending mid-word and at a word's end), against the bits one by one: the
+        // row's slots, then its last block's slots with one more on both ends (past storage:
+        // outside).
+        let mut state = 3u64;
+        let mut seen = [0usize; 4];
+        for slots in [9 * 64 - 5, 9 * 64usize] {
+            let mut bits = vec![0u64; slots.div_ceil(64) + 1];
+            let mut inside = false;
+            for i in 0..slots {
+                if lcg(&mut state) < 0.03 {
+                    inside = !inside;
+                }
+                bits[i >> 6] |= u64::from(inside) << (i & 63);
+            }
+            let bit = |i: usize| i < slots && bits[i >> 6] >> (i & 63) & 1 == 1;
+            let sides_of = |r: std::ops::Range<usize>| {
+                let any_in = r.clone().any(bit);
+                let any_out = r.clone().any(|i| !bit(i));
+                (u8::from(any_in) * SOME_INSIDE) | (u8::from(any_out) * SOME_OUTSIDE)
+            };
+            for dx in [5, 64, 65, 66, 100, 128, 129, 190] {
+                for start in (0..slots).step_by(dx) {
+                    let dx = dx.min(slots - start);
+                    let got = row_and_tail_sides(&bits, start, dx, slots);
+                    assert_eq!(got & 3, sides_of(start..start + dx), "{slots} {dx} {start}");
+                    let tail = tail_start(dx);
+                    let want = if tail == 0 {
+                        0
+                    } else {
+                        sides_of(start + tail - 1..start + dx + 1)
+                    };
+                    assert_eq!(got >> TAIL, want, "{slots} {dx} {start}");
+                    seen[usize::from(want)] += 1;
+                }
             }
         }
         assert!(

@@ -76,64 +76,72 @@ pub(crate) fn for_each_group<const RANK: bool>(
 ) {
     let [nx, ny, nz] = l.s.cells;
     let plane = l.s.dims[0] * l.s.dims[1];
-    // The anchors of one row are consecutive storage slots, at lattice points `first + (step n,
-    // 0, 0)`: scan their bits, visit only the crossed ones.
-    let mut row = |start: usize, z: usize, len: usize, g: usize, first: Offset, step: i32| {
-        let local = start - z * plane;
-        let mut rank = if RANK { crossed.rank_in(z, local) } else { 0 };
-        for_each_bit(crossed.plane_bits(z), local, len, |n| {
-            let r = rank;
-            rank += 1;
-            let p = [first[0] + step * n as i32, first[1], first[2]];
-            if keep.is_some_and(|range| !range.contains(l.anchor_cell(p, g))) {
-                return;
-            }
-            visit(start + n, r, g, p);
-        });
-    };
-    match l.lattice {
-        Lattice::Simple => {
-            // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface
-            // in the cube.
-            for j in 0..ny {
-                row(
-                    l.s.simple_index(0, j, k),
-                    k,
-                    nx,
-                    0,
-                    [0, j as i32, k as i32],
-                    1,
-                );
-            }
-        }
+    // The layer's runs of rows, in walk order: (rows, group, row length, the first anchor's
+    // x and y, the row step of y, its z), walked by one loop (the row walk compiled into it,
+    // not called per row).
+    let none = (0, 0, 0, 0, 0, 0, 0);
+    let runs: [(usize, usize, usize, i32, i32, i32, i32); 3] = match l.lattice {
+        // Cubes by corner 0, a neighbour of the other 7: no crossed edge there, no surface in
+        // the cube.
+        Lattice::Simple => [(ny, 0, nx, 0, 0, 1, k as i32), none, none],
         Lattice::BodyCentred => {
-            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by their
-            // anchor A, the centre below (B and the 4 face corners are neighbours of A: without
-            // a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a face anchor
-            // moves by one storage slot (two lattice units).
+            // Faces perpendicular to z at plane k, then (inside layer k) to x and to y, by
+            // their anchor A, the centre below (B and the 4 face corners are neighbours of A:
+            // without a crossed edge at A, no surface in the face's 4 tetrahedra). Along x a
+            // face anchor moves by one storage slot (two lattice units). Without ghosts, the
+            // faces on the box's upper faces (whose centre above is a ghost) are not walked:
+            // their pyramids are `pyramids`' (those on the lower faces have a ghost anchor,
+            // which has no crossed edge).
             let ki = k as i32;
-            let mut faces = |first: Offset, len: usize, axis: usize| {
-                // Storage plane (see `Samples::bcdl_index`).
-                let z = (first[2] + 1) as usize;
-                row(l.s.bcdl_index(first), z, len, axis, first, 2);
-            };
-            // Without ghosts, the faces on the box's upper faces (whose centre above is a
-            // ghost) are not walked: their pyramids are `pyramids`' (those on the lower faces
-            // have a ghost anchor, which has no crossed edge).
             let upper = usize::from(l.s.boundary == Boundary::Pyramids);
-            if k + upper <= nz {
-                for j in 0..ny as i32 {
-                    faces([1, 2 * j + 1, 2 * ki - 1], nx, 2);
+            let rows = |walked: bool, n: usize| if walked { n } else { 0 };
+            [
+                (rows(k + upper <= nz, ny), 2, nx, 1, 1, 2, 2 * ki - 1),
+                (rows(k < nz, ny), 0, nx + 1 - upper, -1, 1, 2, 2 * ki + 1),
+                (rows(k < nz, ny + 1 - upper), 1, nx, 1, -1, 2, 2 * ki + 1),
+            ]
+        }
+    };
+    let row_slots = l.s.dims[0];
+    for (rows, g, len, x, y, dy, z) in runs {
+        if rows == 0 {
+            continue;
+        }
+        // The run's storage plane, its first row's first anchor, and the lattice step
+        // between anchors along a row; each next row starts one storage row further.
+        let (start0, plane_z, step) = match l.lattice {
+            Lattice::Simple => (l.s.simple_index(0, 0, k), k, 1),
+            // Storage plane (see `Samples::bcdl_index`).
+            Lattice::BodyCentred => (l.s.bcdl_index([x, y, z]), (z + 1) as usize, 2),
+        };
+        let bits = crossed.plane_bits(plane_z);
+        for j in 0..rows {
+            let first = [x, y + dy * j as i32, z];
+            let start = start0 + j * row_slots;
+            debug_assert_eq!(
+                start,
+                match l.lattice {
+                    Lattice::Simple => l.s.simple_index(0, j, k),
+                    Lattice::BodyCentred => l.s.bcdl_index(first),
                 }
-            }
-            if k < nz {
-                for j in 0..ny as i32 {
-                    faces([-1, 2 * j + 1, 2 * ki + 1], nx + 1 - upper, 0);
+            );
+            // The anchors of one row are consecutive storage slots, at lattice points
+            // `first + (step n, 0, 0)`: scan their bits, visit only the crossed ones.
+            let local = start - plane_z * plane;
+            let mut rank = if RANK {
+                crossed.rank_in(plane_z, local)
+            } else {
+                0
+            };
+            for_each_bit(bits, local, len, |n| {
+                let r = rank;
+                rank += 1;
+                let p = [first[0] + step * n as i32, first[1], first[2]];
+                if keep.is_some_and(|range| !range.contains(l.anchor_cell(p, g))) {
+                    return;
                 }
-                for f in 0..=(ny - upper) as i32 {
-                    faces([1, 2 * f - 1, 2 * ki + 1], nx, 1);
-                }
-            }
+                visit(start + n, r, g, p);
+            });
         }
     }
 }
@@ -220,10 +228,13 @@ pub(crate) fn geometry_layer(
         }
         for z in z0..=z1 {
             let base = (z - z0) * plane;
-            let mut r = crossed.rank_in(z, 0);
+            // The plane's crossed points in rank order, beside its bits in slot order.
+            let mut points = crossed.points[crossed.rank_in(z, 0)..].iter();
+            let dense = &mut window[base..base + plane];
             for_each_bit(crossed.plane_bits(z), 0, plane, |local| {
-                window[base + local] = crossed.points[r];
-                r += 1;
+                if let (Some(slot), Some(&p)) = (dense.get_mut(local), points.next()) {
+                    *slot = p;
+                }
             });
         }
         // Plain MT (no vertex map, no listing, no cells) walks without the other modes' flags,
@@ -352,13 +363,11 @@ pub(crate) fn geometry_in_window<const FLIP: bool, const PLAIN: bool, const LIST
                 "edge {e}"
             );
             debug_assert_ne!(a.crossed >> read.dir[0] & 1, 0, "edge {e} not crossed");
-            // Both ends read, then one picked: which end owns the crossing is data, and a
-            // branch on it mispredicts about half the time.
-            let b = window[(at as isize + read.deltas[1]) as usize];
+            // The far end read only when the near one does not own the crossing.
             let (owner, d) = if a.owned >> read.dir[0] & 1 != 0 {
                 (a, read.dir[0])
             } else {
-                (b, read.dir[1])
+                (window[(at as isize + read.deltas[1]) as usize], read.dir[1])
             };
             ids[e] = owner.id(d);
         }

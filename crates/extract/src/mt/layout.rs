@@ -154,8 +154,9 @@ pub(crate) struct TetGroup {
     /// Triangles of its tetrahedra when the points with bit i set in the index are inside.
     /// A tetrahedron gives as many triangles with its sides swapped, so this is also the count
     /// when bit i says "point i is on the other side from the anchor", i.e. the anchor's
-    /// crossed edges: no sample value needs reading.
-    pub(crate) triangles: Vec<u8>,
+    /// crossed edges: no sample value needs reading. [`CODES`] entries (those past the group's
+    /// codes zero), so that a code, below 256, needs no bounds check.
+    pub(crate) triangles: Box<[u8; CODES]>,
     /// Per index (as in `triangles`) and tetrahedron of the group (template order), the
     /// tetrahedron's case (bit i: its corner i inside) when the anchor is outside: entry
     /// `code * tets + j`. With the anchor inside every bit flips. The geometry pass reads a
@@ -174,15 +175,19 @@ pub(crate) struct TetGroup {
     /// index masked to its low 5 bits needs no bounds check.
     pub(crate) edge_reads: [EdgeRead; EDGE_SLOTS],
     /// Per index (as in `triangles`): the edges of `edges` that the group's cycles name (bit k:
-    /// edge k), all crossed.
-    pub(crate) crossed_edges: Vec<u64>,
+    /// edge k), all crossed. [`CODES`] entries, as `triangles`.
+    pub(crate) crossed_edges: Box<[u64; CODES]>,
     /// Per index and anchor side (entry `2 * code + inside`), the range of `cycles` holding its
-    /// tetrahedra's cycles (`cycle_start[i]..cycle_start[i + 1]`).
-    pub(crate) cycle_start: Vec<u16>,
+    /// tetrahedra's cycles (`cycle_start[i]..cycle_start[i + 1]`); for every code below
+    /// [`CODES`] (those past the group's codes empty), so that no bound is checked.
+    pub(crate) cycle_start: Box<[u16; 2 * CODES + 1]>,
     /// The cycles of crossed edges of the group's tetrahedra, in template order, each the
     /// case table's cycle ([`CASES`]) with its tetrahedron's edges replaced by the group's.
     pub(crate) cycles: Vec<GroupCycle>,
 }
+
+/// Entries of a [`TetGroup`]'s tables by code: every value of a code (a byte).
+pub(crate) const CODES: usize = 256;
 
 /// The most edges a [`TetGroup`] has: a cube's 6 tetrahedra have 19 (its 12 edges, 6 face
 /// diagonals and the main diagonal; each named in one direction only), a body-centred face's 4
@@ -237,13 +242,13 @@ impl TetGroup {
             points: [0; 8],
             dirs: [u8::MAX; 8],
             len: 1,
-            triangles: Vec::new(),
+            triangles: Box::new([0; CODES]),
             cases: Vec::new(),
             code_parts: [[0; 128]; 2],
             edges: Vec::new(),
             edge_reads: [EdgeRead::default(); EDGE_SLOTS],
-            crossed_edges: Vec::new(),
-            cycle_start: Vec::new(),
+            crossed_edges: Box::new([0; CODES]),
+            cycle_start: Box::new([0; 2 * CODES + 1]),
             cycles: Vec::new(),
         };
         let mut corners = Vec::with_capacity(tets.len());
@@ -314,7 +319,7 @@ impl TetGroup {
         for code in 0..1usize << group.len {
             let mut crossed = 0u64;
             for flip in [0, 15] {
-                group.cycle_start.push(group.cycles.len() as u16);
+                group.cycle_start[2 * code + usize::from(flip != 0)] = group.cycles.len() as u16;
                 for (j, c) in corners.iter().enumerate() {
                     let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i) ^ flip;
                     if case == 0 || case == 15 {
@@ -334,20 +339,20 @@ impl TetGroup {
                     });
                 }
             }
-            group.crossed_edges.push(crossed);
+            group.crossed_edges[code] = crossed;
         }
-        group.cycle_start.push(group.cycles.len() as u16);
-        group.triangles = (0..1usize << group.len)
-            .map(|code| {
-                corners
-                    .iter()
-                    .map(|c| {
-                        let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i);
-                        case_triangles(case)
-                    })
-                    .sum()
-            })
-            .collect();
+        // The codes past the group's: empty ranges at the end.
+        let end = group.cycles.len() as u16;
+        group.cycle_start[2 << group.len..].fill(end);
+        for (code, t) in group.triangles[..1 << group.len].iter_mut().enumerate() {
+            *t = corners
+                .iter()
+                .map(|c| {
+                    let case = (0..4).fold(0, |case, i| case | ((code >> c[i]) & 1) << i);
+                    case_triangles(case)
+                })
+                .sum();
+        }
         group
     }
 }
@@ -368,6 +373,10 @@ pub(crate) struct Layout<'a> {
     pub(crate) t: &'static LatticeTables,
     /// Storage-index delta of neighbour d, for even (`[0]`) and odd (`[1]`) points.
     pub(crate) delta: [[isize; 14]; 2],
+    /// Per parity and neighbour d (16 entries, the last two unused, so that `d & 15` needs no
+    /// bounds check): its storage delta, and per axis the index of its coordinate in the
+    /// point's window of the axis tables ([`Positions::around`]).
+    pub(crate) far: [[(isize, [u8; 3]); 16]; 2],
     pub(crate) tets: Vec<TetTemplate>,
     /// The tetrahedra visited together: per face axis (body-centred) or the cube (simple).
     pub(crate) groups: Vec<TetGroup>,
@@ -400,16 +409,37 @@ pub(crate) struct Positions<'a> {
 }
 
 impl Positions<'_> {
-    /// World position of lattice point `p`, bit for bit [`Layout::position`].
+    /// The corner plus the axis offsets `(x, y, z)` read from the tables: the position of
+    /// the point they belong to, bit for bit [`Layout::position`] (the same additions).
     #[inline(always)]
-    pub(crate) fn at(&self, p: Offset) -> glam::Vec3 {
-        let c = |a: usize| self.coords[a][(p[a] + COORD_PAD) as usize];
-        self.min + glam::Vec3::new(c(0), c(1), c(2))
+    pub(crate) fn min_plus(&self, x: f32, y: f32, z: f32) -> glam::Vec3 {
+        self.min + glam::Vec3::new(x, y, z)
+    }
+
+    /// Per axis, the 8 table entries from coordinate `p[a] - AROUND`: entry `o + AROUND` is
+    /// the offset of coordinate `p[a] + o` (`|o| <= AROUND`, a neighbour's), read without a
+    /// bounds check once the index is masked to 3 bits. `p` is a lattice point or a ghost
+    /// (at most one unit outside the box).
+    #[inline(always)]
+    pub(crate) fn around(&self, p: Offset) -> [&[f32; 8]; 3] {
+        let window = |a: usize| {
+            let from = (p[a] + COORD_PAD - AROUND) as usize;
+            let w: &[f32; 8] = self.coords[a][from..from + 8]
+                .try_into()
+                .expect("eight entries");
+            w
+        };
+        [window(0), window(1), window(2)]
     }
 }
 
-/// Lattice coordinates below 0 that [`Layout::coords`] covers.
-const COORD_PAD: i32 = 2;
+/// Lattice coordinates below 0 (and above the largest) that [`Layout::coords`] covers: enough
+/// for the window of a ghost ([`Positions::around`]: from 3 below 0 to 6 above the largest).
+const COORD_PAD: i32 = 8;
+
+/// How far a neighbour's coordinate lies from the point's on one axis, at most (body-centred:
+/// 2 along the axes, 1 on the diagonals; simple: 1).
+pub(crate) const AROUND: i32 = 2;
 
 /// One of the tetrahedra around a lattice point (which edges of the point have all their
 /// tetrahedra: [`Layout::inner_dirs`]): corners in the positive orientation of the lattice's
@@ -597,11 +627,21 @@ impl<'a> Layout<'a> {
                 })
                 .collect()
         });
+        let far = [0, 1].map(|par| {
+            let mut far = [(0, [AROUND as u8; 3]); 16];
+            for (d, slot) in far.iter_mut().take(14).enumerate() {
+                let o = t.offsets[d];
+                debug_assert!(o.iter().all(|c| c.abs() <= AROUND), "offset {o:?}");
+                *slot = (delta[par][d], o.map(|c| (c + AROUND) as u8));
+            }
+            far
+        });
         Self {
             s,
             lattice,
             t,
             delta,
+            far,
             reach,
             tets,
             groups,
