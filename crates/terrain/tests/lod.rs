@@ -6,25 +6,20 @@
 //! sequences run `RMT_CASES / 16`, at least 4); `RMT_CASES=10000 cargo test --release -p
 //! rmt-terrain --test lod` runs the long version.
 
+mod common;
+
 use foldhash::HashMap;
 
+use common::{cases, config};
 use glam::Vec3;
 use proptest::prelude::*;
-use proptest::test_runner::FileFailurePersistence;
 use rmt_fields::{RandomField, ScalarField};
 use rmt_terrain::lod::check::{check_surface, check_tets};
 use rmt_terrain::lod::lattice::{bcc_tet, canonical, cell_size, Point};
 use rmt_terrain::lod::{
-    chunk_tets, march, mesh_chunks, mesh_whole, thread_pool, weld, world_tets, ChunkMesh, LevelMap,
-    LodFrame, LodGeometry, LodSettings, LodWorld, MeshTet, TetKind,
+    chunk_tets, march, mesh_chunks, mesh_whole, same_bits, thread_pool, weld, world_tets,
+    ChunkMesh, LevelMap, LodFrame, LodGeometry, LodSettings, LodWorld, MeshTet, TetKind,
 };
-
-fn cases(default: u32) -> u32 {
-    std::env::var("RMT_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(default)
-}
 
 /// The test worlds: `[-1, 1]` along x and z (y: `[-1, 0]` for the first), where the random
 /// fields live.
@@ -44,25 +39,6 @@ fn geometry(which: u8) -> (LodGeometry, LodFrame) {
             h,
         },
     )
-}
-
-fn same_bits(a: &[ChunkMesh], b: &[ChunkMesh]) -> bool {
-    let bits = |v: &[[f32; 3]]| -> Vec<u32> { v.iter().flatten().map(|x| x.to_bits()).collect() };
-    a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| {
-            x.keys == y.keys
-                && x.indices == y.indices
-                && bits(&x.positions) == bits(&y.positions)
-                && bits(&x.normals) == bits(&y.normals)
-        })
-}
-
-fn config() -> ProptestConfig {
-    ProptestConfig {
-        cases: cases(64),
-        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("regressions"))),
-        ..ProptestConfig::default()
-    }
 }
 
 proptest! {

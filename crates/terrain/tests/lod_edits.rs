@@ -9,8 +9,8 @@ use glam::Vec3;
 use rmt_fields::{RandomField, ScalarField};
 use rmt_terrain::lod::check::{check_surface, check_tets};
 use rmt_terrain::lod::{
-    mesh_chunks, thread_pool, weld, world_tets, ChunkKey, ChunkMesh, EditedField, LevelMap,
-    LodFrame, LodGeometry, LodSettings, LodWorld, Overlay,
+    mesh_chunks, same_bits, thread_pool, weld, world_tets, ChunkKey, ChunkMesh, EditedField,
+    LevelMap, LodFrame, LodGeometry, LodSettings, LodWorld, Overlay,
 };
 use rmt_terrain::Brush;
 
@@ -41,17 +41,6 @@ fn settings(roots: u32, threads: usize) -> LodSettings {
         threads,
         morph: None,
     }
-}
-
-fn same_bits(a: &[ChunkMesh], b: &[ChunkMesh]) -> bool {
-    let bits = |v: &[[f32; 3]]| -> Vec<u32> { v.iter().flatten().map(|x| x.to_bits()).collect() };
-    a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| {
-            x.keys == y.keys
-                && x.indices == y.indices
-                && bits(&x.positions) == bits(&y.positions)
-                && bits(&x.normals) == bits(&y.normals)
-        })
 }
 
 /// The world's chunk meshes against a from-scratch meshing of its map over field + overlay

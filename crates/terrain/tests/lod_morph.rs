@@ -5,22 +5,18 @@
 //!
 //! Case counts scale with `RMT_CASES` (default 64 here).
 
+mod common;
+
+use common::{cases, config};
 use glam::Vec3;
 use proptest::prelude::*;
-use proptest::test_runner::FileFailurePersistence;
 use rmt_fields::{RandomField, ScalarField};
 use rmt_terrain::lod::check::{check_surface, check_tets};
+use rmt_terrain::lod::level_map::viewer_splits;
 use rmt_terrain::lod::{
-    mesh_chunks_morphed, thread_pool, weld, world_tets, ChunkKey, ChunkMesh, LevelMap, LodFrame,
-    LodGeometry, LodSettings, LodWorld, Morph, MorphSettings,
+    mesh_chunks_morphed, same_bits, thread_pool, weld, world_tets, ChunkKey, ChunkMesh, LevelMap,
+    LodFrame, LodGeometry, LodSettings, LodWorld, Morph, MorphSettings,
 };
-
-fn cases(default: u32) -> u32 {
-    std::env::var("RMT_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(default)
-}
 
 /// Worlds over `[-1, 1]` in x and z, where the random fields live.
 fn geometry(which: u8) -> (LodGeometry, LodFrame) {
@@ -42,25 +38,6 @@ fn geometry(which: u8) -> (LodGeometry, LodFrame) {
 fn to_u(frame: &LodFrame, p: Vec3) -> [f64; 3] {
     let u = f64::from(frame.h) * 0.5;
     ((p.as_dvec3() - frame.origin.as_dvec3()) / u).to_array()
-}
-
-fn same_bits(a: &[ChunkMesh], b: &[ChunkMesh]) -> bool {
-    let bits = |v: &[[f32; 3]]| -> Vec<u32> { v.iter().flatten().map(|x| x.to_bits()).collect() };
-    a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| {
-            x.keys == y.keys
-                && x.indices == y.indices
-                && bits(&x.positions) == bits(&y.positions)
-                && bits(&x.normals) == bits(&y.normals)
-        })
-}
-
-fn config() -> ProptestConfig {
-    ProptestConfig {
-        cases: cases(64),
-        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("regressions"))),
-        ..ProptestConfig::default()
-    }
 }
 
 proptest! {
@@ -197,20 +174,6 @@ fn one_way(from: &rmt_mesh::Mesh, to: &rmt_mesh::Mesh, lo: Vec3, hi: Vec3) -> Op
     worst
 }
 
-/// The distance rule of `LevelMap::from_viewer`.
-fn near(g: &LodGeometry, k: &ChunkKey, viewer: [f64; 3], ratio: f64) -> bool {
-    let (lo, hi) = k.bounds(g);
-    let d2: f64 = (0..3)
-        .map(|i| {
-            let d = (lo[i] as f64 - viewer[i])
-                .max(viewer[i] - hi[i] as f64)
-                .max(0.0);
-            d * d
-        })
-        .sum();
-    d2.sqrt() < ratio * g.chunk_size(k.level) as f64
-}
-
 /// The pop of splitting each coarse chunk of the viewer's map (with the viewer where it is):
 /// the Hausdorff distance between the two surfaces around the chunk, in cells of the finer
 /// level. Without the morph the surface jumps; with it, the split chunk's finer values are the
@@ -234,7 +197,7 @@ fn a_change_of_level_does_not_pop_under_the_morph() {
             .filter(|k| k.level >= 1)
             .collect();
         for target in coarse.iter().step_by(5).take(4) {
-            let split = LevelMap::build(g, |k| near(&g, k, viewer, ratio) || k == target);
+            let split = LevelMap::build(g, |k| viewer_splits(&g, k, viewer, ratio) || k == target);
             let (lo, hi) = target.bounds(&g);
             let u = frame.h * 0.5;
             let world =

@@ -65,6 +65,21 @@ impl LodGeometry {
     }
 }
 
+/// The distance rule of [`LevelMap::from_viewer`]: whether the viewer (in `u`) is closer to
+/// chunk `k`'s box than `ratio` times its edge.
+pub fn viewer_splits(geom: &LodGeometry, k: &ChunkKey, viewer: [f64; 3], ratio: f64) -> bool {
+    let (lo, hi) = k.bounds(geom);
+    let d2: f64 = (0..3)
+        .map(|i| {
+            let d = (lo[i] as f64 - viewer[i])
+                .max(viewer[i] - hi[i] as f64)
+                .max(0.0);
+            d * d
+        })
+        .sum();
+    d2.sqrt() < ratio * geom.chunk_size(k.level) as f64
+}
+
 /// One chunk: its level and its index among the chunks of that level.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ChunkKey {
@@ -151,18 +166,7 @@ impl LevelMap {
     /// `ratio` times its edge, then balanced 2:1. Each level then covers a shell about `ratio`
     /// of its chunk edges thick around the finer ones (a clipmap made of chunks).
     pub fn from_viewer(geom: LodGeometry, viewer: [f64; 3], ratio: f64) -> Self {
-        Self::build(geom, |k| {
-            let (lo, hi) = k.bounds(&geom);
-            let d2: f64 = (0..3)
-                .map(|i| {
-                    let d = (lo[i] as f64 - viewer[i])
-                        .max(viewer[i] - hi[i] as f64)
-                        .max(0.0);
-                    d * d
-                })
-                .sum();
-            d2.sqrt() < ratio * geom.chunk_size(k.level) as f64
-        })
+        Self::build(geom, |k| viewer_splits(&geom, k, viewer, ratio))
     }
 
     /// A random map for tests and measurements: each chunk is split with probability

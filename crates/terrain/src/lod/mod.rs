@@ -50,7 +50,7 @@ pub use error::LodError;
 pub use level_map::{ChunkKey, LevelMap, LodGeometry};
 pub use mesh::{chunk_tets, world_tets, MeshTet};
 pub use morph::Morph;
-pub use mt::{march, weld, ChunkMesh, LodFrame};
+pub use mt::{march, same_bits, weld, ChunkMesh, LodFrame};
 pub use refine::TetKind;
 pub use tet_cache::{TetCache, TetCacheStats, DEFAULT_TET_CACHE_BYTES};
 pub use world::{

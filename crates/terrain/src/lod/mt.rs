@@ -570,6 +570,19 @@ fn empty_box(
         }
 }
 
+/// Whether two lists of chunk surfaces are the same, bit for bit: keys, triangles, and every
+/// position's and normal's bits (stricter than `==` on floats: it tells `-0.0` from `0.0`).
+pub fn same_bits(a: &[ChunkMesh], b: &[ChunkMesh]) -> bool {
+    let bits = |v: &[[f32; 3]]| -> Vec<u32> { v.iter().flatten().map(|x| x.to_bits()).collect() };
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            x.keys == y.keys
+                && x.indices == y.indices
+                && bits(&x.positions) == bits(&y.positions)
+                && bits(&x.normals) == bits(&y.normals)
+        })
+}
+
 /// Welds chunk meshes (in the given order) into one mesh by crossing key: vertices in order
 /// of first appearance. Returns the mesh and each vertex's key.
 pub fn weld<'a>(chunks: impl IntoIterator<Item = &'a ChunkMesh>) -> (Mesh, Vec<[Point; 2]>) {
