@@ -42,7 +42,6 @@ use rmt_fields::ScalarField;
 use super::error::LodError;
 use super::lattice::{cell_size, Point};
 use super::level_map::LodGeometry;
-use super::mt::LodFrame;
 
 /// The morph of a multiresolution world for one viewer position (see the module doc).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -180,14 +179,14 @@ impl Morph {
 
     /// Turns the field's values `values` at `points` into the morphed ones. `known` gives the
     /// field's value at a point when the caller sampled it already (any other point is sampled
-    /// from `field`, placed by `frame`).
+    /// from `field` at `place(point)`, its world position).
     pub fn apply(
         &self,
         points: &[Point],
         values: &mut [f32],
         known: &dyn Fn(Point) -> Option<f32>,
         field: &dyn ScalarField,
-        frame: &LodFrame,
+        place: &dyn Fn(Point) -> Vec3,
     ) {
         // The points that morph, and every parent their values need (with its level, weight).
         let mut morphing: Vec<(usize, u8, f64)> = Vec::new();
@@ -226,7 +225,7 @@ impl Morph {
             .filter(|&i| known(order[i].1).is_none())
             .collect();
         if !missing.is_empty() {
-            let at: Vec<Vec3> = missing.iter().map(|&i| frame.world(order[i].1)).collect();
+            let at: Vec<Vec3> = missing.iter().map(|&i| place(order[i].1)).collect();
             let mut out = vec![0f32; at.len()];
             field.sample_batch(&at, &mut out);
             for (&i, v) in missing.iter().zip(out) {

@@ -349,7 +349,7 @@ pub fn march_reusing(
     if let Some(m) = morph {
         let fields = values.clone();
         let known = |p: Point| index.get(p).map(|i| fields[i as usize]);
-        m.apply(&lattice, &mut values, &known, field, frame);
+        m.apply(&lattice, &mut values, &known, field, &|p| frame.world(p));
     }
     let mut mesh = ChunkMesh {
         samples: points.len(),
