@@ -31,12 +31,13 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use rayon::prelude::*;
+use rmt_extract::Clustering;
 use rmt_fields::ScalarField;
 use rmt_mesh::distance::{one_sided, TriangleGrid};
 use rmt_terrain::lod::check::{check_surface, check_tets};
 use rmt_terrain::lod::{
-    chunk_tets, mesh_chunks, thread_pool, weld, ChunkKey, ChunkMesh, LevelMap, LodFrame,
-    LodGeometry, LodSettings, LodWorld, MorphSettings,
+    chunk_tets, cluster_chunk, mesh_chunks, thread_pool, weld, ChunkKey, ChunkMesh, LevelMap,
+    LodFrame, LodGeometry, LodSettings, LodWorld, MorphSettings,
 };
 
 use crate::config::Extraction;
@@ -83,6 +84,7 @@ pub fn lod_settings(e: &Extraction, plan: &LodPlan, threads: usize) -> Result<Lo
         },
         ratio: plan.ratio,
         threads,
+        cluster: e.clustering == Clustering::Integrated,
         // The morph is made for the path's longest step (a hair longer, for rounding).
         morph: (plan.morph > 0.0).then(|| {
             let path = viewer_path(e, plan);
@@ -627,7 +629,8 @@ fn check_world<F: ScalarField>(
     }))
 }
 
-/// Triangles of the world at the finest level everywhere: counted when the finest level has at
+/// Triangles of the world at the finest level everywhere (clustered when the world clusters):
+/// counted when the finest level has at
 /// most `plan.finest_exact_chunks` chunks (all meshed at once), else estimated from the world's
 /// chunks as triangles x 4^level (a surface meshed at half the spacing has about 4 times the
 /// triangles).
@@ -646,9 +649,19 @@ fn finest<F: ScalarField + Copy>(
     if finest_chunks as usize <= plan.finest_exact_chunks {
         let map = LevelMap::uniform(geom, 0);
         let pool = thread_pool(threads).context("threads for the finest level")?;
-        let meshes = mesh_chunks(&map, &field, &world.settings().frame, &pool)
-            .context("meshing the finest level")?;
-        let total: usize = meshes.iter().map(ChunkMesh::triangles).sum();
+        let frame = world.settings().frame;
+        let meshes =
+            mesh_chunks(&map, &field, &frame, &pool).context("meshing the finest level")?;
+        let total: usize = if world.settings().cluster {
+            pool.install(|| {
+                meshes
+                    .par_iter()
+                    .map(|m| cluster_chunk(m, &frame).0.triangles())
+                    .sum()
+            })
+        } else {
+            meshes.iter().map(ChunkMesh::triangles).sum()
+        };
         return Ok((total as f64, "exact"));
     }
     let estimate: f64 = world

@@ -218,6 +218,44 @@ fn a_flight_is_deterministic_outside_times() {
     );
 }
 
+/// Clustering at every level: the world that clusters stays closed, manifold and oriented at
+/// every step, with fewer triangles than the plain one, and its finest level is clustered too.
+#[test]
+fn a_clustered_flight_is_closed_and_has_fewer_triangles() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = WORLD
+        .replace(
+            "clustering = [\"none\"]",
+            "clustering = [\"none\", \"integrated\"]",
+        )
+        .replace("chunk = 4", "chunk = 8")
+        .replace("resolution = [32, 16, 32]", "resolution = [64, 32, 64]");
+    let manifest = write(dir.path(), "lod.toml", &text);
+    let folder = dir.path().join("run");
+    let opts = RunOptions {
+        quiet: true,
+        stop_after: None,
+    };
+    let report = runner::start(&manifest, &Overrides::default(), Some(&folder), &opts).unwrap();
+    assert_eq!(report.status, Status::Finished);
+    let summary = Table::read(&folder.join("summary.csv")).unwrap();
+    assert_eq!(summary.rows.len(), 2);
+    let row = |c: &str| {
+        (0..2)
+            .find(|&r| summary.get(r, "clustering") == Some(c))
+            .unwrap()
+    };
+    let (plain, clustered) = (row("none"), row("integrated"));
+    let num = |r: usize, col: &str| -> f64 { summary.get(r, col).unwrap().parse().unwrap() };
+    for col in ["open_edges", "non_manifold_edges", "orientation_errors"] {
+        assert_eq!(summary.get(clustered, col), Some("0"), "{col}");
+    }
+    assert_eq!(summary.get(clustered, "validated_steps"), Some("5"));
+    assert!(num(clustered, "normal_seam_max_deg") < 5.0);
+    assert!(num(clustered, "triangles_max") < 0.8 * num(plain, "triangles_max"));
+    assert!(num(clustered, "finest_triangles") < 0.8 * num(plain, "finest_triangles"));
+}
+
 #[test]
 fn the_lod_workload_refuses_what_it_cannot_mesh() {
     let dir = tempfile::tempdir().unwrap();
@@ -228,11 +266,14 @@ fn the_lod_workload_refuses_what_it_cannot_mesh() {
             .map(|e| e.to_string())
             .unwrap_or_default()
     };
-    let clustered = err(
-        "clustered.toml",
-        &WORLD.replace("clustering = [\"none\"]", "clustering = [\"integrated\"]"),
+    let unchecked = err(
+        "unchecked.toml",
+        &WORLD.replace(
+            "clustering = [\"none\"]",
+            "clustering = [\"integrated-unchecked\"]",
+        ),
     );
-    assert!(clustered.contains("clustering none"), "{clustered}");
+    assert!(unchecked.contains("(integrated)"), "{unchecked}");
     let uneven = err(
         "uneven.toml",
         &WORLD.replace("resolution = [32, 16, 32]", "resolution = [40, 16, 32]"),

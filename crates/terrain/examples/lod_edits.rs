@@ -25,6 +25,7 @@ fn main() -> anyhow::Result<()> {
         ratio: 1.5,
         threads: 2,
         morph: None,
+        cluster: false,
     };
     let mut world = LodWorld::new(CaveTerrain::new(CaveParams::default()), settings)?;
     world.set_viewer(Vec3::new(-0.9, 0.3, -0.9));

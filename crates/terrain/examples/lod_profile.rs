@@ -105,6 +105,7 @@ fn fly(steps: usize, threads: usize, cache_mb: usize) -> anyhow::Result<()> {
         ratio: 1.5,
         threads,
         morph: None,
+        cluster: false,
     };
     let mut world = LodWorld::new(CaveTerrain::new(CaveParams::default()), settings)?;
     world.set_tet_cache_bytes(cache_mb << 20);

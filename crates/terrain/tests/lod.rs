@@ -10,7 +10,7 @@ mod common;
 
 use foldhash::HashMap;
 
-use common::{cases, config};
+use common::{cases, config, geometry};
 use glam::Vec3;
 use proptest::prelude::*;
 use rmt_fields::{RandomField, ScalarField};
@@ -20,26 +20,6 @@ use rmt_terrain::lod::{
     chunk_tets, march, mesh_chunks, mesh_whole, same_bits, thread_pool, weld, world_tets,
     ChunkMesh, LevelMap, LodFrame, LodGeometry, LodSettings, LodWorld, MeshTet, TetKind,
 };
-
-/// The test worlds: `[-1, 1]` along x and z (y: `[-1, 0]` for the first), where the random
-/// fields live.
-fn geometry(which: u8) -> (LodGeometry, LodFrame) {
-    let (g, h) = match which {
-        0 => (LodGeometry::new(2, 2, [2, 1, 2]).unwrap(), 0.125),
-        1 => (LodGeometry::new(1, 2, [2, 2, 2]).unwrap(), 0.25),
-        2 => (LodGeometry::new(2, 4, [1, 1, 1]).unwrap(), 0.125),
-        // Larger: room for chunks far from a level change (x, z in [-1, 1], y in [-1, -2/3]).
-        3 => (LodGeometry::new(2, 4, [3, 1, 3]).unwrap(), 2.0 / 48.0),
-        _ => (LodGeometry::new(2, 4, [4, 1, 4]).unwrap(), 2.0 / 64.0),
-    };
-    (
-        g,
-        LodFrame {
-            origin: Vec3::splat(-1.0),
-            h,
-        },
-    )
-}
 
 proptest! {
     #![proptest_config(config())]
@@ -235,6 +215,7 @@ fn incremental_remesh_equals_from_scratch() {
         ratio: 0.5,
         threads: 2,
         morph: None,
+        cluster: false,
     };
     let mut world = LodWorld::new(field.clone(), settings).unwrap();
     let pool = thread_pool(1).unwrap();

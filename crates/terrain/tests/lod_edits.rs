@@ -40,6 +40,7 @@ fn settings(roots: u32, threads: usize) -> LodSettings {
         ratio: 0.5,
         threads,
         morph: None,
+        cluster: false,
     }
 }
 
@@ -357,6 +358,7 @@ proptest::proptest! {
             ratio: 0.5,
             threads: 2,
             morph: None,
+            cluster: false,
         };
         let g = s.geometry;
         let mut world = LodWorld::new(field.clone(), s).unwrap();

@@ -34,6 +34,7 @@ fn settings() -> LodSettings {
         ratio: 0.5,
         threads: 2,
         morph: None,
+        cluster: false,
     }
 }
 

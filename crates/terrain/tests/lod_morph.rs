@@ -92,6 +92,7 @@ fn incremental_morphed_remesh_equals_from_scratch() {
             band: 0.5,
             lead: 0.0,
         }),
+        cluster: false,
     };
     let mut world = LodWorld::new(field.clone(), settings).unwrap();
     let pool = thread_pool(1).unwrap();

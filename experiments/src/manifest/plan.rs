@@ -691,11 +691,11 @@ fn plan_lod(
                 "the lod workload meshes nested body-centred lattices: method mt, lattice bcdl",
             ));
         }
-        if e.clustering != Clustering::None {
+        if !matches!(e.clustering, Clustering::None | Clustering::Integrated) {
             return Err(invalid.at(
                 &format!("configuration {}", c.id),
-                "the lod workload runs plain marching tetrahedra (clustering none); clustering \
-                 across levels is not built yet",
+                "the lod workload clusters with the exact check (integrated) or not at all \
+                 (none)",
             ));
         }
         if e.simplify.is_some() || e.vertex_cache {

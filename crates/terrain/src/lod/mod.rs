@@ -18,6 +18,9 @@
 //!        |
 //!   march (mt.rs)             marching tetrahedra, crossings keyed by their edge's lattice points
 //!        |
+//!   cluster (cluster.rs)      optional: RMT's groups merged inside each chunk, each by an exact
+//!                             local check; crossings near the chunk's faces stay plain
+//!        |
 //!   LodWorld (world.rs)       viewer moves -> new map -> re-mesh the chunks whose level or
 //!                             neighbours' levels changed
 //! ```
@@ -31,9 +34,11 @@
 //! Edits are an overlay of brush strokes over the procedural field ([`edits`]), sampled by
 //! every level at its own lattice points.
 //!
-//! Not here (yet): clustering across levels (plain marching tetrahedra only).
+//! Clustering ([`cluster`]) merges groups only where no other chunk sees them, so the seams
+//! and the transition layer stay plain and exact.
 
 pub mod check;
+pub mod cluster;
 pub mod edits;
 pub mod error;
 pub mod lattice;
@@ -45,6 +50,7 @@ pub mod refine;
 pub mod tet_cache;
 pub mod world;
 
+pub use cluster::{cluster_chunk, ClusterCount};
 pub use edits::{EditedField, Overlay, Stroke};
 pub use error::LodError;
 pub use level_map::{ChunkKey, LevelMap, LodGeometry};

@@ -33,6 +33,7 @@ use rayon::prelude::*;
 use rmt_fields::ScalarField;
 use rmt_mesh::Mesh;
 
+use super::cluster::cluster_chunk;
 use super::edits::{chunks_seeing, EditedField, Overlay};
 use super::error::LodError;
 use super::lattice::Point;
@@ -56,6 +57,9 @@ pub struct LodSettings {
     pub threads: usize,
     /// The morph between levels, if any.
     pub morph: Option<MorphSettings>,
+    /// Merge RMT's groups inside every chunk, where the exact check allows it
+    /// ([`cluster_chunk`]); crossings near a chunk's faces stay plain.
+    pub cluster: bool,
 }
 
 /// A world's morph between levels ([`Morph`]).
@@ -287,6 +291,7 @@ impl<F: ScalarField> LodWorld<F> {
         let frame = self.settings.frame;
         let cache = &self.tets;
         let morph_now = morph.as_ref();
+        let cluster = self.settings.cluster;
         let outcomes: Vec<Remeshed> = self.pool.install(|| {
             stale
                 .par_iter()
@@ -301,7 +306,13 @@ impl<F: ScalarField> LodWorld<F> {
                         tets: same_values.and_then(|_| encoded.get(k)),
                         mesh: before.and_then(|_| meshes.get(k)),
                     };
-                    remesh_chunk(new, k, &field, &frame, cache, last, morph_now)
+                    let meshed = remesh_chunk(new, k, &field, &frame, cache, last, morph_now)?;
+                    Ok(match meshed {
+                        Remeshed::Meshed(m, e) if cluster => {
+                            Remeshed::Meshed(cluster_chunk(&m, &frame).0, e)
+                        }
+                        other => other,
+                    })
                 })
                 .collect::<Result<_, LodError>>()
         })?;
@@ -363,14 +374,19 @@ impl<F: ScalarField> LodWorld<F> {
     pub fn mesh_under(&self, map: &LevelMap, key: &ChunkKey) -> Result<ChunkMesh, LodError> {
         let field = EditedField::new(&self.field, &self.edits);
         let frame = self.settings.frame;
-        mesh_chunk_with(
+        let mesh = mesh_chunk_with(
             map,
             key,
             &field,
             &frame,
             Some(&self.tets),
             self.morphed.as_ref(),
-        )
+        )?;
+        Ok(if self.settings.cluster {
+            cluster_chunk(&mesh, &frame).0
+        } else {
+            mesh
+        })
     }
 
     /// Whether [`LodWorld::remesh`] keeps the surfaces it replaces, for
