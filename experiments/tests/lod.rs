@@ -40,17 +40,24 @@ fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
     p
 }
 
-#[test]
-fn a_flight_writes_one_row_per_step_a_closed_world_and_a_summary() {
-    let dir = tempfile::tempdir().unwrap();
-    let manifest = write(dir.path(), "lod.toml", WORLD);
-    let folder = dir.path().join("run");
+/// Runs the manifest `text` (written as `NAME.toml` in `dir`) into the folder `dir/NAME`, which
+/// it returns, and asserts the run finished.
+fn fly(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let manifest = write(dir, &format!("{name}.toml"), text);
+    let folder = dir.join(name);
     let opts = RunOptions {
         quiet: true,
         stop_after: None,
     };
     let report = runner::start(&manifest, &Overrides::default(), Some(&folder), &opts).unwrap();
     assert_eq!(report.status, Status::Finished);
+    folder
+}
+
+#[test]
+fn a_flight_writes_one_row_per_step_a_closed_world_and_a_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = fly(dir.path(), "lod", WORLD);
     let steps = Table::read(&folder.join("lod.csv")).unwrap();
     assert_eq!(steps.header, LOD_STEPS);
     assert_eq!(steps.rows.len(), 5, "step 0 and 4 viewer steps");
@@ -230,14 +237,7 @@ fn a_clustered_flight_is_closed_and_has_fewer_triangles() {
         )
         .replace("chunk = 4", "chunk = 8")
         .replace("resolution = [32, 16, 32]", "resolution = [64, 32, 64]");
-    let manifest = write(dir.path(), "lod.toml", &text);
-    let folder = dir.path().join("run");
-    let opts = RunOptions {
-        quiet: true,
-        stop_after: None,
-    };
-    let report = runner::start(&manifest, &Overrides::default(), Some(&folder), &opts).unwrap();
-    assert_eq!(report.status, Status::Finished);
+    let folder = fly(dir.path(), "lod", &text);
     let summary = Table::read(&folder.join("summary.csv")).unwrap();
     assert_eq!(summary.rows.len(), 2);
     let row = |c: &str| {
@@ -327,18 +327,12 @@ fn a_morphed_flight_does_not_pop() {
             "path = [[-0.3, 0.0, -0.3], [0.2, 0.0, 0.2]]",
         )
         .replace("save_meshes = true", "");
-    let opts = RunOptions {
-        quiet: true,
-        stop_after: None,
-    };
     let mut pops = Vec::new();
     for (name, text) in [
         ("plain", slow.clone()),
         ("morph", format!("{slow}morph = 1.0\n")),
     ] {
-        let manifest = write(dir.path(), &format!("{name}.toml"), &text);
-        let folder = dir.path().join(name);
-        runner::start(&manifest, &Overrides::default(), Some(&folder), &opts).unwrap();
+        let folder = fly(dir.path(), name, &text);
         let steps = Table::read(&folder.join("lod.csv")).unwrap();
         let summary = Table::read(&folder.join("summary.csv")).unwrap();
         for r in 0..steps.rows.len() {

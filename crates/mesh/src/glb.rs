@@ -467,19 +467,8 @@ fn bounds(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solids::tetrahedron;
     use proptest::prelude::*;
-
-    fn tetrahedron() -> Mesh {
-        Mesh::from_triangles(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
-        )
-    }
 
     #[test]
     fn a_glb_round_trips_with_and_without_normals() {

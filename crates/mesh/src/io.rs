@@ -910,19 +910,8 @@ fn vertex_index(value: f64, face: usize, vertex_count: usize) -> Result<u32, Bod
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solids::tetrahedron;
     use proptest::prelude::*;
-
-    fn tetrahedron() -> Mesh {
-        Mesh::from_triangles(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
-        )
-    }
 
     fn with_normals(mut mesh: Mesh) -> Mesh {
         mesh.compute_area_weighted_normals();

@@ -25,6 +25,7 @@ pub mod distance;
 pub mod glb;
 pub mod io;
 pub mod quality;
+pub mod solids;
 pub mod validate;
 
 pub use io::MeshIoError;

@@ -388,6 +388,7 @@ impl UnionFind {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solids::{octahedron, tetrahedron};
     use proptest::prelude::*;
 
     fn never(_: [f32; 3]) -> bool {
@@ -396,46 +397,6 @@ mod tests {
 
     fn always(_: [f32; 3]) -> bool {
         true
-    }
-
-    /// Outward-oriented tetrahedron.
-    fn tetrahedron() -> Mesh {
-        Mesh::from_triangles(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
-        )
-    }
-
-    /// Outward-oriented octahedron with vertices on the axes.
-    fn octahedron() -> Mesh {
-        let positions = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let mut indices = Vec::new();
-        for (x, sx) in [(0u32, 1.0f32), (1, -1.0)] {
-            for (y, sy) in [(2u32, 1.0f32), (3, -1.0)] {
-                for (z, sz) in [(4u32, 1.0f32), (5, -1.0)] {
-                    // (x, y, z) is counter-clockwise from outside when the octant has an even
-                    // number of negative signs.
-                    if sx * sy * sz > 0.0 {
-                        indices.extend([x, y, z]);
-                    } else {
-                        indices.extend([x, z, y]);
-                    }
-                }
-            }
-        }
-        Mesh::from_triangles(positions, indices)
     }
 
     /// The surface of the cube [0, n]^3, each face an n x n grid of split squares, outward.

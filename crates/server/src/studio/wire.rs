@@ -226,15 +226,7 @@ mod tests {
     use super::*;
 
     fn tetra() -> Mesh {
-        let mut m = Mesh::from_triangles(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
-        );
+        let mut m = rmt_mesh::solids::tetrahedron();
         m.compute_area_weighted_normals();
         m
     }

@@ -80,22 +80,7 @@ pub fn cluster_chunk(mesh: &ChunkMesh, frame: &LodFrame) -> (ChunkMesh, ClusterC
     let proposals = propose(mesh, &tris, frame);
     count.proposed = proposals.len();
 
-    let mut s = State {
-        remap: (0..nv as u32).collect(),
-        next: vec![u32::MAX; nv],
-        size: vec![1; nv],
-        pos_sum: mesh
-            .positions
-            .iter()
-            .map(|p| DVec3::from(p.map(f64::from)))
-            .collect(),
-        nrm_sum: mesh
-            .normals
-            .iter()
-            .map(|n| DVec3::from(n.map(f64::from)))
-            .collect(),
-        dead: vec![false; mesh.indices.len() / 3],
-    };
+    let mut s = State::new(mesh);
     let mut scratch = Scratch::default();
     for (start, end) in proposals.ranges() {
         let m = &proposals.members[start..end];
@@ -316,6 +301,20 @@ struct Scratch {
 const NEW: u32 = u32::MAX;
 
 impl State {
+    /// The plain surface: every vertex on its own, every triangle live.
+    fn new(mesh: &ChunkMesh) -> Self {
+        let nv = mesh.keys.len();
+        let sums = |v: &[[f32; 3]]| v.iter().map(|p| DVec3::from(p.map(f64::from))).collect();
+        State {
+            remap: (0..nv as u32).collect(),
+            next: vec![u32::MAX; nv],
+            size: vec![1; nv],
+            pos_sum: sums(&mesh.positions),
+            nrm_sum: sums(&mesh.normals),
+            dead: vec![false; mesh.indices.len() / 3],
+        }
+    }
+
     /// The live triangles around current vertex `v` into `out` (appended; may repeat).
     fn triangles_of(&self, v: u32, tris: &Incidence, out: &mut Vec<u32>) {
         let mut m = v;
@@ -545,22 +544,7 @@ mod tests {
     fn merge(mesh: &ChunkMesh, members: &[u32]) -> (bool, ChunkMesh) {
         let nv = mesh.keys.len();
         let tris = Incidence::new(&mesh.indices, nv);
-        let mut s = State {
-            remap: (0..nv as u32).collect(),
-            next: vec![u32::MAX; nv],
-            size: vec![1; nv],
-            pos_sum: mesh
-                .positions
-                .iter()
-                .map(|p| DVec3::from(p.map(f64::from)))
-                .collect(),
-            nrm_sum: mesh
-                .normals
-                .iter()
-                .map(|n| DVec3::from(n.map(f64::from)))
-                .collect(),
-            dead: vec![false; mesh.indices.len() / 3],
-        };
+        let mut s = State::new(mesh);
         let r = s.try_merge(members, mesh, &tris, &mut Scratch::default());
         (r, s.output(mesh))
     }
@@ -583,30 +567,13 @@ mod tests {
         (m.keys.len() as i64 - e.len() as i64 + f, closed)
     }
 
-    /// The octahedron: vertices +-x, +-y, +-z (0..6), outward triangles.
+    /// A solid of `rmt_mesh::solids` as a chunk surface.
+    fn solid(m: rmt_mesh::Mesh) -> ChunkMesh {
+        surface(&m.positions, &m.indices)
+    }
+
     fn octahedron() -> ChunkMesh {
-        let p = [
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let mut idx = Vec::new();
-        for (x, sx) in [(0u32, 1.0f32), (1, -1.0)] {
-            for (y, sy) in [(2u32, 1.0f32), (3, -1.0)] {
-                for (z, sz) in [(4u32, 1.0f32), (5, -1.0)] {
-                    // (x, y, z) is outward when the signs' product is positive.
-                    if sx * sy * sz > 0.0 {
-                        idx.extend([x, y, z]);
-                    } else {
-                        idx.extend([x, z, y]);
-                    }
-                }
-            }
-        }
-        surface(&p, &idx)
+        solid(rmt_mesh::solids::octahedron())
     }
 
     #[test]
@@ -637,13 +604,7 @@ mod tests {
 
     #[test]
     fn a_tetrahedron_does_not_lose_an_edge() {
-        let p = [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ];
-        let t = surface(&p, &[0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3]);
+        let t = solid(rmt_mesh::solids::tetrahedron());
         assert_eq!(euler_closed(&t), (2, true));
         assert!(!merge(&t, &[0, 1]).0);
     }
