@@ -385,8 +385,9 @@ impl Backend for StudioBackend {
                     {"name": "chunk", "help": "chunk edge in cells at every level, 4 to 32", "default": LOD_CHUNK.to_string()},
                     {"name": "levels", "help": "the coarsest level (0 finest; level l has cells of h 2^l), 0 to 4", "default": LOD_LEVELS.to_string()},
                     {"name": "ratio", "help": "a chunk is split while the viewer is closer than ratio x its edge, 0.5 to 4", "default": LOD_RATIO.to_string()},
+                    {"name": "clustering", "help": "none, or integrated: RMT's groups merged inside each chunk where the exact check allows it (seams stay plain)", "choices": ["none", "integrated"], "default": "none"},
                 ],
-                "defaults": { "object": "terrain", "size": LOD_SIZE.to_string(), "chunk": LOD_CHUNK.to_string(), "levels": LOD_LEVELS.to_string(), "ratio": LOD_RATIO.to_string() },
+                "defaults": { "object": "terrain", "size": LOD_SIZE.to_string(), "chunk": LOD_CHUNK.to_string(), "levels": LOD_LEVELS.to_string(), "ratio": LOD_RATIO.to_string(), "clustering": "none" },
             },
         })
     }
@@ -492,11 +493,17 @@ impl Backend for StudioBackend {
                     )))
                 }
                 "object" => {}
+                "clustering" if v != "none" && v != "integrated" => {
+                    return Err(invalid(format!(
+                        "LOD mode clusters with integrated or none, got `{v}`"
+                    )))
+                }
+                "clustering" => {}
                 other if PAGE_OPTIONS.contains(&other.replace('-', "_").as_str()) => {
                     return Err(invalid(format!(
-                        "`{k}` is fixed in LOD mode (plain marching tetrahedra on the \
+                        "`{k}` is fixed in LOD mode (marching tetrahedra on the \
                          body-centred lattice over the edit workload's box; set size, chunk, \
-                         levels and ratio instead)"
+                         levels, ratio and clustering instead)"
                     )))
                 }
                 _ => {}
@@ -505,12 +512,18 @@ impl Backend for StudioBackend {
         if !params.iter().any(|(k, _)| k == "object") {
             params.insert(0, ("object".into(), "terrain".into()));
         }
+        let clustering = params
+            .iter()
+            .find(|(k, _)| k == "clustering")
+            .map_or("none", |(_, v)| v.as_str())
+            .to_string();
+        params.retain(|(k, _)| k != "clustering");
         let extra = [
             format!("--resolution={size},{},{size}", size / 4),
             format!("--bounds={SCULPT_BOUNDS}"),
             "--method=mt".to_string(),
             "--lattice=bcdl".to_string(),
-            "--clustering=none".to_string(),
+            format!("--clustering={clustering}"),
         ];
         let e = self.parse(&params, &extra).map_err(invalid)?;
         let plan = crate::manifest::LodPlan {
@@ -551,10 +564,12 @@ impl Backend for StudioBackend {
             "chunk": chunk,
             "levels": levels,
             "ratio": ratio,
+            "clustering": clustering,
             "h": spacing,
             "bounds": [min.x, min.y, min.z, max.x, max.y, max.z],
             "label": format!(
-                "{} {nx}x{ny}x{nz}, chunks {chunk}^3, levels 0-{levels}, ratio {ratio}",
+                "{} {nx}x{ny}x{nz}, chunks {chunk}^3, levels 0-{levels}, ratio {ratio}, \
+                 clustering {clustering}",
                 e.object.kind.name()
             ),
         });

@@ -210,6 +210,37 @@ fn a_stroke_far_from_the_viewer_remeshes_the_coarse_chunks_that_see_it() {
     }
 }
 
+/// Clustering at every level from the page: the same world with fewer triangles, closed.
+#[test]
+fn a_clustered_lod_session_has_fewer_triangles() {
+    let server = start();
+    let a = server.addr;
+    let mut triangles = Vec::new();
+    for clustering in ["none", "integrated"] {
+        let created = post(
+            a,
+            &format!("{WORLD}&viewer=-3,0.5,-3&clustering={clustering}"),
+            None,
+        );
+        assert_eq!(created.status, 201, "{}", created.text());
+        let (h, parts) = decode(&created);
+        assert_eq!(h["world"]["clustering"], clustering);
+        let mut shown = Shown::new();
+        apply(&mut shown, &h, parts);
+        let id = h["session"].as_str().unwrap().to_string();
+        let obj = get(a, &format!("/studio/api/lod/{id}/export?format=obj"), None).unwrap();
+        let faces = obj.text().lines().filter(|l| l.starts_with("f ")).count();
+        assert_eq!(faces as u64, h["triangles"].as_u64().unwrap());
+        triangles.push(faces);
+    }
+    assert!(
+        triangles[1] * 10 < triangles[0] * 8,
+        "clustered {} of plain {}",
+        triangles[1],
+        triangles[0]
+    );
+}
+
 #[test]
 fn bad_lod_requests_get_4xx_with_a_message_and_the_server_keeps_serving() {
     let server = start();
@@ -225,7 +256,7 @@ fn bad_lod_requests_get_4xx_with_a_message_and_the_server_keeps_serving() {
         ("ratio=10", "ratio"),
         ("object=sphere", "terrain or caves"),
         ("method=mc", "fixed in LOD mode"),
-        ("clustering=integrated", "fixed in LOD mode"),
+        ("clustering=integrated-unchecked", "integrated or none"),
         ("resolution=64", "fixed in LOD mode"),
         ("out=%2Ftmp%2Fx", "cannot be set"),
         ("bogus=1", "unknown parameter"),

@@ -24,9 +24,9 @@
 //!       - the Euler characteristic does not change: (1 - |members|) - dE + dF = 0
 //!       - no fan triangle's normal turns: n_new . n_old > 0
 //!   otherwise the crossings stay plain.
-//!   then each own crossing still alone, in order, joins the nearest merged vertex beside it
-//!   (sharing a triangle) that the same check allows (RMT's lone crossings given to a
-//!   neighbouring island).
+//!   then each own crossing still alone, in order, joins the nearest merged group beside it
+//!   (sharing a triangle) that the same check allows, at most MAX_LONES (6) per group (RMT's
+//!   lone crossings given to a neighbouring island, as the extractor gives them).
 //! ```
 //!
 //! Seams stay exact: a crossing that another chunk also has is never merged, so both sides
@@ -41,6 +41,10 @@ use glam::DVec3;
 
 use super::lattice::Point;
 use super::mt::{ChunkMesh, LodFrame};
+
+/// At most this many lone crossings join one group (as in the extractor's integrated
+/// clustering): groups stay near their point, and the check's stars stay small.
+pub const MAX_LONES: usize = 6;
 
 /// What [`cluster_chunk`] did to one chunk.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -91,8 +95,9 @@ pub fn cluster_chunk(mesh: &ChunkMesh, frame: &LodFrame) -> (ChunkMesh, ClusterC
         count.merged += usize::from(s.try_merge(m, mesh, &tris, &mut scratch));
     }
     // Lone crossings: each own crossing still alone joins the nearest merged vertex beside it
-    // that the check allows.
+    // that the check allows, at most MAX_LONES per group.
     let mut near: Vec<(f64, u32)> = Vec::new();
+    let mut lones = vec![0u8; nv];
     for x in 0..nv as u32 {
         if !own[x as usize] || s.remap[x as usize] != x || s.size[x as usize] > 1 {
             continue;
@@ -103,7 +108,8 @@ pub fn cluster_chunk(mesh: &ChunkMesh, frame: &LodFrame) -> (ChunkMesh, ClusterC
         let px = s.position(x);
         for &t in &scratch.around {
             for c in s.corners(mesh, t) {
-                if c != x && s.size[c as usize] > 1 && !near.iter().any(|&(_, n)| n == c) {
+                let open = usize::from(lones[c as usize]) < MAX_LONES;
+                if c != x && s.size[c as usize] > 1 && open && !near.iter().any(|&(_, n)| n == c) {
                     near.push((s.position(c).distance_squared(px), c));
                 }
             }
@@ -113,6 +119,8 @@ pub fn cluster_chunk(mesh: &ChunkMesh, frame: &LodFrame) -> (ChunkMesh, ClusterC
             count.lone_tried += 1;
             if s.try_merge(&[c, x], mesh, &tris, &mut scratch) {
                 count.lone_merged += 1;
+                // The group's leader is its lowest member, which may now be x.
+                lones[s.remap[c as usize] as usize] = lones[c as usize] + 1;
                 break;
             }
         }
