@@ -1,11 +1,12 @@
 //! The multiresolution world's public functions fed extreme and non-finite input: viewers at
 //! NaN, infinity and far away, strokes with non-finite or huge centres, radii, strengths and
-//! time steps, and fields that answer NaN or infinity. Each call returns (a value or an error);
-//! none panics, and a world that refused an input still re-meshes.
+//! time steps, and fields that answer NaN or infinity, in plain, morphed and clustered worlds.
+//! Each call returns (a value or an error); none panics, and a world that refused an input still
+//! re-meshes.
 
 use glam::Vec3;
 use rmt_fields::ScalarField;
-use rmt_terrain::lod::{LodFrame, LodGeometry, LodSettings, LodWorld};
+use rmt_terrain::lod::{LodFrame, LodGeometry, LodSettings, LodWorld, MorphSettings};
 use rmt_terrain::Brush;
 
 /// A plane through the world, except where the field answers `bad` (a slab of NaN or infinity).
@@ -24,7 +25,8 @@ impl ScalarField for Spoiled {
     }
 }
 
-fn settings() -> LodSettings {
+/// Plain, morphed (`morph`) or clustered (`cluster`) worlds.
+fn settings(morph: bool, cluster: bool) -> LodSettings {
     LodSettings {
         geometry: LodGeometry::new(2, 4, [2, 1, 2]).unwrap(),
         frame: LodFrame {
@@ -33,8 +35,11 @@ fn settings() -> LodSettings {
         },
         ratio: 0.5,
         threads: 2,
-        morph: None,
-        cluster: false,
+        morph: morph.then_some(MorphSettings {
+            band: 0.5,
+            lead: 0.01,
+        }),
+        cluster,
     }
 }
 
@@ -50,8 +55,12 @@ const EXTREMES: [f32; 7] = [
 
 #[test]
 fn extreme_viewers_strokes_and_fields_give_answers_not_panics() {
-    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30] {
-        let mut world = LodWorld::new(Spoiled { bad }, settings()).unwrap();
+    let kinds = [(false, false), (true, false), (false, true)];
+    for (bad, (morph, cluster)) in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30]
+        .into_iter()
+        .flat_map(|b| kinds.map(|k| (b, k)))
+    {
+        let mut world = LodWorld::new(Spoiled { bad }, settings(morph, cluster)).unwrap();
         world.set_viewer(Vec3::new(0.0, -0.75, 0.0));
         assert!(world.remesh().is_ok(), "field answering {bad}");
         let mut answered = 0;

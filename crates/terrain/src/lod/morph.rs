@@ -217,13 +217,15 @@ impl Morph {
         // Coarse first: a point's parents are of a coarser level.
         let mut order: Vec<(u8, Point, f64)> = need.iter().map(|(&q, &(l, w))| (l, q, w)).collect();
         order.sort_unstable_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
-        let mut f: Vec<f32> = order
-            .iter()
-            .map(|&(_, q, _)| known(q).unwrap_or(f32::NAN))
-            .collect();
-        let missing: Vec<usize> = (0..order.len())
-            .filter(|&i| known(order[i].1).is_none())
-            .collect();
+        let mut f: Vec<f32> = Vec::with_capacity(order.len());
+        let mut missing: Vec<usize> = Vec::new();
+        for (i, &(_, q, _)) in order.iter().enumerate() {
+            let v = known(q);
+            if v.is_none() {
+                missing.push(i);
+            }
+            f.push(v.unwrap_or(f32::NAN));
+        }
         if !missing.is_empty() {
             let at: Vec<Vec3> = missing.iter().map(|&i| place(order[i].1)).collect();
             let mut out = vec![0f32; at.len()];
