@@ -75,14 +75,16 @@ pub(crate) fn incidence(
 /// count.
 ///
 /// The list is cut into parts of consecutive triangles. Each part counts its corners over the
-/// range of ids it touches (`parts[p]`); the counts add up to `inc_start`; then, in part order,
-/// each part's counts become its cursors (where its first triangle of each vertex goes: after
-/// the earlier parts' ones), and the parts fill `inc` in parallel. Every (vertex, triangle)
-/// pair has its own place, so the parts never write the same slot, and each vertex's
-/// triangles come in triangle order. The serial steps cost the sum of the parts' id ranges:
-/// meant for lists whose nearby triangles have nearby ids (plain MT's, listed layer by layer,
-/// with ids in storage order); when the ranges add up to more than four times the vertex
-/// count, it falls back to [`incidence`].
+/// range of ids it touches (`parts[p]`). Then, in parallel over blocks of ids (as Flying Edges
+/// sums its rows), the parts' counts add up to each id's count, in part order, and each part's
+/// counts become its cursors relative to the id's start (the earlier parts' triangles there);
+/// the counts' prefix sums, block by block and then across the blocks, give `inc_start`; the
+/// parts add it to their cursors and fill `inc` in parallel. Every (vertex, triangle) pair has
+/// its own place, so the parts never write the same slot, and each vertex's triangles come in
+/// triangle order. The steps over the ids cost the sum of the parts' id ranges: meant for
+/// lists whose nearby triangles have nearby ids (plain MT's, listed layer by layer, with ids
+/// in storage order); when the ranges add up to more than four times the vertex count, it
+/// falls back to [`incidence`].
 pub(crate) fn incidence_parallel(
     vertex_count: usize,
     indices: &[u32],
@@ -133,26 +135,66 @@ pub(crate) fn incidence_parallel(
     {
         return incidence(vertex_count, indices, inc_start, inc, cursor);
     }
-    inc_start.clear();
-    inc_start.resize(vertex_count + 1, 0);
-    for (&lo, counts) in los.iter().zip(parts.iter()) {
-        for (slot, &c) in inc_start[lo + 1..].iter_mut().zip(counts) {
-            *slot += c;
-        }
-    }
-    for i in 0..vertex_count {
-        inc_start[i + 1] += inc_start[i];
-    }
-    // Counts to cursors, part after part.
-    cursor.clear();
-    cursor.extend_from_slice(&inc_start[..vertex_count]);
+    // Per block of ids, in parallel: each id's count (summed over the parts, in part order)
+    // and, in each part's counts, the triangles of the earlier parts at that id (the part's
+    // cursor, relative to the id's start); then the counts' prefix sums, block by block.
+    let blocks = vertex_count.div_ceil(BLOCK);
+    let mut pieces: Vec<Vec<(usize, &mut [u32])>> = (0..blocks).map(|_| Vec::new()).collect();
     for (&lo, counts) in los.iter().zip(parts.iter_mut()) {
-        for (c, next) in counts.iter_mut().zip(&mut cursor[lo..]) {
-            let n = *c;
-            *c = *next;
-            *next += n;
+        let (mut v, mut rest) = (lo, &mut counts[..]);
+        while !rest.is_empty() {
+            let end = ((v / BLOCK + 1) * BLOCK).min(v + rest.len());
+            let (head, tail) = rest.split_at_mut(end - v);
+            pieces[v / BLOCK].push((v, head));
+            (v, rest) = (end, tail);
         }
     }
+    crate::util::overwritten(inc_start, vertex_count + 1, 0, pool);
+    inc_start[0] = 0;
+    let sums: Vec<u32> = pool.install(|| {
+        inc_start[1..]
+            .par_chunks_mut(BLOCK)
+            .zip(pieces.par_iter_mut())
+            .enumerate()
+            .map(|(b, (ends, pieces))| {
+                let first = b * BLOCK;
+                ends.fill(0);
+                for (v, counts) in pieces.iter_mut() {
+                    let at = &mut ends[*v - first..*v - first + counts.len()];
+                    for (c, total) in counts.iter_mut().zip(at) {
+                        let n = *c;
+                        *c = *total;
+                        *total += n;
+                    }
+                }
+                let mut sum = 0;
+                for e in ends.iter_mut() {
+                    sum += *e;
+                    *e = sum;
+                }
+                sum
+            })
+            .collect()
+    });
+    drop(pieces);
+    // Left with one entry per vertex, as [`incidence`] leaves it (its bytes are counted).
+    crate::util::overwritten(cursor, vertex_count, 0, pool);
+    // Each block's offset: the blocks before it.
+    let offsets: Vec<u32> = sums
+        .iter()
+        .scan(0, |acc, &n| {
+            let at = *acc;
+            *acc += n;
+            Some(at)
+        })
+        .collect();
+    pool.install(|| {
+        inc_start[1..]
+            .par_chunks_mut(BLOCK)
+            .zip(offsets.par_iter())
+            .skip(1)
+            .for_each(|(ends, &offset)| ends.iter_mut().for_each(|e| *e += offset))
+    });
     // Every slot is written below: a reused table is not cleared first.
     crate::util::overwritten(inc, indices.len() - indices.len() % 3, 0, pool);
     let out = SharedSlots {
@@ -160,12 +202,17 @@ pub(crate) fn incidence_parallel(
         len: inc.len(),
     };
     let out = &out;
+    let inc_start = &*inc_start;
     pool.install(|| {
         parts
             .par_iter_mut()
             .zip(los.par_iter())
             .enumerate()
             .for_each(|(p, (cursors, &lo))| {
+                // The part's cursors: relative to each id's start until here.
+                for (c, &at) in cursors.iter_mut().zip(&inc_start[lo..]) {
+                    *c += at;
+                }
                 for t in bounds[p]..bounds[p + 1] {
                     for &v in &indices[3 * t..3 * t + 3] {
                         let c = &mut cursors[v as usize - lo];
@@ -176,6 +223,9 @@ pub(crate) fn incidence_parallel(
             })
     });
 }
+
+/// Ids per block of the parallel steps of [`incidence_parallel`] that run over the ids.
+const BLOCK: usize = 1 << 12;
 
 /// Slots of a `u32` slice that threads write in parallel, each slot by one writer only
 /// ([`incidence_parallel`]: every (vertex, triangle) pair has its own slot).
