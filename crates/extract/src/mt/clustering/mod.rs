@@ -609,9 +609,9 @@ fn activity_points(
 ///
 /// In parallel over runs of crossings, as Flying Edges numbers its points: each run counts its
 /// vertices, prefix sums give where each run's start, then each run numbers its own and places
-/// their positions, and maps the crossings whose label is a vertex of the same run. The rest
-/// (a label in an earlier run) take their label's number after, in order: the same map as one
-/// pass over the crossings in order.
+/// their positions, and maps the crossings whose label it has mapped. The rest (a label in an
+/// earlier run, or one left for later) take their label's number after, in order: the same
+/// map as one pass over the crossings in order.
 pub(crate) fn vertex_map(
     q: &Quotient,
     vertex_of: &mut Vec<u32>,
@@ -619,6 +619,8 @@ pub(crate) fn vertex_map(
     pool: &rayon::ThreadPool,
 ) {
     const RUN: usize = 1 << 14;
+    // Not a vertex number (there are fewer vertices than crossings, fewer than `u32::MAX`).
+    const LATER: u32 = u32::MAX;
     let n = q.cpos.len();
     let g = q.g;
     let (vlabel, vpos) = (&g.vlabel[..n], &g.vpos[..n]);
@@ -628,12 +630,12 @@ pub(crate) fn vertex_map(
             .par_chunks(RUN)
             .enumerate()
             .map(|(k, labels)| {
-                let lo = k * RUN;
-                labels
-                    .iter()
-                    .enumerate()
-                    .filter(|&(i, &l)| l as usize == lo + i)
-                    .count()
+                let first = (k * RUN) as u32;
+                let mut count = 0u32;
+                for (x, &l) in (first..).zip(labels) {
+                    count += u32::from(l == x);
+                }
+                count as usize
             })
             .collect()
     });
@@ -656,23 +658,24 @@ pub(crate) fn vertex_map(
             .enumerate()
             .map(|(k, (out, placed))| {
                 let lo = k * RUN;
-                let mut next = 0;
+                let (labels, at) = (&vlabel[lo..lo + out.len()], &vpos[lo..lo + out.len()]);
+                let mut vertex = firsts[k];
+                let mut placed = placed.iter_mut();
                 let mut later = Vec::new();
                 for i in 0..out.len() {
-                    let x = lo + i;
-                    let l = vlabel[x] as usize;
-                    if l == x {
-                        out[i] = firsts[k] + next as u32;
-                        placed[next] = vpos[x];
-                        next += 1;
-                    } else if l >= lo && vlabel[l] as usize == l {
-                        debug_assert!(
-                            l < x,
-                            "crossing {x} labelled {l}: labels are their groups' lowest ids"
-                        );
+                    let l = labels[i] as usize;
+                    if l == lo + i {
+                        out[i] = vertex;
+                        vertex += 1;
+                        if let Some(p) = placed.next() {
+                            *p = at[i];
+                        }
+                    } else if l >= lo && out[l - lo] != LATER {
+                        debug_assert!(l < lo + i, "crossing {} labelled {l}", lo + i);
                         out[i] = out[l - lo];
                     } else {
-                        later.push(x as u32);
+                        out[i] = LATER;
+                        later.push((lo + i) as u32);
                     }
                 }
                 later
@@ -1051,5 +1054,70 @@ mod tests {
             }
         }
         assert!(compared > 5000, "only {compared} crossings compared");
+    }
+
+    #[test]
+    fn parallel_vertex_map_equals_one_pass_in_order() {
+        // Labels near and far (in the same run of the parallel map, in an earlier one) and
+        // chains (a label that is not a vertex itself): the map and the positions of one pass
+        // over the crossings in order, for any thread count.
+        use crate::{ExtractSettings, Grid, Samples};
+        let settings = ExtractSettings::new(
+            Grid::cube(2, 1.0),
+            Lattice::BodyCentred,
+            crate::Clustering::Integrated,
+        );
+        let mut samples = Samples::default();
+        samples.prepare(&settings);
+        let l = Layout::new(&samples, Lattice::BodyCentred);
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for n in [0usize, 1, 1000, 70_000] {
+            let cpos: Vec<[f32; 3]> = (0..n).map(|x| [x as f32, 1.0, 2.0]).collect();
+            let mut g = Groups::default();
+            for x in 0..n {
+                let label = match next() % 8 {
+                    _ if x == 0 => 0,
+                    0..=2 => x,
+                    3 => x - 1 - (next() as usize % x.min(40_000)),
+                    _ => x - 1 - (next() as usize % x.min(20)),
+                };
+                g.vlabel.push(label as u32);
+                g.vpos.push([label as f32, 0.5, -(x as f32)]);
+            }
+            // The reference: one pass in order.
+            let (mut want_map, mut want_pos) = (vec![0u32; n], Vec::new());
+            for x in 0..n {
+                let label = g.vlabel[x] as usize;
+                if label == x {
+                    want_map[x] = want_pos.len() as u32;
+                    want_pos.push(g.vpos[x]);
+                } else {
+                    want_map[x] = want_map[label];
+                }
+            }
+            let fixed = Fixed {
+                l: &l,
+                cpos: &cpos,
+                groups: &[],
+                tris: &[],
+                source: &[],
+                inc_start: &[],
+                inc: &[],
+            };
+            let q = Quotient::new(&fixed, &g);
+            for threads in [1, 2, 3] {
+                let pool = test_pool(threads);
+                let (mut map, mut pos) = (vec![7; 3], vec![[9.0; 3]; n + 5]);
+                vertex_map(&q, &mut map, &mut pos, &pool);
+                assert_eq!(map, want_map, "{n} crossings, {threads} threads");
+                assert_eq!(pos, want_pos, "{n} crossings, {threads} threads");
+            }
+        }
     }
 }
