@@ -20,6 +20,9 @@ pub(crate) struct Incidence {
     cursor: Vec<u32>,
     /// Per part of the triangle list, its counts and then its cursors.
     parts: Vec<Vec<u32>>,
+    /// Per part, how far below its first corner's id its lowest id lay the last time (where
+    /// its counting window starts).
+    below: Vec<usize>,
 }
 
 impl Incidence {
@@ -96,6 +99,7 @@ pub(crate) fn incidence_parallel(
         inc,
         cursor,
         parts,
+        below,
     } = table;
     use rayon::prelude::*;
     let tris = indices.len() / 3;
@@ -105,24 +109,15 @@ pub(crate) fn incidence_parallel(
     }
     let bounds: Vec<usize> = (0..=count).map(|p| tris * p / count).collect();
     parts.resize_with(count, Vec::new);
+    below.resize(count, 0);
     // Each part's id range and its counts over it.
     let los: Vec<usize> = pool.install(|| {
         parts
             .par_iter_mut()
+            .zip(below.par_iter_mut())
             .enumerate()
-            .map(|(p, counts)| {
-                let corners = &indices[3 * bounds[p]..3 * bounds[p + 1]];
-                // The id range in one pass (parts hold at least one triangle).
-                let (lo, hi) = corners
-                    .iter()
-                    .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-                let (lo, hi) = (lo as usize, hi as usize + 1);
-                counts.clear();
-                counts.resize(hi - lo, 0);
-                for &v in corners {
-                    counts[v as usize - lo] += 1;
-                }
-                lo
+            .map(|(p, (counts, below))| {
+                count_ids(&indices[3 * bounds[p]..3 * bounds[p + 1]], counts, below)
             })
             .collect()
     });
@@ -209,14 +204,17 @@ pub(crate) fn incidence_parallel(
             .zip(los.par_iter())
             .enumerate()
             .for_each(|(p, (cursors, &lo))| {
+                // A copy of the slots: its pointer and length held in registers in the loop.
+                let out = *out;
                 // The part's cursors: relative to each id's start until here.
                 for (c, &at) in cursors.iter_mut().zip(&inc_start[lo..]) {
                     *c += at;
                 }
-                for t in bounds[p]..bounds[p + 1] {
-                    for &v in &indices[3 * t..3 * t + 3] {
+                let tris = indices[3 * bounds[p]..3 * bounds[p + 1]].chunks_exact(3);
+                for (t, tri) in (bounds[p] as u32..).zip(tris) {
+                    for &v in tri {
                         let c = &mut cursors[v as usize - lo];
-                        out.write(*c as usize, t as u32);
+                        out.write(*c as usize, t);
                         *c += 1;
                     }
                 }
@@ -224,11 +222,59 @@ pub(crate) fn incidence_parallel(
     });
 }
 
+/// The corners of each id from the lowest to the highest in `corners` (not empty) into
+/// `counts`; returns the lowest. One pass while the ids fall in a window as wide as `counts`
+/// held before, from `below` (and a little more) below the first corner's id: where the lowest
+/// id lay the last time (a part's ids lie near each other, and a reused table allocates
+/// nothing). At the first id outside it, the counts start over on the ids' exact range (two
+/// more passes, in the table's memory when it is large enough, which then keeps a margin for
+/// the next window). The counts are trimmed to the ids present at the end, and `below` set for
+/// the next time.
+fn count_ids(corners: &[u32], counts: &mut Vec<u32>, below: &mut usize) -> usize {
+    let width = counts.capacity().max(64);
+    let first_id = corners[0] as usize;
+    let lo = first_id.saturating_sub(*below + width / 64);
+    counts.clear();
+    counts.resize(width, 0);
+    let mut fits = true;
+    for &v in corners {
+        let i = (v as usize).wrapping_sub(lo);
+        if i >= counts.len() {
+            fits = false;
+            break;
+        }
+        counts[i] += 1;
+    }
+    let lo = if fits {
+        lo
+    } else {
+        let (min, max) = corners
+            .iter()
+            .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let (min, max) = (min as usize, max as usize);
+        counts.clear();
+        // Room for the window of the next time: the range and a margin either side.
+        counts.reserve(max + 1 - min + (max + 1 - min) / 16);
+        counts.resize(max + 1 - min, 0);
+        for &v in corners {
+            counts[v as usize - min] += 1;
+        }
+        min
+    };
+    let first = counts.iter().position(|&c| c != 0).unwrap_or(0);
+    let last = counts.iter().rposition(|&c| c != 0).unwrap_or(0);
+    counts.truncate(last + 1);
+    counts.drain(..first);
+    *below = first_id - (lo + first);
+    lo + first
+}
+
 /// Ids per block of the parallel steps of [`incidence_parallel`] that run over the ids.
 const BLOCK: usize = 1 << 12;
 
 /// Slots of a `u32` slice that threads write in parallel, each slot by one writer only
 /// ([`incidence_parallel`]: every (vertex, triangle) pair has its own slot).
+#[derive(Clone, Copy)]
 struct SharedSlots {
     ptr: *mut u32,
     len: usize,
@@ -274,6 +320,30 @@ mod tests {
                 [corner(), corner(), corner()]
             })
             .collect()
+    }
+
+    #[test]
+    fn ids_are_counted_from_the_lowest_to_the_highest() {
+        // Ids below and above the first one's window, far and near, repeated.
+        for corners in [
+            vec![5u32],
+            vec![9, 9, 9],
+            vec![100, 3, 250, 100, 7_000, 0, 4_000_000, 99],
+            vec![50_000, 49_999, 50_001, 1, 50_000],
+            (0..3000u32).map(|i| (i * 7919) % 4001 + 20).collect(),
+        ] {
+            let (mut counts, mut below) = (vec![1, 2, 3], 2);
+            let lo = count_ids(&corners, &mut counts, &mut below);
+            assert_eq!(below, corners[0] as usize - lo, "{corners:?}");
+            let (min, max) = (corners.iter().min(), corners.iter().max());
+            let (min, max) = (*min.unwrap_or(&0) as usize, *max.unwrap_or(&0) as usize);
+            assert_eq!(lo, min, "{corners:?}");
+            assert_eq!(counts.len(), max - min + 1, "{corners:?}");
+            for (k, &c) in counts.iter().enumerate() {
+                let n = corners.iter().filter(|&&v| v as usize == lo + k).count();
+                assert_eq!(c as usize, n, "id {}", lo + k);
+            }
+        }
     }
 
     #[test]
