@@ -786,9 +786,9 @@ pub(crate) fn vertex_plane(
 /// The vertex pass, after [`VertexTables::allocate`]: step 0, the inside bit of every sample point;
 /// step 1 (parallel over storage planes), the sides of every row, then each plane's crossed
 /// points, their owned crossings, the crossings' positions and (with `work.propose`) the
-/// cluster proposals ([`crate::mt::clustering::proposal`]), copied into `out.proposals`;
-/// step 2 (parallel over planes), the planes' crossed points with their ids and the positions
-/// (`out.positions`, one vertex per crossing) copied into place. Returns how many crossings lie on a sample
+/// cluster proposals ([`crate::mt::clustering::proposal`]); step 2 (parallel over planes),
+/// the planes' crossed points with their ids, their proposals (`out.proposals`, replacing what
+/// it held) and the positions (`out.positions`, one vertex per crossing) copied into place. Returns how many crossings lie on a sample
 /// point (within the weld distance). On the simple lattice, step 0 also checks every value and
 /// errors with [`ExtractError::NonFiniteValue`] (the first in storage order) on NaN or
 /// infinity.
