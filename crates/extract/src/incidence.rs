@@ -20,6 +20,9 @@ pub(crate) struct Incidence {
     cursor: Vec<u32>,
     /// Per part of the triangle list, its counts and then its cursors.
     parts: Vec<Vec<u32>>,
+    /// Per part, how far below its first corner's id its lowest id lay the last time (where
+    /// its counting window starts).
+    below: Vec<usize>,
 }
 
 impl Incidence {
@@ -75,14 +78,16 @@ pub(crate) fn incidence(
 /// count.
 ///
 /// The list is cut into parts of consecutive triangles. Each part counts its corners over the
-/// range of ids it touches (`parts[p]`); the counts add up to `inc_start`; then, in part order,
-/// each part's counts become its cursors (where its first triangle of each vertex goes: after
-/// the earlier parts' ones), and the parts fill `inc` in parallel. Every (vertex, triangle)
-/// pair has its own place, so the parts never write the same slot, and each vertex's
-/// triangles come in triangle order. The serial steps cost the sum of the parts' id ranges:
-/// meant for lists whose nearby triangles have nearby ids (plain MT's, listed layer by layer,
-/// with ids in storage order); when the ranges add up to more than four times the vertex
-/// count, it falls back to [`incidence`].
+/// range of ids it touches (`parts[p]`). Then, in parallel over blocks of ids (as Flying Edges
+/// sums its rows), the parts' counts add up to each id's count, in part order, and each part's
+/// counts become its cursors relative to the id's start (the earlier parts' triangles there);
+/// the counts' prefix sums, block by block and then across the blocks, give `inc_start`; the
+/// parts add it to their cursors and fill `inc` in parallel. Every (vertex, triangle) pair has
+/// its own place, so the parts never write the same slot, and each vertex's triangles come in
+/// triangle order. The steps over the ids cost the sum of the parts' id ranges: meant for
+/// lists whose nearby triangles have nearby ids (plain MT's, listed layer by layer, with ids
+/// in storage order); when the ranges add up to more than four times the vertex count, it
+/// falls back to [`incidence`].
 pub(crate) fn incidence_parallel(
     vertex_count: usize,
     indices: &[u32],
@@ -94,6 +99,7 @@ pub(crate) fn incidence_parallel(
         inc,
         cursor,
         parts,
+        below,
     } = table;
     use rayon::prelude::*;
     let tris = indices.len() / 3;
@@ -103,24 +109,15 @@ pub(crate) fn incidence_parallel(
     }
     let bounds: Vec<usize> = (0..=count).map(|p| tris * p / count).collect();
     parts.resize_with(count, Vec::new);
+    below.resize(count, 0);
     // Each part's id range and its counts over it.
     let los: Vec<usize> = pool.install(|| {
         parts
             .par_iter_mut()
+            .zip(below.par_iter_mut())
             .enumerate()
-            .map(|(p, counts)| {
-                let corners = &indices[3 * bounds[p]..3 * bounds[p + 1]];
-                // The id range in one pass (parts hold at least one triangle).
-                let (lo, hi) = corners
-                    .iter()
-                    .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-                let (lo, hi) = (lo as usize, hi as usize + 1);
-                counts.clear();
-                counts.resize(hi - lo, 0);
-                for &v in corners {
-                    counts[v as usize - lo] += 1;
-                }
-                lo
+            .map(|(p, (counts, below))| {
+                count_ids(&indices[3 * bounds[p]..3 * bounds[p + 1]], counts, below)
             })
             .collect()
     });
@@ -133,26 +130,66 @@ pub(crate) fn incidence_parallel(
     {
         return incidence(vertex_count, indices, inc_start, inc, cursor);
     }
-    inc_start.clear();
-    inc_start.resize(vertex_count + 1, 0);
-    for (&lo, counts) in los.iter().zip(parts.iter()) {
-        for (slot, &c) in inc_start[lo + 1..].iter_mut().zip(counts) {
-            *slot += c;
-        }
-    }
-    for i in 0..vertex_count {
-        inc_start[i + 1] += inc_start[i];
-    }
-    // Counts to cursors, part after part.
-    cursor.clear();
-    cursor.extend_from_slice(&inc_start[..vertex_count]);
+    // Per block of ids, in parallel: each id's count (summed over the parts, in part order)
+    // and, in each part's counts, the triangles of the earlier parts at that id (the part's
+    // cursor, relative to the id's start); then the counts' prefix sums, block by block.
+    let blocks = vertex_count.div_ceil(BLOCK);
+    let mut pieces: Vec<Vec<(usize, &mut [u32])>> = (0..blocks).map(|_| Vec::new()).collect();
     for (&lo, counts) in los.iter().zip(parts.iter_mut()) {
-        for (c, next) in counts.iter_mut().zip(&mut cursor[lo..]) {
-            let n = *c;
-            *c = *next;
-            *next += n;
+        let (mut v, mut rest) = (lo, &mut counts[..]);
+        while !rest.is_empty() {
+            let end = ((v / BLOCK + 1) * BLOCK).min(v + rest.len());
+            let (head, tail) = rest.split_at_mut(end - v);
+            pieces[v / BLOCK].push((v, head));
+            (v, rest) = (end, tail);
         }
     }
+    crate::util::overwritten(inc_start, vertex_count + 1, 0, pool);
+    inc_start[0] = 0;
+    let sums: Vec<u32> = pool.install(|| {
+        inc_start[1..]
+            .par_chunks_mut(BLOCK)
+            .zip(pieces.par_iter_mut())
+            .enumerate()
+            .map(|(b, (ends, pieces))| {
+                let first = b * BLOCK;
+                ends.fill(0);
+                for (v, counts) in pieces.iter_mut() {
+                    let at = &mut ends[*v - first..*v - first + counts.len()];
+                    for (c, total) in counts.iter_mut().zip(at) {
+                        let n = *c;
+                        *c = *total;
+                        *total += n;
+                    }
+                }
+                let mut sum = 0;
+                for e in ends.iter_mut() {
+                    sum += *e;
+                    *e = sum;
+                }
+                sum
+            })
+            .collect()
+    });
+    drop(pieces);
+    // Left with one entry per vertex, as [`incidence`] leaves it (its bytes are counted).
+    crate::util::overwritten(cursor, vertex_count, 0, pool);
+    // Each block's offset: the blocks before it.
+    let offsets: Vec<u32> = sums
+        .iter()
+        .scan(0, |acc, &n| {
+            let at = *acc;
+            *acc += n;
+            Some(at)
+        })
+        .collect();
+    pool.install(|| {
+        inc_start[1..]
+            .par_chunks_mut(BLOCK)
+            .zip(offsets.par_iter())
+            .skip(1)
+            .for_each(|(ends, &offset)| ends.iter_mut().for_each(|e| *e += offset))
+    });
     // Every slot is written below: a reused table is not cleared first.
     crate::util::overwritten(inc, indices.len() - indices.len() % 3, 0, pool);
     let out = SharedSlots {
@@ -160,16 +197,24 @@ pub(crate) fn incidence_parallel(
         len: inc.len(),
     };
     let out = &out;
+    let inc_start = &*inc_start;
     pool.install(|| {
         parts
             .par_iter_mut()
             .zip(los.par_iter())
             .enumerate()
             .for_each(|(p, (cursors, &lo))| {
-                for t in bounds[p]..bounds[p + 1] {
-                    for &v in &indices[3 * t..3 * t + 3] {
+                // A copy of the slots: its pointer and length held in registers in the loop.
+                let out = *out;
+                // The part's cursors: relative to each id's start until here.
+                for (c, &at) in cursors.iter_mut().zip(&inc_start[lo..]) {
+                    *c += at;
+                }
+                let tris = indices[3 * bounds[p]..3 * bounds[p + 1]].chunks_exact(3);
+                for (t, tri) in (bounds[p] as u32..).zip(tris) {
+                    for &v in tri {
                         let c = &mut cursors[v as usize - lo];
-                        out.write(*c as usize, t as u32);
+                        out.write(*c as usize, t);
                         *c += 1;
                     }
                 }
@@ -177,8 +222,59 @@ pub(crate) fn incidence_parallel(
     });
 }
 
+/// The corners of each id from the lowest to the highest in `corners` (not empty) into
+/// `counts`; returns the lowest. One pass while the ids fall in a window as wide as `counts`
+/// held before, from `below` (and a little more) below the first corner's id: where the lowest
+/// id lay the last time (a part's ids lie near each other, and a reused table allocates
+/// nothing). At the first id outside it, the counts start over on the ids' exact range (two
+/// more passes, in the table's memory when it is large enough, which then keeps a margin for
+/// the next window). The counts are trimmed to the ids present at the end, and `below` set for
+/// the next time.
+fn count_ids(corners: &[u32], counts: &mut Vec<u32>, below: &mut usize) -> usize {
+    let width = counts.capacity().max(64);
+    let first_id = corners[0] as usize;
+    let lo = first_id.saturating_sub(*below + width / 64);
+    counts.clear();
+    counts.resize(width, 0);
+    let mut fits = true;
+    for &v in corners {
+        let i = (v as usize).wrapping_sub(lo);
+        if i >= counts.len() {
+            fits = false;
+            break;
+        }
+        counts[i] += 1;
+    }
+    let lo = if fits {
+        lo
+    } else {
+        let (min, max) = corners
+            .iter()
+            .fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let (min, max) = (min as usize, max as usize);
+        counts.clear();
+        // Room for the window of the next time: the range and a margin either side.
+        counts.reserve(max + 1 - min + (max + 1 - min) / 16);
+        counts.resize(max + 1 - min, 0);
+        for &v in corners {
+            counts[v as usize - min] += 1;
+        }
+        min
+    };
+    let first = counts.iter().position(|&c| c != 0).unwrap_or(0);
+    let last = counts.iter().rposition(|&c| c != 0).unwrap_or(0);
+    counts.truncate(last + 1);
+    counts.drain(..first);
+    *below = first_id - (lo + first);
+    lo + first
+}
+
+/// Ids per block of the parallel steps of [`incidence_parallel`] that run over the ids.
+const BLOCK: usize = 1 << 12;
+
 /// Slots of a `u32` slice that threads write in parallel, each slot by one writer only
 /// ([`incidence_parallel`]: every (vertex, triangle) pair has its own slot).
+#[derive(Clone, Copy)]
 struct SharedSlots {
     ptr: *mut u32,
     len: usize,
@@ -224,6 +320,30 @@ mod tests {
                 [corner(), corner(), corner()]
             })
             .collect()
+    }
+
+    #[test]
+    fn ids_are_counted_from_the_lowest_to_the_highest() {
+        // Ids below and above the first one's window, far and near, repeated.
+        for corners in [
+            vec![5u32],
+            vec![9, 9, 9],
+            vec![100, 3, 250, 100, 7_000, 0, 4_000_000, 99],
+            vec![50_000, 49_999, 50_001, 1, 50_000],
+            (0..3000u32).map(|i| (i * 7919) % 4001 + 20).collect(),
+        ] {
+            let (mut counts, mut below) = (vec![1, 2, 3], 2);
+            let lo = count_ids(&corners, &mut counts, &mut below);
+            assert_eq!(below, corners[0] as usize - lo, "{corners:?}");
+            let (min, max) = (corners.iter().min(), corners.iter().max());
+            let (min, max) = (*min.unwrap_or(&0) as usize, *max.unwrap_or(&0) as usize);
+            assert_eq!(lo, min, "{corners:?}");
+            assert_eq!(counts.len(), max - min + 1, "{corners:?}");
+            for (k, &c) in counts.iter().enumerate() {
+                let n = corners.iter().filter(|&&v| v as usize == lo + k).count();
+                assert_eq!(c as usize, n, "id {}", lo + k);
+            }
+        }
     }
 
     #[test]

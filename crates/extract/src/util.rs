@@ -161,6 +161,18 @@ pub(crate) fn overwritten<T: Copy + Send + Sync>(
     }
 }
 
+/// Sets `v` to `n` copies of `value`, written in parallel (a table every entry of which a pass
+/// reads before writing it).
+pub(crate) fn filled<T: Copy + Send + Sync>(
+    v: &mut Vec<T>,
+    n: usize,
+    value: T,
+    pool: &rayon::ThreadPool,
+) {
+    v.clear();
+    pool.install(|| v.par_extend(rayon::iter::repeat_n(value, n)));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -43,7 +43,7 @@ use rayon::prelude::*;
 use super::clustering::proposal::{self, Candidate, PointEdges, ProposalCounts, Rules};
 use super::layout::{owns, Layout, AROUND};
 use crate::lattice::FULL;
-use crate::util::{bits_at_signed, inside_word, inside_word_finite64};
+use crate::util::{bits_at_signed, inside_word, inside_word_finite64, overwritten};
 use crate::{ExtractError, Lattice, Stats};
 
 /// Crossings nearer than this many grid spacings to their owner are counted (surfaces through
@@ -264,7 +264,8 @@ impl CrossedIndex {
                     }
                 });
         });
-        self.points.resize(total, CrossedPoint::default());
+        // Every entry is written by the vertex pass's step 2.
+        overwritten(&mut self.points, total, CrossedPoint::default(), pool);
     }
 
     pub(crate) fn bytes(&self) -> usize {
@@ -785,9 +786,9 @@ pub(crate) fn vertex_plane(
 /// The vertex pass, after [`VertexTables::allocate`]: step 0, the inside bit of every sample point;
 /// step 1 (parallel over storage planes), the sides of every row, then each plane's crossed
 /// points, their owned crossings, the crossings' positions and (with `work.propose`) the
-/// cluster proposals ([`crate::mt::clustering::proposal`]), copied into `out.proposals`;
-/// step 2 (parallel over planes), the planes' crossed points with their ids and the positions
-/// (`out.positions`, one vertex per crossing) copied into place. Returns how many crossings lie on a sample
+/// cluster proposals ([`crate::mt::clustering::proposal`]); step 2 (parallel over planes),
+/// the planes' crossed points with their ids, their proposals (`out.proposals`, replacing what
+/// it held) and the positions (`out.positions`, one vertex per crossing) copied into place. Returns how many crossings lie on a sample
 /// point (within the weld distance). On the simple lattice, step 0 also checks every value and
 /// errors with [`ExtractError::NonFiniteValue`] (the first in storage order) on NaN or
 /// infinity.
@@ -894,6 +895,7 @@ pub(crate) fn vertex_pass(
     let mut total = 0usize;
     let mut total_points = 0usize;
     let mut proposals = ProposalCounts::default();
+    let (mut cand_starts, mut total_cands) = (Vec::with_capacity(per_plane.len()), 0usize);
     for (z, (c, cands)) in per_plane.iter().enumerate() {
         starts.push(total);
         total += c.crossings;
@@ -903,11 +905,8 @@ pub(crate) fn vertex_pass(
             stats.edges += c.edges;
         }
         proposals.add(c.proposals);
-        let start = starts[z] as u32;
-        out.proposals.extend(cands.iter().map(|c| Candidate {
-            first: start + c.first,
-            ..*c
-        }));
+        cand_starts.push(total_cands);
+        total_cands += cands.len();
     }
     stats.edges = match known_edges {
         Some(edges) => edges,
@@ -921,10 +920,26 @@ pub(crate) fn vertex_pass(
         });
     }
     buf.crossed.rank_planes(&point_starts, total_points, pool);
-    // Step 2: the planes joined: their crossed points, with the plane's first id added, and
-    // their crossings' positions copied into place.
+    // Step 2: the planes joined: their crossed points and their proposals, with the plane's
+    // first id added, and their crossings' positions copied into place.
+    // Zeroed in one fill (the mesh's positions start empty: a memset costs less than a
+    // parallel fill element by element).
     out.positions.resize(total, [0.0; 3]);
+    let no_candidate = Candidate {
+        first: 0,
+        members: 0,
+        dirs: 0,
+        slot: 0,
+    };
+    overwritten(out.proposals, total_cands, no_candidate, pool);
     {
+        let mut rest: &mut [Candidate] = out.proposals;
+        let mut cand_parts = Vec::with_capacity(per_plane.len());
+        for (_, cands) in &per_plane {
+            let (head, tail) = rest.split_at_mut(cands.len());
+            cand_parts.push(head);
+            rest = tail;
+        }
         let mut rest: &mut [[f32; 3]] = out.positions;
         let mut chunks = Vec::with_capacity(per_plane.len());
         for (c, _) in &per_plane {
@@ -940,12 +955,14 @@ pub(crate) fn vertex_pass(
             rest = tail;
         }
         let (plane_points, plane_positions) = (&buf.plane_points, &buf.plane_positions);
+        let per_plane = &per_plane;
         pool.install(|| {
             entries
                 .into_par_iter()
                 .zip(chunks.into_par_iter())
+                .zip(cand_parts.into_par_iter())
                 .enumerate()
-                .for_each(|(z, (entries, positions))| {
+                .for_each(|(z, ((entries, positions), cands))| {
                     let start = starts[z] as u32;
                     for (e, p) in entries.iter_mut().zip(&plane_points[z]) {
                         *e = CrossedPoint {
@@ -954,6 +971,12 @@ pub(crate) fn vertex_pass(
                         };
                     }
                     positions.copy_from_slice(&plane_positions[z]);
+                    for (out, c) in cands.iter_mut().zip(&per_plane[z].1) {
+                        *out = Candidate {
+                            first: start + c.first,
+                            ..*c
+                        };
+                    }
                 })
         });
     }

@@ -212,12 +212,22 @@ pub(crate) fn emit(
             Some(k) => k.iter().filter(|&&f| f != 0).count(),
             None => plain.len() / 3,
         };
+        // The parts joined in order, each copied into place in parallel.
         let indices = &mut mesh.indices;
-        indices.clear();
-        indices.reserve(parts[..runs].iter().map(Vec::len).sum());
+        overwritten(indices, parts[..runs].iter().map(Vec::len).sum(), 0, pool);
+        let mut places = Vec::with_capacity(runs);
+        let mut rest = &mut indices[..];
         for part in &parts[..runs] {
-            indices.extend_from_slice(part);
+            let (head, tail) = rest.split_at_mut(part.len());
+            places.push(head);
+            rest = tail;
         }
+        pool.install(|| {
+            places
+                .into_par_iter()
+                .zip(parts[..runs].par_iter())
+                .for_each(|(place, part)| place.copy_from_slice(part))
+        });
         let emitted = indices.len() / 3;
         stats.tetrahedra_processed += clustered.processed;
         stats.discarded += listed - emitted;

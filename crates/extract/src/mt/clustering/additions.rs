@@ -17,7 +17,7 @@
 use rayon::prelude::*;
 
 use super::proposal::Candidate;
-use super::quotient::{Fixed, Groups, Lone, Quotient, Star, MAX_LONES, NONE};
+use super::quotient::{group_vertex, Fixed, Groups, Lone, Quotient, Star, MAX_LONES, NONE};
 
 /// The groups that may replace a split island, in the order they are tried: its island without
 /// one crossing, for each crossing in bit order, when that leaves a connected part; then (for
@@ -214,7 +214,8 @@ pub(crate) fn sliver_proposals(
     };
     // In runs of crossings, the test of the crossings in kept groups (nearly all) inline; each
     // run lists the crossings that picked one.
-    let mut choice = vec![NONE; edge_of.len()];
+    let mut choice = Vec::new();
+    crate::util::filled(&mut choice, edge_of.len(), NONE, pool);
     let picked: Vec<Vec<u32>> = pool.install(|| {
         choice
             .par_chunks_mut(RUN)
@@ -349,6 +350,8 @@ pub(crate) fn attach(
         lone_start: old_start,
         lone_len,
         base_len,
+        centroid,
+        leader,
         ..
     } = &mut *g;
     let (active, old_lone, old_start) = (&*active, &*old_lone, &*old_start);
@@ -388,46 +391,57 @@ pub(crate) fn attach(
         rest = tail;
     }
     lone_start[count] = first as u32;
-    // Per run: the groups that took lones, and the lones taken (crossing, group).
+    // Per run: the groups that took lones, and the lones taken (crossing, group). The groups
+    // that took some get their label and vertex position from their new members here
+    // ([`Groups::refresh`]).
     type Taken = (Vec<u32>, Vec<(u32, u32)>);
+    let cpos = f.cpos;
     let taken: Vec<Taken> = pool.install(|| {
         parts
             .into_par_iter()
             .zip(lone_start[..count].par_chunks_mut(RUN))
             .zip(lone_len[..count].par_chunks_mut(RUN))
             .zip(base_len[..count].par_chunks(RUN))
+            .zip(centroid[..count].par_chunks_mut(RUN))
+            .zip(leader[..count].par_chunks_mut(RUN))
             .enumerate()
-            .map(|(r, ((((first, out), starts), lens), bases))| {
-                let (mut changed, mut joined) = (Vec::new(), Vec::new());
-                let mut w = 0;
-                let mut next = found[part[r]..part[r + 1]].iter().peekable();
-                for (j, ((start, len), base)) in starts.iter_mut().zip(lens).zip(bases).enumerate()
-                {
-                    let gi = r * RUN + j;
-                    *start = (first + w) as u32;
-                    let k = usize::from(*base);
-                    if k > 0 {
-                        let from = old_start[gi] as usize;
-                        out[w..w + k].copy_from_slice(&old_lone[from..from + k]);
-                        w += k;
-                    }
-                    let mut n = k;
-                    while let Some(&(h, l)) = next.next_if(|&&(h, _)| h as usize == gi) {
-                        if n < MAX_LONES {
-                            out[w] = l;
-                            w += 1;
-                            joined.push((l.id, h));
-                            n += 1;
+            .map(
+                |(r, ((((((first, out), starts), lens), bases), centroids), leaders))| {
+                    let (mut changed, mut joined) = (Vec::new(), Vec::new());
+                    let mut w = 0;
+                    let mut next = found[part[r]..part[r + 1]].iter().peekable();
+                    for (j, ((start, len), base)) in
+                        starts.iter_mut().zip(lens).zip(bases).enumerate()
+                    {
+                        let gi = r * RUN + j;
+                        let from_w = w;
+                        *start = (first + w) as u32;
+                        let k = usize::from(*base);
+                        if k > 0 {
+                            let from = old_start[gi] as usize;
+                            out[w..w + k].copy_from_slice(&old_lone[from..from + k]);
+                            w += k;
+                        }
+                        let mut n = k;
+                        while let Some(&(h, l)) = next.next_if(|&&(h, _)| h as usize == gi) {
+                            if n < MAX_LONES {
+                                out[w] = l;
+                                w += 1;
+                                joined.push((l.id, h));
+                                n += 1;
+                            }
+                        }
+                        *len = n as u8;
+                        if n > k {
+                            changed.push(gi as u32);
+                            (centroids[j], leaders[j]) =
+                                group_vertex(f.groups[gi], &out[from_w..w], cpos);
                         }
                     }
-                    *len = n as u8;
-                    if n > k {
-                        changed.push(gi as u32);
-                    }
-                }
-                debug_assert_eq!(w, out.len());
-                (changed, joined)
-            })
+                    debug_assert_eq!(w, out.len());
+                    (changed, joined)
+                },
+            )
             .collect()
     });
     for (_, joined) in &taken {
@@ -438,14 +452,69 @@ pub(crate) fn attach(
     g.lone = lone;
     g.lone_start = lone_start;
     let changed: Vec<u32> = taken.into_iter().flat_map(|(c, _)| c).collect();
-    for &gi in &changed {
-        g.refresh(f, gi as usize);
-        g.set_vertices(f, gi as usize);
-    }
+    set_vertices_of(f, g, &changed, pool);
     if !want_dirty {
         return changed;
     }
     around(f, g, &changed, pool)
+}
+
+/// [`Groups::set_vertices`] of the groups `changed`, in their order: in parallel over runs of
+/// crossings. Runs of groups list their members' new quotient vertices by run of crossings, then
+/// each run of crossings takes its entries, group run after group run: the same writes in the
+/// same order as the serial loop. (Recording the activity, the serial loop.)
+fn set_vertices_of(f: &Fixed, g: &mut Groups, changed: &[u32], pool: &rayon::ThreadPool) {
+    const GROUPS: usize = 1 << 10;
+    const CROSSINGS: usize = 1 << 14;
+    if !g.touched.is_empty() || changed.len() < GROUPS {
+        for &gi in changed {
+            g.set_vertices(f, gi as usize);
+        }
+        return;
+    }
+    let n = g.vlabel.len();
+    let runs = n.div_ceil(CROSSINGS);
+    type Writes = Vec<Vec<(u32, u32, [f32; 3])>>;
+    let q = &*g;
+    let writes: Vec<Writes> = pool.install(|| {
+        changed
+            .par_chunks(GROUPS)
+            .map(|groups| {
+                let mut by_run: Writes = vec![Vec::new(); runs];
+                for &gi in groups {
+                    let gi = gi as usize;
+                    let start = q.lone_start[gi] as usize;
+                    let lones = &q.lone[start..start + q.lone_len[gi] as usize];
+                    let kept = q.active[gi] != 0;
+                    for x in f.groups[gi].ids().chain(lones.iter().map(|l| l.id)) {
+                        let (label, at) = if kept {
+                            (q.leader[gi], q.centroid[gi])
+                        } else {
+                            (x, f.cpos[x as usize])
+                        };
+                        by_run[x as usize / CROSSINGS].push((x, label, at));
+                    }
+                }
+                by_run
+            })
+            .collect()
+    });
+    let writes = &writes;
+    pool.install(|| {
+        g.vlabel
+            .par_chunks_mut(CROSSINGS)
+            .zip(g.vpos.par_chunks_mut(CROSSINGS))
+            .enumerate()
+            .for_each(|(r, (labels, positions))| {
+                let lo = r * CROSSINGS;
+                for by_run in writes {
+                    for &(x, label, at) in &by_run[r] {
+                        labels[x as usize - lo] = label;
+                        positions[x as usize - lo] = at;
+                    }
+                }
+            })
+    });
 }
 
 #[cfg(test)]
@@ -453,9 +522,14 @@ mod tests {
     use super::*;
 
     /// The lone table as the serial pass built it before the parallel runs: each group in
-    /// order, its kept lones, then its new ones up to [`MAX_LONES`]. Returns the groups that
-    /// took some.
-    fn attach_serial(count: usize, g: &mut Groups, mut found: Vec<(u32, Lone)>) -> Vec<u32> {
+    /// order, its kept lones, then its new ones up to [`MAX_LONES`]; then, group by group, the
+    /// label, vertex position and quotient vertices of those that took some. Returns them.
+    fn attach_serial(
+        f: &Fixed,
+        count: usize,
+        g: &mut Groups,
+        mut found: Vec<(u32, Lone)>,
+    ) -> Vec<u32> {
         found.sort_unstable_by_key(|&(h, l)| (h, l.id));
         let mut lone = Vec::new();
         let mut lone_start = Vec::new();
@@ -487,6 +561,10 @@ mod tests {
         lone_start.push(lone.len() as u32);
         g.lone = lone;
         g.lone_start = lone_start;
+        for &gi in &changed {
+            g.refresh(f, gi as usize);
+            g.set_vertices(f, gi as usize);
+        }
         changed
     }
 
@@ -570,7 +648,7 @@ mod tests {
                     .collect()
             };
             let mut expected = g.clone();
-            let expected_changed = attach_serial(count, &mut expected, found.clone());
+            let expected_changed = attach_serial(&f, count, &mut expected, found.clone());
             for threads in [1, 2, 3] {
                 let pool = rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
@@ -599,6 +677,12 @@ mod tests {
                 assert_eq!(got.lone_len, expected.lone_len);
                 assert_eq!(got.base_len, expected.base_len);
                 assert_eq!(got.group_of, expected.group_of);
+                // The groups that took lones: their label and vertex, and their members'
+                // quotient vertices (in parallel from a thousand groups on).
+                assert_eq!(got.leader, expected.leader);
+                assert_eq!(got.centroid, expected.centroid);
+                assert_eq!(got.vlabel, expected.vlabel);
+                assert_eq!(got.vpos, expected.vpos);
             }
             if count > 0 && offered > 0 {
                 assert!(

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use super::crossings::CrossedIndex;
 use super::geometry::Surface;
 use super::layout::Layout;
-use crate::util::{for_each_bit, overwritten};
+use crate::util::{filled, for_each_bit, overwritten};
 use crate::{Clustering, Stats};
 
 pub(crate) mod additions;
@@ -143,20 +143,19 @@ pub(crate) fn build_groups(
             .map(|&c| mean_position(c, cpos))
             .collect_into_vec(&mut g.centroid)
     });
-    g.leader.clear();
-    g.leader.extend(candidates.iter().map(|c| c.leader()));
-    g.active.clear();
-    g.active.resize(count, 1);
+    pool.install(|| {
+        candidates
+            .par_iter()
+            .map(|c| c.leader())
+            .collect_into_vec(&mut g.leader)
+    });
+    filled(&mut g.active, count, 1, pool);
     g.lone.clear();
-    g.lone_start.clear();
-    g.lone_start.resize(count + 1, 0);
-    g.lone_len.clear();
-    g.lone_len.resize(count, 0);
-    g.base_len.clear();
-    g.base_len.resize(count, 0);
-    g.refused.clear();
+    filled(&mut g.lone_start, count + 1, 0, pool);
+    filled(&mut g.lone_len, count, 0, pool);
+    filled(&mut g.base_len, count, 0, pool);
     g.touched.clear();
-    g.refused.resize(crossings, NONE);
+    filled(&mut g.refused, crossings, NONE, pool);
     // Every crossing's edge: plane by plane, points in slot order, edges in bit order, which
     // is the order of the ids.
     let plane = layout.s.dims[0] * layout.s.dims[1];
@@ -450,7 +449,8 @@ fn settle_islands(
         // The proposals are complete: from here on, what the steps do is activity.
         groups.touched.resize(buf.cpos.len(), 0);
     }
-    groups.base_len.fill(0);
+    let len = groups.base_len.len();
+    filled(&mut groups.base_len, len, 0, pool);
     stats.t_groups_s += step.elapsed().as_secs_f64();
     let all = (0..islands as u32).collect();
     let settled = settle(&fixed, groups, all, Phase::Islands, pool);
@@ -525,7 +525,8 @@ fn sliver_passes(
     let mut pairs = 0;
     // A group that gave a crossing back in a lone pass is asked again (see
     // `additions::sliver_proposals`).
-    groups.refused.fill(quotient::NONE);
+    let crossings = groups.refused.len();
+    filled(&mut groups.refused, crossings, quotient::NONE, pool);
     for _ in 0..SLIVER_PASSES {
         let step = std::time::Instant::now();
         mark_deciders(&fixed(buf, layout), groups, &buf.edge_of, pool);
@@ -604,34 +605,92 @@ fn activity_points(
 /// order of their lowest crossing id; `vertex_of` maps every crossing to its vertex. Read from
 /// the quotient's labels ([`quotient::Groups::vlabel`] and `vpos`, kept up to date by
 /// every step): a crossing labelled with itself is a vertex, at its quotient position; the
-/// others take their label's, numbered before them (a label is its group's lowest id). (One
-/// serial pass over two tables, 0.74 -> 0.53 ms at 128^3 against the group tables it read
-/// before; a parallel numbering by runs and prefix sums over those measured slower, 1.6
-/// against 1.1 ms at 128^3 on 2 threads.)
+/// others take their label's, numbered before them (a label is its group's lowest id).
+///
+/// In parallel over runs of crossings, as Flying Edges numbers its points: each run counts its
+/// vertices, prefix sums give where each run's start, then each run numbers its own and places
+/// their positions, and maps the crossings whose label it has mapped. The rest (a label in an
+/// earlier run, or one left for later) take their label's number after, in order: the same
+/// map as one pass over the crossings in order.
 pub(crate) fn vertex_map(
     q: &Quotient,
     vertex_of: &mut Vec<u32>,
     positions: &mut Vec<[f32; 3]>,
     pool: &rayon::ThreadPool,
 ) {
+    const RUN: usize = 1 << 14;
+    // Not a vertex number (there are fewer vertices than crossings, fewer than `u32::MAX`).
+    const LATER: u32 = u32::MAX;
     let n = q.cpos.len();
     let g = q.g;
-    // Every entry is written below.
+    let (vlabel, vpos) = (&g.vlabel[..n], &g.vpos[..n]);
+    // Each run's vertices, and where they start.
+    let counts: Vec<usize> = pool.install(|| {
+        vlabel
+            .par_chunks(RUN)
+            .enumerate()
+            .map(|(k, labels)| {
+                let first = (k * RUN) as u32;
+                let mut count = 0u32;
+                for (x, &l) in (first..).zip(labels) {
+                    count += u32::from(l == x);
+                }
+                count as usize
+            })
+            .collect()
+    });
+    // Every entry of both is written below.
     overwritten(vertex_of, n, 0, pool);
-    positions.clear();
-    let (vlabel, vpos, vertex_of) = (&g.vlabel[..n], &g.vpos[..n], &mut vertex_of[..n]);
-    for x in 0..n {
+    overwritten(positions, counts.iter().sum(), [0.0; 3], pool);
+    let (mut firsts, mut parts) = (Vec::with_capacity(counts.len()), Vec::new());
+    let (mut rest, mut first) = (&mut positions[..], 0);
+    for &c in &counts {
+        let (head, tail) = rest.split_at_mut(c);
+        parts.push(head);
+        firsts.push(first as u32);
+        first += c;
+        rest = tail;
+    }
+    let later: Vec<Vec<u32>> = pool.install(|| {
+        vertex_of[..n]
+            .par_chunks_mut(RUN)
+            .zip(parts.into_par_iter())
+            .enumerate()
+            .map(|(k, (out, placed))| {
+                let lo = k * RUN;
+                let (labels, at) = (&vlabel[lo..lo + out.len()], &vpos[lo..lo + out.len()]);
+                let mut vertex = firsts[k];
+                let mut placed = placed.iter_mut();
+                let mut later = Vec::new();
+                for i in 0..out.len() {
+                    let l = labels[i] as usize;
+                    if l == lo + i {
+                        out[i] = vertex;
+                        vertex += 1;
+                        if let Some(p) = placed.next() {
+                            *p = at[i];
+                        }
+                    } else if l >= lo && out[l - lo] != LATER {
+                        debug_assert!(l < lo + i, "crossing {} labelled {l}", lo + i);
+                        out[i] = out[l - lo];
+                    } else {
+                        out[i] = LATER;
+                        later.push((lo + i) as u32);
+                    }
+                }
+                later
+            })
+            .collect()
+    });
+    // The labels in earlier runs (or not vertices themselves), in order.
+    for &x in later.iter().flatten() {
+        let x = x as usize;
         let l = vlabel[x] as usize;
-        if l == x {
-            vertex_of[x] = positions.len() as u32;
-            positions.push(vpos[x]);
-        } else {
-            debug_assert!(
-                l < x,
-                "crossing {x} labelled {l}: labels are their groups' lowest ids"
-            );
-            vertex_of[x] = vertex_of[l];
-        }
+        debug_assert!(
+            l < x,
+            "crossing {x} labelled {l}: labels are their groups' lowest ids"
+        );
+        vertex_of[x] = vertex_of[l];
     }
 }
 
@@ -995,5 +1054,70 @@ mod tests {
             }
         }
         assert!(compared > 5000, "only {compared} crossings compared");
+    }
+
+    #[test]
+    fn parallel_vertex_map_equals_one_pass_in_order() {
+        // Labels near and far (in the same run of the parallel map, in an earlier one) and
+        // chains (a label that is not a vertex itself): the map and the positions of one pass
+        // over the crossings in order, for any thread count.
+        use crate::{ExtractSettings, Grid, Samples};
+        let settings = ExtractSettings::new(
+            Grid::cube(2, 1.0),
+            Lattice::BodyCentred,
+            crate::Clustering::Integrated,
+        );
+        let mut samples = Samples::default();
+        samples.prepare(&settings);
+        let l = Layout::new(&samples, Lattice::BodyCentred);
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for n in [0usize, 1, 1000, 70_000] {
+            let cpos: Vec<[f32; 3]> = (0..n).map(|x| [x as f32, 1.0, 2.0]).collect();
+            let mut g = Groups::default();
+            for x in 0..n {
+                let label = match next() % 8 {
+                    _ if x == 0 => 0,
+                    0..=2 => x,
+                    3 => x - 1 - (next() as usize % x.min(40_000)),
+                    _ => x - 1 - (next() as usize % x.min(20)),
+                };
+                g.vlabel.push(label as u32);
+                g.vpos.push([label as f32, 0.5, -(x as f32)]);
+            }
+            // The reference: one pass in order.
+            let (mut want_map, mut want_pos) = (vec![0u32; n], Vec::new());
+            for x in 0..n {
+                let label = g.vlabel[x] as usize;
+                if label == x {
+                    want_map[x] = want_pos.len() as u32;
+                    want_pos.push(g.vpos[x]);
+                } else {
+                    want_map[x] = want_map[label];
+                }
+            }
+            let fixed = Fixed {
+                l: &l,
+                cpos: &cpos,
+                groups: &[],
+                tris: &[],
+                source: &[],
+                inc_start: &[],
+                inc: &[],
+            };
+            let q = Quotient::new(&fixed, &g);
+            for threads in [1, 2, 3] {
+                let pool = test_pool(threads);
+                let (mut map, mut pos) = (vec![7; 3], vec![[9.0; 3]; n + 5]);
+                vertex_map(&q, &mut map, &mut pos, &pool);
+                assert_eq!(map, want_map, "{n} crossings, {threads} threads");
+                assert_eq!(pos, want_pos, "{n} crossings, {threads} threads");
+            }
+        }
     }
 }

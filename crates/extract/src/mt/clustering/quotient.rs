@@ -254,16 +254,25 @@ impl Groups {
 
     /// Recomputes the label and the vertex position of group `gi` from its members.
     pub(crate) fn refresh(&mut self, f: &Fixed, gi: usize) {
-        let c = &f.groups[gi];
         let start = self.lone_start[gi] as usize;
         let lones = &self.lone[start..start + self.lone_len[gi] as usize];
-        let mut sum = glam::Vec3::ZERO;
-        for id in c.ids().chain(lones.iter().map(|l| l.id)) {
-            sum += glam::Vec3::from(f.cpos[id as usize]);
-        }
-        self.centroid[gi] = (sum / (c.size() as usize + lones.len()) as f32).to_array();
-        self.leader[gi] = lones.iter().map(|l| l.id).fold(c.leader(), u32::min);
+        (self.centroid[gi], self.leader[gi]) = group_vertex(f.groups[gi], lones, f.cpos);
     }
+}
+
+/// The vertex position (the mean of its crossings) and the label (the lowest id) of the group
+/// with island `c` and lone crossings `lones` ([`Groups::refresh`]).
+#[inline]
+pub(crate) fn group_vertex(c: Candidate, lones: &[Lone], cpos: &[[f32; 3]]) -> ([f32; 3], u32) {
+    let mut sum = glam::Vec3::ZERO;
+    for id in c.ids().chain(lones.iter().map(|l| l.id)) {
+        sum += glam::Vec3::from(cpos[id as usize]);
+    }
+    let centroid = (sum / (c.size() as usize + lones.len()) as f32).to_array();
+    (
+        centroid,
+        lones.iter().map(|l| l.id).fold(c.leader(), u32::min),
+    )
 }
 
 /// The quotient test's view of one state: [`Fixed`] plus [`Groups`].
