@@ -7,8 +7,9 @@
 //! STEPS viewer steps of the 400-step path (default 12) from step FIRST (default 1); at most
 //! SAMPLE chunks of each path are timed per step (default 8; 0 times them all).
 //!
-//! `... --example lod_profile -- world STEPS THREADS CACHE_MB`: the world itself flown over the
-//! first STEPS steps on THREADS threads with a chunk-tets cache of CACHE_MB MiB
+//! `... --example lod_profile -- world STEPS THREADS CACHE_MB [cluster]`: the world itself flown
+//! over the first STEPS steps on THREADS threads with a chunk-tets cache of CACHE_MB MiB (and
+//! clustering at every level with `cluster`)
 //! (`LodWorld::set_tet_cache_bytes`): per step the chunks re-meshed and kept unchanged, the
 //! re-mesh time and the cache's hits and misses, then the median and the slowest step after step 0.
 
@@ -26,7 +27,8 @@ fn main() -> anyhow::Result<()> {
         Ok(args.get(i).map(|a| a.parse()).transpose()?.unwrap_or(d))
     };
     if args.get(1).map(String::as_str) == Some("world") {
-        return fly(arg(2, 40)?, arg(3, 2)?, arg(4, 1024)?);
+        let cluster = args.get(5).map(String::as_str) == Some("cluster");
+        return fly(arg(2, 40)?, arg(3, 2)?, arg(4, 1024)?, cluster);
     }
     let (steps, first, sample) = (arg(1, 12)?, arg(2, 1)?, arg(3, 8)?);
     let g = LodGeometry::new(4, 16, [16, 1, 16])?;
@@ -93,7 +95,7 @@ fn main() -> anyhow::Result<()> {
 }
 
 /// The world flown over `steps` steps of the path (see the module doc).
-fn fly(steps: usize, threads: usize, cache_mb: usize) -> anyhow::Result<()> {
+fn fly(steps: usize, threads: usize, cache_mb: usize, cluster: bool) -> anyhow::Result<()> {
     let g = LodGeometry::new(4, 16, [16, 1, 16])?;
     let frame = LodFrame {
         origin: Vec3::new(-64.0, -4.0, -64.0),
@@ -105,7 +107,7 @@ fn fly(steps: usize, threads: usize, cache_mb: usize) -> anyhow::Result<()> {
         ratio: 1.5,
         threads,
         morph: None,
-        cluster: false,
+        cluster,
     };
     let mut world = LodWorld::new(CaveTerrain::new(CaveParams::default()), settings)?;
     world.set_tet_cache_bytes(cache_mb << 20);
