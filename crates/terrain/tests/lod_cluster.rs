@@ -80,9 +80,11 @@ fn compare(
         }
     }
     for (m, c) in plain.iter().zip(&clust) {
+        let index: std::collections::HashMap<_, usize> =
+            c.keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
         for (k, p) in m.keys.iter().zip(&m.positions) {
             if seen[k] > 1 {
-                let at = c.keys.iter().position(|x| x == k);
+                let at = index.get(k).copied();
                 prop_assert!(at.is_some(), "seam crossing {:?} merged", k);
                 let at = at.unwrap_or(0);
                 prop_assert_eq!(c.positions[at].map(f32::to_bits), p.map(f32::to_bits));
