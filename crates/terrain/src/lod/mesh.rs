@@ -96,6 +96,46 @@ pub fn needs_remesh(old: &LevelMap, new: &LevelMap, k: &ChunkKey) -> bool {
     old.leaves_touching(lo, hi) != new.leaves_touching(lo, hi)
 }
 
+/// The leaves of one map and not the other (the symmetric difference of the two leaf sets),
+/// sorted: what [`needs_remesh_given`] reads instead of querying both maps per chunk.
+pub fn changed_leaves(old: &LevelMap, new: &LevelMap) -> Vec<ChunkKey> {
+    let (a, b) = (old.chunks(), new.chunks());
+    let (mut i, mut j) = (0, 0);
+    let mut out = Vec::new();
+    while i < a.len() || j < b.len() {
+        match (a.get(i), b.get(j)) {
+            (Some(x), Some(y)) if x == y => (i, j) = (i + 1, j + 1),
+            (Some(x), Some(y)) if x < y => {
+                out.push(*x);
+                i += 1;
+            }
+            (Some(_), Some(y)) | (None, Some(y)) => {
+                out.push(*y);
+                j += 1;
+            }
+            (Some(x), None) => {
+                out.push(*x);
+                i += 1;
+            }
+            (None, None) => break,
+        }
+    }
+    out
+}
+
+/// [`needs_remesh`] from the two maps' [`changed_leaves`]: the leaves touching chunk `k`'s
+/// [`dependency_box`] (in `new`) differ between the maps exactly when a leaf of one map and
+/// not the other touches it (each map's list is its own leaves touching the box). One box test
+/// per changed leaf, instead of two walks of the maps.
+pub fn needs_remesh_given(changed: &[ChunkKey], new: &LevelMap, k: &ChunkKey) -> bool {
+    let (lo, hi) = dependency_box(new, k);
+    let g = new.geometry();
+    changed.iter().any(|c| {
+        let (a, b) = c.bounds(g);
+        (0..3).all(|i| a[i] <= hi[i] && b[i] >= lo[i])
+    })
+}
+
 /// The tets of `chunk` (a leaf of `map`), sorted.
 pub fn chunk_tets(map: &LevelMap, chunk: &ChunkKey) -> Result<Vec<MeshTet>, LodError> {
     if !map.contains(chunk) {
@@ -178,7 +218,7 @@ fn lattice_tets(map: &LevelMap, level: u8, lo: [i64; 3], hi: [i64; 3]) -> Vec<Me
             }
         }
     }
-    out.sort_unstable();
+    sort_tets(&mut out);
     out
 }
 
@@ -222,6 +262,43 @@ pub fn world_tets(map: &LevelMap) -> Result<Vec<(usize, MeshTet)>, LodError> {
     Ok(out)
 }
 
+/// Sorts `tets` into their derived order ([`MeshTet`]'s `Ord`), as `sort_unstable` does, faster:
+/// when the 12 coordinates of every tet fit `b` bits each over their smallest value, with
+/// `12 b <= 128`, one `u128` per tet packs them (fixed-width fields in the order `Ord` reads
+/// them, so the keys compare as the tets do), the keys are sorted with their indices and the
+/// tets gathered once; equal keys (the same vertices) fall back to the whole comparison.
+fn sort_tets(tets: &mut Vec<MeshTet>) {
+    let Some(first) = tets.first() else {
+        return;
+    };
+    let (mut lo, mut hi) = (first.tet[0][0], first.tet[0][0]);
+    for c in tets.iter().flat_map(|t| t.tet.iter().flatten()) {
+        lo = lo.min(*c);
+        hi = hi.max(*c);
+    }
+    let span = (i64::from(hi) - i64::from(lo)) as u64;
+    let bits = 64 - span.leading_zeros();
+    if 12 * bits > 128 || tets.len() > u32::MAX as usize {
+        tets.sort_unstable();
+        return;
+    }
+    let key = |t: &MeshTet| {
+        t.tet.iter().flatten().fold(0u128, |k, &c| {
+            (k << bits) | u128::from((i64::from(c) - i64::from(lo)) as u64)
+        })
+    };
+    let mut keys: Vec<(u128, u32)> = tets
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (key(t), i as u32))
+        .collect();
+    keys.sort_unstable_by(|a, b| {
+        a.0.cmp(&b.0)
+            .then_with(|| tets[a.1 as usize].cmp(&tets[b.1 as usize]))
+    });
+    *tets = keys.iter().map(|&(_, i)| tets[i as usize]).collect();
+}
+
 /// The level map over a region as a grid of cells of the finest chunk there, for
 /// [`LevelMap::min_level_touching`] without walking the octree.
 struct LevelGrid {
@@ -229,8 +306,10 @@ struct LevelGrid {
     origin: [i64; 3],
     lo: [i64; 3],
     hi: [i64; 3],
-    /// Cell edge (the finest chunk's), cells per axis, and each cell's level.
+    /// Cell edge (the finest chunk's), its log2 when it is a power of two (then floor
+    /// division is a shift, the same integers), cells per axis, and each cell's level.
     cell: i64,
+    shift: Option<u32>,
     n: [i64; 3],
     levels: Vec<u8>,
 }
@@ -268,6 +347,7 @@ impl LevelGrid {
             lo,
             hi,
             cell,
+            shift: (cell > 0 && cell.count_ones() == 1).then(|| cell.trailing_zeros()),
             n,
             levels,
         }
@@ -285,10 +365,13 @@ impl LevelGrid {
             return map.min_level_touching(a, b);
         }
         // Cells j with origin + j cell <= b and origin + (j + 1) cell >= a.
-        let c = self.cell;
+        let floor = |x: i64| match self.shift {
+            Some(s) => x >> s,
+            None => x.div_euclid(self.cell),
+        };
         let r: [(i64, i64); 3] = std::array::from_fn(|i| {
-            let lo = -(-(a[i] - self.origin[i])).div_euclid(c) - 1;
-            let hi = (b[i] - self.origin[i]).div_euclid(c);
+            let lo = -floor(-(a[i] - self.origin[i])) - 1;
+            let hi = floor(b[i] - self.origin[i]);
             (lo.max(0), hi.min(self.n[i] - 1))
         });
         let mut best = u8::MAX;
@@ -393,7 +476,7 @@ fn window_tets(
             }
         }
     }
-    out.sort_unstable();
+    sort_tets(&mut out);
     Ok(out)
 }
 
@@ -535,6 +618,46 @@ mod tests {
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     }
 
+    /// The packed-key sort gives `sort_unstable`'s order: small and wide spans (the keyed path
+    /// and the fallback), negative coordinates, many tets sharing their first vertices, and
+    /// duplicates differing in level or kind only.
+    #[test]
+    fn sort_tets_is_the_derived_order() {
+        let kinds = [
+            TetKind::Bcc,
+            TetKind::Cone,
+            TetKind::Bisect(1),
+            TetKind::Bisect(3),
+        ];
+        for (seed, span) in [(1, 3.0), (2, 40.0), (3, 1023.0), (4, 1024.0), (5, 3.0e6)] {
+            let c = |i: u64| (unit(seed, i) * span - span / 3.0) as i32;
+            let mut tets: Vec<MeshTet> = (0..3000u64)
+                .map(|i| MeshTet {
+                    tet: std::array::from_fn(|v| {
+                        // The first vertex from a few values only: long runs of equal prefixes.
+                        let j = if v == 0 { i % 7 } else { 16 * i + v as u64 };
+                        std::array::from_fn(|x| c(4 * j + x as u64))
+                    }),
+                    level: (unit(seed, 7 * i + 1) * 3.0) as u8,
+                    kind: kinds[(unit(seed, 7 * i + 2) * 4.0) as usize % 4],
+                })
+                .collect();
+            let dup = tets[10];
+            tets.push(MeshTet {
+                level: dup.level + 1,
+                ..dup
+            });
+            tets.push(MeshTet {
+                kind: TetKind::Bcc,
+                ..dup
+            });
+            let mut want = tets.clone();
+            want.sort_unstable();
+            sort_tets(&mut tets);
+            assert_eq!(tets, want, "seed {seed}, span {span}");
+        }
+    }
+
     /// Chunks of [`LOCAL_CHUNK`] cells follow the local rules (the fast path whenever no finer
     /// leaf touches a chunk, the domain filter near the world's faces): each chunk's tets are
     /// the whole world's, on random and viewer maps.
@@ -672,6 +795,60 @@ mod tests {
             }
         }
         assert!(same > 0 && changed > 0, "{same} kept, {changed} re-meshed");
+    }
+
+    /// The re-mesh rule from the changed leaves gives `needs_remesh`'s answer for every chunk:
+    /// viewer steps and random map pairs, chunks below and at [`LOCAL_CHUNK`] cells (whose
+    /// dependency boxes differ), and a map against itself (nothing to re-mesh).
+    #[test]
+    fn the_rule_from_changed_leaves_is_needs_remesh() {
+        let mut geoms = geometries().to_vec();
+        geoms.push(LodGeometry::new(2, LOCAL_CHUNK, [2, 1, 2]).unwrap());
+        geoms.push(LodGeometry::new(3, LOCAL_CHUNK, [1, 1, 1]).unwrap());
+        let (mut yes, mut no) = (0, 0);
+        for seed in 0..cases(40, 200) {
+            let g = geoms[(seed % 4) as usize];
+            let w = g.world_size();
+            let p: [f64; 3] = std::array::from_fn(|i| unit(seed, i as u64) * w[i] as f64);
+            let q: [f64; 3] = std::array::from_fn(|i| {
+                p[i] + 2.0 * g.chunk_size(0) as f64 * (unit(seed, 10 + i as u64) - 0.5)
+            });
+            let ratio = 0.6 + unit(seed, 7);
+            let pairs = [
+                (
+                    LevelMap::from_viewer(g, p, ratio),
+                    LevelMap::from_viewer(g, q, ratio),
+                ),
+                (
+                    LevelMap::random(g, seed, 0.4),
+                    LevelMap::random(g, seed + 1000, 0.4),
+                ),
+                (
+                    LevelMap::from_viewer(g, p, ratio),
+                    LevelMap::from_viewer(g, p, ratio),
+                ),
+            ];
+            for (n, (a, b)) in pairs.iter().enumerate() {
+                let changed = changed_leaves(a, b);
+                if n == 2 {
+                    assert!(changed.is_empty(), "seed {seed}: a map differs from itself");
+                }
+                for k in b.chunks() {
+                    let want = needs_remesh(a, b, k);
+                    assert_eq!(
+                        needs_remesh_given(&changed, b, k),
+                        want,
+                        "seed {seed}, pair {n}, chunk {k:?}"
+                    );
+                    if want {
+                        yes += 1;
+                    } else {
+                        no += 1;
+                    }
+                }
+            }
+        }
+        assert!(yes > 0 && no > 0, "{yes} re-meshed, {no} kept");
     }
 
     #[test]

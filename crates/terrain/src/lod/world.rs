@@ -38,7 +38,7 @@ use super::edits::{chunks_seeing, EditedField, Overlay};
 use super::error::LodError;
 use super::lattice::Point;
 use super::level_map::{ChunkKey, LevelMap, LodGeometry};
-use super::mesh::{is_fast_path, needs_remesh, world_tets, MeshTet};
+use super::mesh::{changed_leaves, is_fast_path, needs_remesh_given, world_tets, MeshTet};
 use super::morph::Morph;
 use super::mt::{march, mesh_chunk_with, remesh_chunk, weld, ChunkMesh, Last, LodFrame, Remeshed};
 use super::tet_cache::{EncodedTets, TetCache, TetCacheStats, DEFAULT_TET_CACHE_BYTES};
@@ -271,14 +271,18 @@ impl<F: ScalarField> LodWorld<F> {
             }
             _ => true,
         };
+        // The leaves that changed with the map: a chunk's tets can change only where one of
+        // them touches its dependency box (`needs_remesh_given`, the same answer as
+        // `needs_remesh`); a step that changes no leaf re-meshes nothing.
+        let changed = self.map.as_ref().map(|old| changed_leaves(old, new));
         let stale: Vec<(ChunkKey, bool)> = new
             .chunks()
             .iter()
             .filter_map(|k| {
                 let revalued = revalued(k);
-                let stale = match (&self.map, self.meshes.contains_key(k)) {
-                    (Some(old), true) => {
-                        revalued || self.edited.contains(k) || needs_remesh(old, new, k)
+                let stale = match (&changed, self.meshes.contains_key(k)) {
+                    (Some(changed), true) => {
+                        revalued || self.edited.contains(k) || needs_remesh_given(changed, new, k)
                     }
                     _ => true,
                 };
