@@ -15,7 +15,8 @@
 //!           at that step (they and their touching leaves, up to validate_max_chunks chunks)
 //!           checked: edges open inside the domain (not in a boundary face of the region's
 //!           tetrahedra), non-manifold, misoriented; and the normals of every crossing that
-//!           chunks of two levels share compared (the level seam)
+//!           chunks of two levels share compared (the level seam); and the shape of every
+//!           triangle of the world (rmt_mesh::quality: radius ratio R / 2r, 1 = equilateral)
 //!   at the end: the most triangles the world had over the finest level everywhere (counted
 //!           when the finest level has at most finest_exact_chunks chunks, meshed at once;
 //!           else estimated as the sum over the last step's chunks of triangles x 4^level)
@@ -197,6 +198,48 @@ pub struct WorldCheck {
     pub normal_seam_max_deg: f32,
 }
 
+/// The shape of the world's triangles at one step ([`rmt_mesh::quality`], the extractor's
+/// measure: radius ratio `R / (2r)`, 1 for an equilateral triangle, larger for slivers).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Shape {
+    /// Triangles in the ratio statistics (all but the zero-area ones).
+    pub measured: usize,
+    /// Mean radius ratio.
+    pub ar_mean: f64,
+    /// Median radius ratio (linear interpolation, as `quality`).
+    pub ar_median: f64,
+    /// 99th percentile of the radius ratio (linear interpolation, as `quality`).
+    pub ar_p99: f64,
+    /// Largest radius ratio.
+    pub ar_max: f64,
+    /// Zero-area triangles (left out of the ratios).
+    pub zero_area: usize,
+}
+
+/// The shape of every triangle of `world`'s chunks, measured as one mesh (chunks side by
+/// side, not welded: the triangles are the same).
+fn world_shape<F: ScalarField>(world: &LodWorld<F>) -> Result<Shape> {
+    let chunks = world.chunk_meshes();
+    let mut mesh = rmt_mesh::Mesh::default();
+    for (_, m) in &chunks {
+        let base = mesh.positions.len();
+        u32::try_from(base + m.positions.len())
+            .context("the world has too many vertices to measure as one mesh")?;
+        let base = base as u32;
+        mesh.positions.extend_from_slice(&m.positions);
+        mesh.indices.extend(m.indices.iter().map(|&i| base + i));
+    }
+    let q = rmt_mesh::quality(&mesh);
+    Ok(Shape {
+        measured: mesh.triangle_count() - q.zero_area_triangles - q.unmeasurable_triangles,
+        ar_mean: q.ar_mean,
+        ar_median: q.ar_median,
+        ar_p99: q.ar_p99,
+        ar_max: q.ar_max,
+        zero_area: q.zero_area_triangles,
+    })
+}
+
 /// One viewer step.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LodStep {
@@ -232,6 +275,9 @@ pub struct LodStep {
     pub edit_chunks: usize,
     /// The checks, on validated steps.
     pub check: Option<WorldCheck>,
+    /// The shape of the world's triangles, on validated steps (also where the check's region
+    /// was too large).
+    pub shape: Option<Shape>,
     /// Per level `0..=levels`: chunks in the map and their triangles.
     pub levels: Vec<LevelCount>,
 }
@@ -381,6 +427,11 @@ pub fn run_lod_session<F: ScalarField + Copy>(
         } else {
             None
         };
+        let shape = if validate {
+            Some(world_shape(&world)?)
+        } else {
+            None
+        };
         let chunks = world.level_map().map_or(0, |m| m.chunks().len());
         let mut levels = level_counts(&world, geom.levels);
         for c in &edit_chunks {
@@ -403,6 +454,7 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             strokes: plan.edits.iter().filter(|e| e.step == k).count(),
             edit_chunks: edit_chunks.len(),
             check,
+            shape,
             levels,
         });
     }
@@ -769,6 +821,11 @@ pub fn lod_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
                 opt(st.check.map(|c| c.orientation_errors.to_string())),
                 opt(st.check.map(|c| format!("{:.4}", c.normal_seam_max_deg))),
                 st.edit_chunks.to_string(),
+                opt(st.shape.map(|q| format!("{:.4}", q.ar_mean))),
+                opt(st.shape.map(|q| format!("{:.4}", q.ar_median))),
+                opt(st.shape.map(|q| format!("{:.4}", q.ar_p99))),
+                opt(st.shape.map(|q| format!("{:.4}", q.ar_max))),
+                opt(st.shape.map(|q| q.zero_area.to_string())),
             ]
         })
         .collect()
@@ -850,6 +907,14 @@ pub fn lod_summary_row(
         .map(|c| c.normal_seam_max_deg)
         .fold(0.0f32, f32::max);
     let most_triangles = s.steps.iter().map(|st| st.triangles).max().unwrap_or(0);
+    let shapes: Vec<Shape> = s.steps.iter().filter_map(|st| st.shape).collect();
+    let measured: usize = shapes.iter().map(|q| q.measured).sum();
+    let ar_mean = shapes
+        .iter()
+        .map(|q| q.ar_mean * q.measured as f64)
+        .sum::<f64>()
+        / measured.max(1) as f64;
+    let worst = |f: fn(&Shape) -> f64| shapes.iter().map(f).fold(0.0f64, f64::max);
     let [rx, ry, rz] = e.resolution.cells();
     vec![
         id.to_string(),
@@ -911,6 +976,16 @@ pub fn lod_summary_row(
             .iter()
             .map(|st| st.edit_chunks)
             .sum::<usize>()
+            .to_string(),
+        format!("{ar_mean:.4}"),
+        format!("{:.4}", worst(|q| q.ar_median)),
+        format!("{:.4}", worst(|q| q.ar_p99)),
+        format!("{:.4}", worst(|q| q.ar_max)),
+        shapes
+            .iter()
+            .map(|q| q.zero_area)
+            .max()
+            .unwrap_or(0)
             .to_string(),
     ]
 }

@@ -595,3 +595,87 @@ fn a_bad_stroke_is_refused_with_its_entry_and_reason() {
     let e = plan.lod.unwrap().edits;
     assert_eq!((e.len(), e[0].frames, e[0].strength), (1, 1, 1.0));
 }
+
+/// The shape of the world's triangles (radius ratio R / 2r, `rmt_mesh::quality`) on every
+/// validated step, plain and clustered: the last step's is the welded world's own (as the
+/// extractor measures its meshes), the summary's mean lies within the steps' and its median,
+/// p99 and max are the steps' largest.
+#[test]
+fn the_world_triangles_shape_is_measured_on_validated_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = WORLD
+        .replace("save_meshes = true", "")
+        .replace(
+            "clustering = [\"none\"]",
+            "clustering = [\"none\", \"integrated\"]",
+        )
+        .replace("steps = 4", "steps = 4\nvalidate_every = 2");
+    let path = write(dir.path(), "shape.toml", &text);
+    let folder = fly(dir.path(), "shape", &text);
+    let steps = Table::read(&folder.join("lod.csv")).unwrap();
+    let summary = Table::read(&folder.join("summary.csv")).unwrap();
+    let num = |t: &Table, r: usize, c: &str| -> f64 { t.get(r, c).unwrap().parse().unwrap() };
+    for id in ["cs_bu", "cs_bi"] {
+        let rows: Vec<usize> = (0..steps.rows.len())
+            .filter(|&r| steps.get(r, "id") == Some(id))
+            .collect();
+        assert_eq!(rows.len(), 5);
+        // Steps 0, 2 and 4 are validated (every 2nd, the first and the last).
+        for (k, &r) in rows.iter().enumerate() {
+            let cell = steps.get(r, "ar_mean").unwrap();
+            assert_eq!(cell.is_empty(), k % 2 == 1, "{id} step {k}: {cell:?}");
+        }
+        let validated: Vec<usize> = rows.iter().copied().step_by(2).collect();
+        for &r in &validated {
+            let (median, mean, p99, max) = (
+                num(&steps, r, "ar_median"),
+                num(&steps, r, "ar_mean"),
+                num(&steps, r, "ar_p99"),
+                num(&steps, r, "ar_max"),
+            );
+            assert!(
+                1.0 <= mean && 1.0 <= median && median <= p99 && p99 <= max,
+                "{id}: {mean} {median} {p99} {max}"
+            );
+        }
+        // The last step's shape is the welded world's, measured by the extractor's quality.
+        let mesh = session_of(&path, id, true).mesh.unwrap();
+        let q = rmt_mesh::quality(&mesh);
+        let last = *validated.last().unwrap();
+        assert_eq!(
+            steps.get(last, "ar_mean").unwrap(),
+            format!("{:.4}", q.ar_mean)
+        );
+        assert_eq!(
+            steps.get(last, "ar_median").unwrap(),
+            format!("{:.4}", q.ar_median)
+        );
+        assert_eq!(
+            steps.get(last, "ar_max").unwrap(),
+            format!("{:.4}", q.ar_max)
+        );
+        assert_eq!(
+            steps.get(last, "zero_area_triangles").unwrap(),
+            q.zero_area_triangles.to_string()
+        );
+        let s = (0..2).find(|&r| summary.get(r, "id") == Some(id)).unwrap();
+        let of_steps =
+            |c: &str| -> Vec<f64> { validated.iter().map(|&r| num(&steps, r, c)).collect() };
+        let lo = of_steps("ar_mean")
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        let hi = of_steps("ar_mean").into_iter().fold(0.0, f64::max);
+        let mean = num(&summary, s, "ar_mean");
+        assert!(
+            lo - 1e-4 <= mean && mean <= hi + 1e-4,
+            "{id}: {mean} not in [{lo}, {hi}]"
+        );
+        for c in ["ar_median", "ar_p99", "ar_max"] {
+            assert_eq!(
+                num(&summary, s, c),
+                of_steps(c).into_iter().fold(0.0, f64::max),
+                "{id} {c}"
+            );
+        }
+    }
+}
