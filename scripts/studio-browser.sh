@@ -2,8 +2,10 @@
 # The studio in headless Chromium: `experiments studio` on a free port, then
 # crates/server/tests/browser/studio_browser.py (first mesh, canvas not blank, clustering changes
 # the triangle counter, 64^3 update time and bytes per mesh, .glb export loaded back, compare in
-# blind mode, one sculpt stroke with latency and chunk readouts, undo). Screenshots go to OUT, and
-# the README's docs/studio.png is regenerated from the radius-ratio view.
+# blind mode, one sculpt stroke with latency and chunk readouts, undo; LOD mode: levels, a
+# flight, colour by level, a stroke, and clustering integrated lowering the triangle count).
+# Screenshots go to OUT, and the README's docs/studio.png is regenerated from the radius-ratio
+# view.
 #
 #   scripts/studio-browser.sh OUT
 #

@@ -4,15 +4,19 @@
 //! ```text
 //!   object box + resolution (finest cells, cubic)  ->  LodSettings: roots = cells / (chunk 2^L)
 //!   step 0: the viewer at the path's start, every chunk meshed (t_initial_s)
-//!   step k: viewer moved -> LevelMap::from_viewer -> remesh (timed)
+//!   step k: viewer moved -> LevelMap::from_viewer -> the step's strokes ([lod] edits,
+//!           LodWorld::edit: the chunks of the new map that see them counted, per level)
+//!           -> remesh (timed)
 //!           pop: every chunk that left the map (its level changed) against the surface that
 //!                replaced it, both ways (one-sided distances, rmt_mesh::distance), in cells of
-//!                the finer of the two levels
+//!                the finer of the two levels (on a step with strokes, the old map's surfaces
+//!                are meshed again with the strokes, so the pop is the change of level alone)
 //!           every validate_every steps and the last: the surface around the chunks meshed
 //!           at that step (they and their touching leaves, up to validate_max_chunks chunks)
 //!           checked: edges open inside the domain (not in a boundary face of the region's
 //!           tetrahedra), non-manifold, misoriented; and the normals of every crossing that
-//!           chunks of two levels share compared (the level seam)
+//!           chunks of two levels share compared (the level seam); and the shape of every
+//!           triangle of the world (rmt_mesh::quality: radius ratio R / 2r, 1 = equilateral)
 //!   at the end: the most triangles the world had over the finest level everywhere (counted
 //!           when the finest level has at most finest_exact_chunks chunks, meshed at once;
 //!           else estimated as the sum over the last step's chunks of triangles x 4^level)
@@ -25,7 +29,7 @@
 //! (its touching neighbours included, in their state before or after), so a vertex near a chunk
 //! face finds the surface across it.
 
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
@@ -36,12 +40,13 @@ use rmt_fields::ScalarField;
 use rmt_mesh::distance::{one_sided, TriangleGrid};
 use rmt_terrain::lod::check::{check_surface, check_tets};
 use rmt_terrain::lod::{
-    chunk_tets, cluster_chunk, mesh_chunks, thread_pool, weld, ChunkKey, ChunkMesh, LevelMap,
-    LodFrame, LodGeometry, LodSettings, LodWorld, MorphSettings,
+    chunk_tets, cluster_chunk, mesh_chunks, thread_pool, weld, ChunkKey, ChunkMesh, EditedField,
+    LevelMap, LodFrame, LodGeometry, LodSettings, LodWorld, MorphSettings,
 };
+use rmt_terrain::{Brush, BrushMode, StrokeParams};
 
 use crate::config::Extraction;
-use crate::manifest::LodPlan;
+use crate::manifest::{LodEditMode, LodPlan};
 
 /// The world of `e` under `plan` on `threads` threads: the box and resolution give the finest
 /// cells (cubic), which the coarsest chunks (`chunk 2^levels` cells) must tile.
@@ -126,6 +131,31 @@ pub fn viewer_path(e: &Extraction, plan: &LodPlan) -> Vec<Vec3> {
         .collect()
 }
 
+/// The brushes of `plan`'s strokes at viewer step `step` in a world of finest cell `h`, each with
+/// its frame time, in the manifest's order, one per frame held ([`crate::manifest::LodEdit`]):
+/// scaled like the studio's brush and the `edit` workload's strokes
+/// ([`StrokeParams::for_cells`]).
+pub fn lod_brushes(plan: &LodPlan, step: usize, h: f32) -> Vec<(Brush, f32)> {
+    let p = StrokeParams::for_cells(h, 1, 0);
+    plan.edits
+        .iter()
+        .filter(|e| e.step == step)
+        .flat_map(|e| {
+            let brush = Brush {
+                centre: Vec3::from(e.at),
+                radius: e.radius,
+                strength: p.strength * e.strength,
+                mode: match e.mode {
+                    LodEditMode::Add => BrushMode::Add,
+                    LodEditMode::Subtract => BrushMode::Subtract,
+                },
+                clamp: p.clamp,
+            };
+            std::iter::repeat_n((brush, p.dt), e.frames as usize)
+        })
+        .collect()
+}
+
 /// How far the surface moved where chunks changed level, over one step.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Pop {
@@ -168,6 +198,48 @@ pub struct WorldCheck {
     pub normal_seam_max_deg: f32,
 }
 
+/// The shape of the world's triangles at one step ([`rmt_mesh::quality`], the extractor's
+/// measure: radius ratio `R / (2r)`, 1 for an equilateral triangle, larger for slivers).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Shape {
+    /// Triangles in the ratio statistics (all but the zero-area ones).
+    pub measured: usize,
+    /// Mean radius ratio.
+    pub ar_mean: f64,
+    /// Median radius ratio (linear interpolation, as `quality`).
+    pub ar_median: f64,
+    /// 99th percentile of the radius ratio (linear interpolation, as `quality`).
+    pub ar_p99: f64,
+    /// Largest radius ratio.
+    pub ar_max: f64,
+    /// Zero-area triangles (left out of the ratios).
+    pub zero_area: usize,
+}
+
+/// The shape of every triangle of `world`'s chunks, measured as one mesh (chunks side by
+/// side, not welded: the triangles are the same).
+fn world_shape<F: ScalarField>(world: &LodWorld<F>) -> Result<Shape> {
+    let chunks = world.chunk_meshes();
+    let mut mesh = rmt_mesh::Mesh::default();
+    for (_, m) in &chunks {
+        let base = mesh.positions.len();
+        u32::try_from(base + m.positions.len())
+            .context("the world has too many vertices to measure as one mesh")?;
+        let base = base as u32;
+        mesh.positions.extend_from_slice(&m.positions);
+        mesh.indices.extend(m.indices.iter().map(|&i| base + i));
+    }
+    let q = rmt_mesh::quality(&mesh);
+    Ok(Shape {
+        measured: mesh.triangle_count() - q.zero_area_triangles - q.unmeasurable_triangles,
+        ar_mean: q.ar_mean,
+        ar_median: q.ar_median,
+        ar_p99: q.ar_p99,
+        ar_max: q.ar_max,
+        zero_area: q.zero_area_triangles,
+    })
+}
+
 /// One viewer step.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LodStep {
@@ -194,10 +266,18 @@ pub struct LodStep {
     pub pop: Option<Pop>,
     /// Under a morph, how far the surface moved over the step with the values: every chunk
     /// re-meshed in place against its surface before the step, and every chunk that left the
-    /// map with the old values against itself with the new ones.
+    /// map with the old values against itself with the new ones. Not measured on a step with
+    /// strokes (they move the surface too).
     pub morph: Option<Pop>,
+    /// Strokes of the manifest (`[lod] edits` entries) applied at this step.
+    pub strokes: usize,
+    /// Chunks of the step's map that see a value the step's strokes changed (all re-meshed).
+    pub edit_chunks: usize,
     /// The checks, on validated steps.
     pub check: Option<WorldCheck>,
+    /// The shape of the world's triangles, on validated steps (also where the check's region
+    /// was too large).
+    pub shape: Option<Shape>,
     /// Per level `0..=levels`: chunks in the map and their triangles.
     pub levels: Vec<LevelCount>,
 }
@@ -209,6 +289,8 @@ pub struct LevelCount {
     pub chunks: usize,
     /// Their triangles.
     pub triangles: usize,
+    /// Those of its chunks that see a value the step's strokes changed.
+    pub edit_chunks: usize,
 }
 
 /// One chunk of the level map at the last step, for the report's top view.
@@ -260,6 +342,8 @@ pub fn run_lod_session<F: ScalarField + Copy>(
     let path = viewer_path(e, plan);
     let mut steps = Vec::with_capacity(path.len());
     for (k, &viewer) in path.iter().enumerate() {
+        let brushes = lod_brushes(plan, k, frame.h);
+        let edited = !brushes.is_empty();
         // The viewer's map (`LevelMap::from_viewer`); the morph follows the viewer too.
         world.set_viewer(viewer);
         let map = world.pending_map().clone();
@@ -286,14 +370,23 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             }
             None => (Vec::new(), None),
         };
+        // The step's strokes, after the viewer moved: the chunks of the new map that see them.
+        let mut edit_chunks: BTreeSet<ChunkKey> = BTreeSet::new();
+        for (brush, dt) in &brushes {
+            world
+                .edit(brush, *dt)
+                .with_context(|| format!("a stroke at step {k}"))?;
+            edit_chunks.extend(world.chunks_seeing_brush(&map, brush));
+        }
         let t = Instant::now();
         let r = world.remesh().context("re-meshing the world")?;
         let remesh_s = t.elapsed().as_secs_f64();
         let replaced = world.take_replaced();
-        // Under a morph, the old map's surfaces again with the new values: the pop is then
-        // the change of tets alone, and the change of values is the morph.
+        // Under a morph or after strokes, the old map's surfaces again with the new values:
+        // the pop is then the change of tets alone (and under a morph, the change of values
+        // is the morph).
         let old_now: Option<HashMap<ChunkKey, ChunkMesh>> = match &old_near {
-            Some((old, near)) if morphing => {
+            Some((old, near)) if morphing || edited => {
                 let keys: Vec<ChunkKey> = near.keys().copied().collect();
                 let meshes: Vec<ChunkMesh> = world.pool().install(|| {
                     keys.par_iter()
@@ -312,7 +405,7 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             _ => None,
         };
         let morph = match (&old_near, &old_now) {
-            (Some((old, near)), Some(now)) => {
+            (Some((old, near)), Some(now)) if morphing && !edited => {
                 let moved = Moved {
                     old,
                     before: near,
@@ -334,8 +427,18 @@ pub fn run_lod_session<F: ScalarField + Copy>(
         } else {
             None
         };
+        let shape = if validate {
+            Some(world_shape(&world)?)
+        } else {
+            None
+        };
         let chunks = world.level_map().map_or(0, |m| m.chunks().len());
-        let levels = level_counts(&world, geom.levels);
+        let mut levels = level_counts(&world, geom.levels);
+        for c in &edit_chunks {
+            if let Some(l) = levels.get_mut(usize::from(c.level)) {
+                l.edit_chunks += 1;
+            }
+        }
         steps.push(LodStep {
             step: k,
             viewer,
@@ -348,7 +451,10 @@ pub fn run_lod_session<F: ScalarField + Copy>(
             memory_bytes: world.memory_bytes(),
             pop,
             morph,
+            strokes: plan.edits.iter().filter(|e| e.step == k).count(),
+            edit_chunks: edit_chunks.len(),
             check,
+            shape,
             levels,
         });
     }
@@ -629,8 +735,8 @@ fn check_world<F: ScalarField>(
     }))
 }
 
-/// Triangles of the world at the finest level everywhere (clustered when the world clusters):
-/// counted when the finest level has at
+/// Triangles of the world at the finest level everywhere (clustered when the world clusters,
+/// with the world's strokes): counted when the finest level has at
 /// most `plan.finest_exact_chunks` chunks (all meshed at once), else estimated from the world's
 /// chunks as triangles x 4^level (a surface meshed at half the spacing has about 4 times the
 /// triangles).
@@ -650,8 +756,9 @@ fn finest<F: ScalarField + Copy>(
         let map = LevelMap::uniform(geom, 0);
         let pool = thread_pool(threads).context("threads for the finest level")?;
         let frame = world.settings().frame;
+        let edited = EditedField::new(&field, world.edits());
         let meshes =
-            mesh_chunks(&map, &field, &frame, &pool).context("meshing the finest level")?;
+            mesh_chunks(&map, &edited, &frame, &pool).context("meshing the finest level")?;
         let total: usize = if world.settings().cluster {
             pool.install(|| {
                 meshes
@@ -713,6 +820,12 @@ pub fn lod_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
                 opt(st.check.map(|c| c.non_manifold_edges.to_string())),
                 opt(st.check.map(|c| c.orientation_errors.to_string())),
                 opt(st.check.map(|c| format!("{:.4}", c.normal_seam_max_deg))),
+                st.edit_chunks.to_string(),
+                opt(st.shape.map(|q| format!("{:.4}", q.ar_mean))),
+                opt(st.shape.map(|q| format!("{:.4}", q.ar_median))),
+                opt(st.shape.map(|q| format!("{:.4}", q.ar_p99))),
+                opt(st.shape.map(|q| format!("{:.4}", q.ar_max))),
+                opt(st.shape.map(|q| q.zero_area.to_string())),
             ]
         })
         .collect()
@@ -731,6 +844,7 @@ pub fn lod_level_rows(id: &str, s: &LodSession) -> Vec<Vec<String>> {
                     level.to_string(),
                     c.chunks.to_string(),
                     c.triangles.to_string(),
+                    c.edit_chunks.to_string(),
                 ]
             })
         })
@@ -793,6 +907,14 @@ pub fn lod_summary_row(
         .map(|c| c.normal_seam_max_deg)
         .fold(0.0f32, f32::max);
     let most_triangles = s.steps.iter().map(|st| st.triangles).max().unwrap_or(0);
+    let shapes: Vec<Shape> = s.steps.iter().filter_map(|st| st.shape).collect();
+    let measured: usize = shapes.iter().map(|q| q.measured).sum();
+    let ar_mean = shapes
+        .iter()
+        .map(|q| q.ar_mean * q.measured as f64)
+        .sum::<f64>()
+        / measured.max(1) as f64;
+    let worst = |f: fn(&Shape) -> f64| shapes.iter().map(f).fold(0.0f64, f64::max);
     let [rx, ry, rz] = e.resolution.cells();
     vec![
         id.to_string(),
@@ -845,6 +967,26 @@ pub fn lod_summary_row(
             .unwrap_or(0)
             .to_string(),
         s.rss_max_bytes.to_string(),
+        s.steps
+            .iter()
+            .map(|st| st.strokes)
+            .sum::<usize>()
+            .to_string(),
+        s.steps
+            .iter()
+            .map(|st| st.edit_chunks)
+            .sum::<usize>()
+            .to_string(),
+        format!("{ar_mean:.4}"),
+        format!("{:.4}", worst(|q| q.ar_median)),
+        format!("{:.4}", worst(|q| q.ar_p99)),
+        format!("{:.4}", worst(|q| q.ar_max)),
+        shapes
+            .iter()
+            .map(|q| q.zero_area)
+            .max()
+            .unwrap_or(0)
+            .to_string(),
     ]
 }
 
@@ -883,6 +1025,7 @@ mod tests {
             finest_exact_chunks: 4096,
             tet_cache_mb: 1024,
             morph: 0.0,
+            edits: Vec::new(),
         }
     }
 

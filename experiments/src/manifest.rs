@@ -85,6 +85,13 @@
 //! morph = 0.0               # 0: no morph; in (0, 1]: each level's values blend towards the
 //!                           # coarser level's over a band this fraction of `ratio` chunk edges
 //!                           # wide (rmt_terrain::lod::Morph): no pop when a chunk changes level
+//! edits = [{ step = 3, at = [0.8, 0.0, -0.8], radius = 0.3, mode = "subtract" }]
+//!                           # brush strokes (default none): at viewer step `step` (0..=steps;
+//!                           # after the viewer moved, before the re-mesh), a brush centred at
+//!                           # `at` (world units, inside the box) of `radius` (world units),
+//!                           # mode "add" | "subtract", held for `frames` frames of 1/60 s
+//!                           # (default 1) at `strength` times the edit workload's (default 1:
+//!                           # about one finest cell per frame), as the studio's brush
 //! ```
 //!
 //! **Naming rule** (reproduces the dissertation's ids): object code, `_`, lattice letter (`b`
@@ -476,6 +483,60 @@ pub struct LodEntry {
     /// The morph band (0: none).
     #[serde(default)]
     pub morph: Option<f64>,
+    /// Brush strokes applied during the flight.
+    #[serde(default)]
+    pub edits: Option<Vec<LodEditEntry>>,
+}
+
+/// Whether a stroke of the `lod` workload adds or removes ground ([`rmt_terrain::BrushMode`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LodEditMode {
+    /// Add ground (values decrease).
+    Add,
+    /// Remove ground (values increase).
+    Subtract,
+}
+
+/// One entry of `[lod] edits`: a brush held still for some frames at one viewer step.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LodEditEntry {
+    /// The viewer step it is applied at (0: before the first meshing).
+    pub step: usize,
+    /// The brush's centre, world coordinates.
+    pub at: [f32; 3],
+    /// The brush's radius, world units.
+    pub radius: f32,
+    /// `add` or `subtract`.
+    pub mode: LodEditMode,
+    /// Strength relative to the `edit` workload's strokes (default 1).
+    #[serde(default)]
+    pub strength: Option<f32>,
+    /// Frames the brush is held for (default 1).
+    #[serde(default)]
+    pub frames: Option<u32>,
+}
+
+/// One checked stroke of the `lod` workload: at step `step` (after the viewer moved, before
+/// the re-mesh), a brush at `at` of radius `radius` (world units) applied `frames` times for
+/// a frame of 1/60 s each, with the `edit` workload's strength times `strength` (about
+/// `strength` finest cells of ground per frame at the centre; values clamped to 8 finest
+/// cells, [`rmt_terrain::StrokeParams::for_cells`]), as the studio's brush is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct LodEdit {
+    /// The viewer step (`0..=steps`).
+    pub step: usize,
+    /// Centre, world coordinates (inside every configuration's box).
+    pub at: [f32; 3],
+    /// Radius, world units (> 0).
+    pub radius: f32,
+    /// Add or remove ground.
+    pub mode: LodEditMode,
+    /// Strength relative to the `edit` workload's strokes (>= 0; default 1).
+    pub strength: f32,
+    /// Frames the brush is held for (1 to 10,000; default 1).
+    pub frames: u32,
 }
 
 /// The checked `lod` workload of a plan.
@@ -505,6 +566,9 @@ pub struct LodPlan {
     /// level's values blend towards the coarser level's over a band of this fraction of `ratio`
     /// chunk edges, so a change of level does not pop.
     pub morph: f64,
+    /// Brush strokes, in the manifest's order (default none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub edits: Vec<LodEdit>,
 }
 
 /// `[matrix]`: objects x methods x lattices x clustering.

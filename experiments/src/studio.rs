@@ -537,6 +537,7 @@ impl Backend for StudioBackend {
             finest_exact_chunks: 0,
             tet_cache_mb: STUDIO_TET_CACHE_BYTES >> 20,
             morph: 0.0,
+            edits: Vec::new(),
         };
         let settings = crate::lod::lod_settings(&e, &plan, self.threads)
             .map_err(|err| invalid(format!("{err:#}")))?;

@@ -150,9 +150,15 @@ pub const EDIT_SUMMARY: [&str; 25] = [
 /// meshing of the world). `chunks_remeshed` counts the chunks whose surface was rebuilt,
 /// `chunks_unchanged` those the map change marked whose tets stayed the same (their surface
 /// kept). Validation and seam columns are empty on steps that were not validated, pop columns
-/// on steps where no chunk changed its level. Like `remesh_s`,
-/// `memory_bytes` is a measurement of the run (it follows the world's hash tables' history).
-pub const LOD_STEPS: [&str; 21] = [
+/// on steps where no chunk changed its level, morph columns on steps with brush strokes (they
+/// move the surface too). `edit_chunks` counts the chunks of the step's map that see a value
+/// the step's strokes (`[lod] edits`) changed, all re-meshed at that step (0 without strokes).
+/// On validated steps, `ar_mean`, `ar_median`, `ar_p99` and `ar_max` give the radius ratio `R / (2r)` of every
+/// triangle of the world (`rmt_mesh::quality`, as `results.csv`'s columns of those names: 1 is
+/// equilateral, larger is worse; zero-area triangles left out and counted in
+/// `zero_area_triangles`). Like `remesh_s`, `memory_bytes` is a measurement of the run (it
+/// follows the world's hash tables' history).
+pub const LOD_STEPS: [&str; 27] = [
     "id",
     "step",
     "viewer_x",
@@ -174,12 +180,19 @@ pub const LOD_STEPS: [&str; 21] = [
     "non_manifold_edges",
     "orientation_errors",
     "normal_seam_max_deg",
+    "edit_chunks",
+    "ar_mean",
+    "ar_median",
+    "ar_p99",
+    "ar_max",
+    "zero_area_triangles",
 ];
 
 /// The columns of `lod_levels.csv` (the `lod` workload: one row per viewer step and level
-/// `0..=levels`, levels without chunks included): the chunks of that level in the map and their
-/// triangles.
-pub const LOD_LEVELS: [&str; 5] = ["id", "step", "level", "chunks", "triangles"];
+/// `0..=levels`, levels without chunks included): the chunks of that level in the map, their
+/// triangles, and those of them that see the step's brush strokes (`lod.csv`'s `edit_chunks`
+/// by level).
+pub const LOD_LEVELS: [&str; 6] = ["id", "step", "level", "chunks", "triangles", "edit_chunks"];
 
 /// The columns of `lod_map.csv` (the `lod` workload: the level map of the last step, one row per
 /// chunk in map order): the chunk's level, its index among that level's chunks, its box in world
@@ -200,8 +213,13 @@ pub const LOD_MAP: [&str; 13] = [
     "triangles",
 ];
 
-/// The columns of a `lod` run's `summary.csv` (one row per configuration).
-pub const LOD_SUMMARY: [&str; 35] = [
+/// The columns of a `lod` run's `summary.csv` (one row per configuration). `edits_applied`
+/// counts the `[lod] edits` strokes applied over the flight, `edit_chunks_total` the sum of
+/// `lod.csv`'s `edit_chunks` over its steps. The triangles' shape over the validated steps:
+/// `ar_mean` the mean radius ratio of every triangle of every validated step's world,
+/// `ar_median`, `ar_p99` and `ar_max` the largest of the steps' (`lod.csv`),
+/// `zero_area_triangles` the most of a step's.
+pub const LOD_SUMMARY: [&str; 42] = [
     "id",
     "object",
     "method",
@@ -237,6 +255,13 @@ pub const LOD_SUMMARY: [&str; 35] = [
     "triangles_over_finest",
     "memory_max_bytes",
     "rss_max_bytes",
+    "edits_applied",
+    "edit_chunks_total",
+    "ar_mean",
+    "ar_median",
+    "ar_p99",
+    "ar_max",
+    "zero_area_triangles",
 ];
 
 /// Time columns that are not stages of the extraction, so get no `share_<stage>` column in

@@ -10,8 +10,9 @@ use std::path::{Path, PathBuf};
 use rmt_extract::{Clustering, Lattice, Method};
 
 use super::{
-    base_id, finish_suffix, safe_name, shading_suffix, Configuration, EditPlan, LodPlan, Manifest,
-    ManifestError, Matrix, Overrides, Plan, SeedOf, SeedRange, Shading,
+    base_id, finish_suffix, safe_name, shading_suffix, Configuration, EditPlan, LodEdit,
+    LodEditEntry, LodPlan, Manifest, ManifestError, Matrix, Overrides, Plan, SeedOf, SeedRange,
+    Shading,
 };
 use crate::config::{self, Extraction};
 use crate::objects::{self, Bounds, ObjectKind, ObjectSpec, Resolution};
@@ -632,6 +633,7 @@ fn plan_lod(
         finest_exact_chunks: e.finest_exact_chunks.unwrap_or(4096),
         tet_cache_mb: e.tet_cache_mb.unwrap_or(1024),
         morph: e.morph.unwrap_or(0.0),
+        edits: Vec::new(),
     };
     if !(plan.morph == 0.0 || (plan.morph > 0.0 && plan.morph <= 1.0)) {
         return Err(invalid.at(
@@ -683,6 +685,13 @@ fn plan_lod(
             return Err(invalid.at("lod.path", format!("waypoint {p:?} is not finite")));
         }
     }
+    let edits = e.edits.unwrap_or_default();
+    let edits = edits
+        .iter()
+        .enumerate()
+        .map(|(i, entry)| lod_edit(i, entry, plan.steps, configurations, invalid))
+        .collect::<Result<Vec<_>, _>>()?;
+    let plan = LodPlan { edits, ..plan };
     for c in configurations {
         let e = &c.extraction;
         if e.method != Method::Mt || e.lattice != Lattice::BodyCentred {
@@ -721,4 +730,71 @@ fn plan_lod(
         }
     }
     Ok(Some(plan))
+}
+
+/// Entry `i` of `[lod] edits` checked against the flight's `steps` and every configuration's
+/// box, defaults filled in.
+fn lod_edit(
+    i: usize,
+    e: &LodEditEntry,
+    steps: usize,
+    configurations: &[Configuration],
+    invalid: &Invalid,
+) -> Result<LodEdit, ManifestError> {
+    let key = |field: &str| format!("lod.edits[{i}].{field}");
+    let edit = LodEdit {
+        step: e.step,
+        at: e.at,
+        radius: e.radius,
+        mode: e.mode,
+        strength: e.strength.unwrap_or(1.0),
+        frames: e.frames.unwrap_or(1),
+    };
+    if edit.step > steps {
+        return Err(invalid.at(
+            &key("step"),
+            format!(
+                "step {} is after the flight's last step (lod.steps = {steps})",
+                edit.step
+            ),
+        ));
+    }
+    if !edit.at.iter().all(|c| c.is_finite()) {
+        return Err(invalid.at(
+            &key("at"),
+            format!("the centre must be finite, got {:?}", edit.at),
+        ));
+    }
+    if !(edit.radius.is_finite() && edit.radius > 0.0) {
+        return Err(invalid.at(
+            &key("radius"),
+            format!("must be finite and > 0 (world units), got {}", edit.radius),
+        ));
+    }
+    if !(edit.strength.is_finite() && edit.strength >= 0.0) {
+        return Err(invalid.at(
+            &key("strength"),
+            format!("must be finite and >= 0, got {}", edit.strength),
+        ));
+    }
+    if !(1..=10_000).contains(&edit.frames) {
+        return Err(invalid.at(
+            &key("frames"),
+            format!("must be 1 to 10000, got {}", edit.frames),
+        ));
+    }
+    for c in configurations {
+        let b = &c.extraction.bounds;
+        let inside = (0..3).all(|a| b.min[a] <= edit.at[a] && edit.at[a] <= b.max[a]);
+        if !inside {
+            return Err(invalid.at(
+                &key("at"),
+                format!(
+                    "{:?} is outside the box of configuration {}: [{}, {}] x [{}, {}] x [{}, {}]",
+                    edit.at, c.id, b.min.x, b.max.x, b.min.y, b.max.y, b.min.z, b.max.z
+                ),
+            ));
+        }
+    }
+    Ok(edit)
 }

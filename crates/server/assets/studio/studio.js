@@ -25,7 +25,7 @@ const studio = {
   error: null,
   swapped: false,
   // LOD mode: chunks and triangles shown, per level; viewer moves and strokes answered.
-  lod: { chunks: 0, triangles: 0, levels: [], moves: 0, lastMoveMs: null, lastRemeshed: null, strokes: 0, lastStrokeMs: null, viewer: null },
+  lod: { chunks: 0, triangles: 0, levels: [], moves: 0, lastMoveMs: null, lastRemeshed: null, strokes: 0, lastStrokeMs: null, viewer: null, worlds: 0 },
 };
 window.studio = studio;
 
@@ -747,6 +747,7 @@ async function newLodWorld() {
     flyLookAt(new THREE.Vector3((b[0] + b[3]) / 2, (b[1] + b[4]) / 2, (b[2] + b[5]) / 2));
     lodAsked = camera.position.clone();
     studio.lod.viewer = reply.header.viewer;
+    studio.lod.worlds++;
     await nextFrame();
     lodReadout(reply.header, null, null);
     lodLegend();

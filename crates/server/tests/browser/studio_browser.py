@@ -7,7 +7,9 @@ that the triangle counter changes, measures the time from a parameter change to 
 at 64^3 and the bytes per mesh, opens compare mode (blind), then sculpt mode: one stroke, checks
 that the counter and the latency readout update, undo; LOD mode: the multiresolution world
 with more than one level, W held to fly forward (the page asks the server for a re-mesh as the
-camera moves), colour by level (the mesh's colours change), one stroke; exports a .glb and loads it back (glTF 2.0
+camera moves), colour by level (the mesh's colours change), one stroke, then a new world with
+clustering integrated at the same starting viewer (the same chunks per level, fewer triangles);
+exports a .glb and loads it back (glTF 2.0
 structure: header, JSON and BIN chunks, accessors within the buffer, indices within the vertices,
 triangle count equal to the page's). Saves screenshots.
 
@@ -375,6 +377,7 @@ def main():
             fail(f"LOD error: {state('error')}")
         levels = state("lod.levels")
         result["lod_chunks_per_level"] = levels
+        lod_triangles_plain = state("lod.triangles")
         if sum(1 for n in levels if n > 0) < 2:
             fail(f"the LOD world shows one level only: {levels}")
         png = shot("studio-lod.png")
@@ -418,6 +421,35 @@ def main():
         result["lod_stroke_ms"] = round(state("lod.lastStrokeMs"), 1)
         result["lod_stroke_status"] = driver.find_element(By.ID, "status").text
         shot("studio-lod-stroke.png")
+
+        # Clustering at every level: a new world with clustering integrated starts at the same
+        # viewer as the first (plain) one, so it has the same chunks per level and fewer
+        # triangles, and the overlay shows the new count.
+        worlds = state("lod.worlds")
+        set_field("lod-config", "clustering", "integrated")
+        driver.find_element(By.ID, "lod-new").click()
+        wait.until(lambda d: state("lod.worlds") > worlds and state("busy") == 0)
+        if state("error"):
+            fail(f"LOD error with clustering: {state('error')}")
+        clustered_levels = state("lod.levels")
+        lod_triangles_clustered = state("lod.triangles")
+        result["lod_triangles_plain"] = lod_triangles_plain
+        result["lod_triangles_clustered"] = lod_triangles_clustered
+        if clustered_levels != levels:
+            fail(f"the clustered world has other chunks per level: {clustered_levels} vs {levels}")
+        if not 0 < lod_triangles_clustered < lod_triangles_plain:
+            fail(
+                f"clustering did not lower the LOD triangle count: {lod_triangles_clustered} "
+                f"vs {lod_triangles_plain} plain"
+            )
+        overlay = driver.find_element(By.ID, "overlay-a").text
+        if str(lod_triangles_clustered) not in overlay:
+            fail(f"overlay does not show the clustered count {lod_triangles_clustered}: {overlay!r}")
+        png = shot("studio-lod-clustered.png")
+        share = share_not_background(png, canvas_box())
+        result["lod_clustered_nonbackground_share"] = round(share, 3)
+        if share < 0.05:
+            fail(f"clustered LOD view looks blank ({share:.1%})")
         print(json.dumps(result))
     finally:
         driver.quit()

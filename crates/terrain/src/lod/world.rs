@@ -414,20 +414,13 @@ impl<F: ScalarField> LodWorld<F> {
     /// any level changes). A brush that misses the world changes nothing. Returns how many
     /// chunks it marked.
     pub fn edit(&mut self, brush: &crate::Brush, dt: f32) -> Result<usize, LodError> {
-        let world = self.settings.geometry.world_size();
-        let Some((lo, hi)) = self.edits.stroke_box(brush, world) else {
+        let Some((lo, hi)) = self.stroke_reach(brush) else {
             brush
                 .check(dt)
                 .map_err(|e| LodError::Invalid(e.to_string()))?;
             return Ok(0);
         };
         self.edits.add(*brush, dt)?;
-        // A morphed value reads its parents' values, within one coarsest cell.
-        let r = match self.settings.morph {
-            None => 0,
-            Some(_) => super::lattice::cell_size(self.settings.geometry.levels),
-        };
-        let (lo, hi) = (lo.map(|v| v - r), hi.map(|v| v + r));
         let marked = self
             .map
             .as_ref()
@@ -435,6 +428,27 @@ impl<F: ScalarField> LodWorld<F> {
         let n = marked.len();
         self.edited.extend(marked);
         Ok(n)
+    }
+
+    /// The box (lattice units) of values `brush` can change ([`Overlay::stroke_box`]), grown by
+    /// what a morphed value reads (one coarsest cell); `None` when it misses the world.
+    fn stroke_reach(&self, brush: &crate::Brush) -> Option<([i64; 3], [i64; 3])> {
+        let world = self.settings.geometry.world_size();
+        let (lo, hi) = self.edits.stroke_box(brush, world)?;
+        // A morphed value reads its parents' values, within one coarsest cell.
+        let r = match self.settings.morph {
+            None => 0,
+            Some(_) => super::lattice::cell_size(self.settings.geometry.levels),
+        };
+        Some((lo.map(|v| v - r), hi.map(|v| v + r)))
+    }
+
+    /// The chunks of `map` (a map of the world's geometry, e.g. [`LodWorld::pending_map`])
+    /// whose surface can see a value `brush` changes: those [`LodWorld::edit`] marks when `map`
+    /// is the current map, sorted. Empty for a brush that misses the world.
+    pub fn chunks_seeing_brush(&self, map: &LevelMap, brush: &crate::Brush) -> Vec<ChunkKey> {
+        self.stroke_reach(brush)
+            .map_or(Vec::new(), |(lo, hi)| chunks_seeing(map, lo, hi))
     }
 
     /// The strokes applied so far: the world samples `EditedField::new(field, edits)`.
