@@ -109,6 +109,19 @@ pub(crate) enum TriangleShape {
     },
 }
 
+/// The radius ratio R / (2r) of the triangle with corners `p` (1 for an equilateral one;
+/// infinite for zero area): `a b c s / (8 A^2)` with `s` the half perimeter, as
+/// [`quality()`] measures it, for one triangle (the checks that guard triangle shape read it).
+pub fn radius_ratio(p: [DVec3; 3]) -> f64 {
+    let [a, b, c] = [0, 1, 2].map(|e| (p[(e + 1) % 3] - p[e]).length());
+    let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+    if area > 0.0 {
+        a * b * c * (0.5 * (a + b + c)) / (8.0 * area * area)
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Classifies and measures triangle `t` of a mesh with `positions`.
 pub(crate) fn triangle_shape(positions: &[[f32; 3]], t: [u32; 3]) -> TriangleShape {
     let n = positions.len();

@@ -1,6 +1,7 @@
 //! Clustering at every level (`rmt_terrain::lod::cluster`): over random fields and random
 //! 2:1-balanced level maps, the clustered multiresolution surface is closed, manifold and
-//! oriented, with the Euler characteristic and component count of the plain one; crossings
+//! oriented, with the Euler characteristic and component count of the plain one, and no chunk's
+//! worst triangle worse than max(10, the plain chunk's) (no sliver made); crossings
 //! that two chunks share keep their plain vertex; a world that clusters re-meshes
 //! incrementally to the same bytes as clustering a from-scratch meshing.
 //!
@@ -13,11 +14,12 @@ use glam::Vec3;
 use proptest::prelude::*;
 use proptest::test_runner::Config as ProptestConfig;
 use rmt_fields::{RandomFamily, RandomField, ScalarField, Sphere};
+use rmt_mesh::quality::radius_ratio;
 use rmt_mesh::validate::validate;
 use rmt_terrain::lod::check::{check_surface, check_tets};
 use rmt_terrain::lod::{
-    cluster_chunk, mesh_chunks, same_bits, thread_pool, weld, world_tets, ChunkMesh, ClusterCount,
-    LevelMap, LodFrame, LodGeometry, LodSettings, LodWorld,
+    cluster::SLIVER_RATIO, cluster_chunk, mesh_chunks, same_bits, thread_pool, weld, world_tets,
+    ChunkMesh, ClusterCount, LevelMap, LodFrame, LodGeometry, LodSettings, LodWorld,
 };
 
 /// Every chunk clustered, with the counts summed.
@@ -32,6 +34,14 @@ fn clustered(plain: &[ChunkMesh], frame: &LodFrame) -> (Vec<ChunkMesh>, ClusterC
         })
         .collect();
     (out, sum)
+}
+
+/// The largest radius ratio R / (2r) of a chunk's triangles.
+fn worst_ratio(m: &ChunkMesh) -> f64 {
+    m.indices
+        .chunks_exact(3)
+        .map(|t| radius_ratio([0, 1, 2].map(|k| Vec3::from(m.positions[t[k] as usize]).as_dvec3())))
+        .fold(0.0, f64::max)
 }
 
 /// Plain and clustered surfaces of `map` compared (module doc); returns the clustering's
@@ -92,6 +102,15 @@ fn compare(
         }
         // A merged vertex's key is its first member's reversed: never a crossing's.
         prop_assert!(c.keys.iter().filter(|[a, b]| a > b).count() <= count.merged);
+        // No sliver made: the chunk's worst triangle is no worse than max(SLIVER_RATIO, the
+        // plain chunk's worst).
+        let (wp, wc) = (worst_ratio(m), worst_ratio(c));
+        prop_assert!(
+            wc <= wp.max(SLIVER_RATIO),
+            "worst radius ratio {} clustered against {} plain",
+            wc,
+            wp
+        );
     }
     Ok((count, pm.indices.len() / 3, cm.indices.len() / 3))
 }

@@ -151,14 +151,7 @@ const MAX_ROUNDS: usize = 32;
 /// The radius ratio R / (2r) of the triangle `p` (in `f64`; infinite for zero area), as
 /// [`rmt_mesh::quality`] measures it.
 fn radius_ratio(p: [glam::Vec3; 3]) -> f64 {
-    let q = p.map(|v| v.as_dvec3());
-    let [a, b, c] = [0, 1, 2].map(|e| (q[(e + 1) % 3] - q[e]).length());
-    let area = 0.5 * (q[1] - q[0]).cross(q[2] - q[0]).length();
-    if area > 0.0 {
-        a * b * c * (0.5 * (a + b + c)) / (8.0 * area * area)
-    } else {
-        f64::INFINITY
-    }
+    rmt_mesh::quality::radius_ratio(p.map(|v| v.as_dvec3()))
 }
 
 /// Post-processed clustering: collapses what makes a triangle degenerate, under the exact check

@@ -23,6 +23,8 @@
 //!         the edge-contraction link condition along a spanning tree of the group)
 //!       - the Euler characteristic does not change: (1 - |members|) - dE + dF = 0
 //!       - no fan triangle's normal turns: n_new . n_old > 0
+//!       - no sliver made: a fan triangle of radius ratio above SLIVER_RATIO (10) is no worse
+//!         than the star's worst triangle before the merge
 //!   otherwise the crossings stay plain.
 //!   then each own crossing still alone, in order, joins the nearest merged group beside it
 //!   (sharing a triangle) that the same check allows, at most MAX_LONES (6) per group (RMT's
@@ -38,9 +40,16 @@
 //! runner measures what that costs in triangles.
 
 use glam::DVec3;
+use rmt_mesh::quality::radius_ratio;
 
 use super::lattice::Point;
 use super::mt::{ChunkMesh, LodFrame};
+
+/// A merge may make fan triangles up to this radius ratio R / (2r) (the extractor's sliver
+/// bound, `SLIVER_RATIO` of `rmt_extract`'s edge collapse); above it, none worse than the worst triangle of
+/// the star it replaces. So clustering never makes a chunk's worst triangle worse than
+/// `max(SLIVER_RATIO, the plain surface's worst)`.
+pub const SLIVER_RATIO: f64 = 10.0;
 
 /// At most this many lone crossings join one group (as in the extractor's integrated
 /// clustering): groups stay near their point, and the check's stars stay small.
@@ -456,6 +465,7 @@ impl State {
             size += self.size[m as usize];
         }
         let p = (sum / f64::from(size)).as_vec3().as_dvec3();
+        let mut worst_new: f64 = 0.0;
         for &(a, b, t) in &s.fan {
             let c = self.corners(mesh, t);
             let k = c.iter().position(|&v| is_member(v)).unwrap_or(0);
@@ -463,6 +473,19 @@ impl State {
             let old = (pa - pm).cross(pb - pm);
             let new = (pa - p).cross(pb - p);
             if old.dot(new) <= 0.0 {
+                return false;
+            }
+            worst_new = worst_new.max(radius_ratio([pa, pb, p]));
+        }
+        // No sliver made: a fan triangle above SLIVER_RATIO must be no worse than the worst
+        // triangle of the star it replaces.
+        if worst_new > SLIVER_RATIO {
+            let worst_old = s
+                .star
+                .iter()
+                .map(|&t| radius_ratio(self.corners(mesh, t).map(|v| self.position(v))))
+                .fold(0.0, f64::max);
+            if worst_new > worst_old {
                 return false;
             }
         }
