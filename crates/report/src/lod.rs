@@ -46,6 +46,22 @@ pub const LOD_FILES: [&str; 7] = [
     LOD_MAP_CSV,
 ];
 
+/// The measures of the triangles' shape on a flight's checked steps, as `summary.csv` names
+/// them (`rmt_runfolder::schema::LOD_SUMMARY`), with their captions.
+const LOD_QUALITY: [(&str, &str); 5] = [
+    (
+        "ar_mean",
+        "radius ratio R / 2r of the checked steps' triangles, mean (1 is equilateral)",
+    ),
+    ("ar_median", "radius ratio, median (the largest step's)"),
+    ("ar_p99", "radius ratio, p99 (the largest step's)"),
+    ("ar_max", "radius ratio, max"),
+    (
+        "zero_area_triangles",
+        "zero-area triangles, most at a step (not in the ratios)",
+    ),
+];
+
 /// Whether `folder` holds a `lod` run with the files of the report's section.
 pub fn is_lod(folder: &Path) -> bool {
     LOD_FILES.iter().all(|f| folder.join(f).is_file())
@@ -684,6 +700,24 @@ pub fn lod_tables(run: &LodRun) -> Vec<TextTable> {
             ("morph_mean_cells", "morph per step, mean (finer cells)"),
         ]);
     }
+    // Brush strokes during the flight (`[lod] edits`).
+    if run
+        .value("edits_applied")
+        .parse::<u64>()
+        .is_ok_and(|n| n > 0)
+    {
+        measures.extend([
+            ("edits_applied", "brush strokes applied"),
+            (
+                "edit_chunks_total",
+                "chunks that saw a stroke's change, summed over the steps",
+            ),
+        ]);
+    }
+    // The triangles' shape on the checked steps (runs that measured it).
+    if !run.value("ar_p99").is_empty() {
+        measures.extend(LOD_QUALITY);
+    }
     let mut summary = TextTable {
         name: "lod_summary".into(),
         title: format!("The flight's measures ({})", run.info.name),
@@ -893,6 +927,46 @@ mod tests {
         assert!(text.contains("300 of the world's 400 triangles"), "{text}");
         assert!(text.contains("[lod_levels]") && text.contains("[lod_summary]"));
         assert!(text.contains("lod-test"));
+    }
+
+    /// Strokes and triangle shape join the measures only for runs whose `summary.csv` has
+    /// them (older runs, like the committed report's, keep their table).
+    #[test]
+    fn strokes_and_shape_are_shown_when_the_run_measured_them() {
+        let columns = |r: &LodRun| -> Vec<String> {
+            lod_tables(r)[1]
+                .csv_rows
+                .iter()
+                .map(|row| row[1].clone())
+                .collect()
+        };
+        let plain = columns(&run());
+        assert!(!plain
+            .iter()
+            .any(|c| c == "edits_applied" || c.starts_with("ar_")));
+        let mut r = run();
+        r.summary.extend(
+            [
+                ("edits_applied", "0"),
+                ("edit_chunks_total", "0"),
+                ("ar_mean", "5.5"),
+                ("ar_median", "1.3"),
+                ("ar_p99", "31.4"),
+                ("ar_max", "1989489"),
+                ("zero_area_triangles", "2"),
+            ]
+            .map(|(k, v)| (k.to_string(), v.to_string())),
+        );
+        let shaped = columns(&r);
+        assert_eq!(shaped.len(), plain.len() + 5);
+        assert!(!shaped.iter().any(|c| c == "edits_applied"), "no strokes");
+        let rows = &lod_tables(&r)[1].csv_rows;
+        let p99 = rows.iter().find(|row| row[1] == "ar_p99").unwrap();
+        assert_eq!(p99[2], "31.4");
+        r.summary[2].1 = "3".into(); // edits_applied
+        let stroked = columns(&r);
+        assert_eq!(stroked.len(), plain.len() + 7);
+        assert!(stroked.iter().any(|c| c == "edit_chunks_total"));
     }
 
     #[test]
