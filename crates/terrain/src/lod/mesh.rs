@@ -43,6 +43,25 @@
 //! it on random 2:1 level maps, chunk by chunk against one window over the whole world, tet for
 //! tet (a margin of one cell of level `k + 1` also passed 100 maps; two are used).
 //!
+//! **Inert tets.** Beside a finer chunk most of a window is that chunk's side of the margin,
+//! at eight times the density of level `k`. A window of a level-`k` chunk whose leaves are all
+//! of level `k - 1` or coarser leaves out every tet of a level `< k` whose bounding box touches
+//! chunks of levels `< k` only (the forest does not descend into it). That is exact:
+//!
+//! ```text
+//!   T left out, level < k, bbox(T) inside the closed boxes of chunks finer than k
+//!   a leaf L of level >= k:  bbox(L) touches no chunk finer than its level (target rule;
+//!                            the closure's children lie in their parent's box)
+//!                            and its rules read points on bbox(L) only -> never T's vertices
+//!   a leaf of level k - 1:   never refined (its rules need a point of level k - 2; the
+//!                            window has none, and refining leaves of level >= k adds points
+//!                            of level >= k - 1 only), and its split mask is 0 either way
+//!   ownership:               T's centroid is inside a finer chunk, not in the chunk's box
+//! ```
+//!
+//! The tests build each window both ways and compare every chunk with the whole world's tets
+//! (built with every tet of the forest).
+//!
 //! **Dependency.** From [`LOCAL_CHUNK`] cells on, a chunk's tets are a function of the leaves
 //! touching its closed box (the issue's rule: re-mesh a chunk when its level or a
 //! neighbour's changed); below, of the leaves touching its [`dependency_box`]. Tested, not
@@ -149,7 +168,14 @@ pub fn chunk_tets(map: &LevelMap, chunk: &ChunkKey) -> Result<Vec<MeshTet>, LodE
         return Ok(lattice_tets(map, chunk.level, lo, hi));
     }
     let m = window_margin(map, chunk.level);
-    let out = window_tets(map, lo.map(|v| v - m), hi.map(|v| v + m), lo, hi)?;
+    let out = window_tets(
+        map,
+        lo.map(|v| v - m),
+        hi.map(|v| v + m),
+        lo,
+        hi,
+        Some(chunk.level),
+    )?;
     Ok(out)
 }
 
@@ -243,7 +269,7 @@ fn in_domain(g: &LodGeometry, c4: [i64; 3]) -> bool {
 /// chunk (in [`LevelMap::chunks`] order) then tet. The reference the chunks must match.
 pub fn world_tets(map: &LevelMap) -> Result<Vec<(usize, MeshTet)>, LodError> {
     let w = map.geometry().world_size();
-    let all = window_tets(map, [0; 3], w, [0; 3], w)?;
+    let all = window_tets(map, [0; 3], w, [0; 3], w, None)?;
     let mut out = Vec::with_capacity(all.len());
     for t in all {
         let k = map
@@ -356,13 +382,23 @@ impl LevelGrid {
     /// [`LevelMap::min_level_touching`] for the closed box `[a, b]` (from the map itself when
     /// the box leaves the grid's region inside the world).
     fn min_level_touching(&self, map: &LevelMap, a: [i64; 3], b: [i64; 3]) -> Option<u8> {
+        match self.levels_touching(map, a, b) {
+            Some((lo, _)) => (lo != u8::MAX).then_some(lo),
+            None => map.min_level_touching(a, b),
+        }
+    }
+
+    /// The lowest and highest level of the leaves touching the closed box `[a, b]` (clamped
+    /// to the world), from the grid alone; `None` when that box is empty or leaves the grid's
+    /// region. A grid cell no leaf covers reads as level `u8::MAX`.
+    fn levels_touching(&self, map: &LevelMap, a: [i64; 3], b: [i64; 3]) -> Option<(u8, u8)> {
         let w = map.geometry().world_size();
         let (qa, qb): ([i64; 3], [i64; 3]) = (
             std::array::from_fn(|i| a[i].max(0)),
             std::array::from_fn(|i| b[i].min(w[i])),
         );
         if (0..3).any(|i| qa[i] > qb[i] || qa[i] < self.lo[i] || qb[i] > self.hi[i]) {
-            return map.min_level_touching(a, b);
+            return None;
         }
         // Cells j with origin + j cell <= b and origin + (j + 1) cell >= a.
         let floor = |x: i64| match self.shift {
@@ -374,16 +410,18 @@ impl LevelGrid {
             let hi = floor(b[i] - self.origin[i]);
             (lo.max(0), hi.min(self.n[i] - 1))
         });
-        let mut best = u8::MAX;
+        let (mut low, mut high) = (u8::MAX, 0);
         for x in r[0].0..=r[0].1 {
             for y in r[1].0..=r[1].1 {
                 let row = ((x * self.n[1] + y) * self.n[2]) as usize;
                 for z in r[2].0..=r[2].1 {
-                    best = best.min(self.levels[row + z as usize]);
+                    let l = self.levels[row + z as usize];
+                    low = low.min(l);
+                    high = high.max(l);
                 }
             }
         }
-        (best != u8::MAX).then_some(best)
+        Some((low, high))
     }
 }
 
@@ -392,8 +430,10 @@ fn meets(a: ([i32; 3], [i32; 3]), lo: [i64; 3], hi: [i64; 3]) -> bool {
 }
 
 /// The red forest's leaves (before the closure) that meet the window `[lo, hi]` (closed):
-/// the coarsest tets of the domain meeting it, refined by the target rule.
-fn window_forest(map: &LevelMap, lo: [i64; 3], hi: [i64; 3]) -> Vec<Leaf> {
+/// the coarsest tets of the domain meeting it, refined by the target rule. With
+/// `inert_below = Some(k)` (the window of a chunk of level `k`), without the inert tets of the
+/// module doc when no leaf finer than `k - 1` touches the window.
+fn window_forest(map: &LevelMap, lo: [i64; 3], hi: [i64; 3], inert_below: Option<u8>) -> Vec<Leaf> {
     let g = map.geometry();
     let top = g.levels;
     let s = cell_size(top);
@@ -424,6 +464,12 @@ fn window_forest(map: &LevelMap, lo: [i64; 3], hi: [i64; 3]) -> Vec<Leaf> {
         }
     }
     let grid = LevelGrid::new(map, lo.map(|v| v - s), hi.map(|v| v + s));
+    let inert_below = inert_below.filter(|&k| {
+        k > 0
+            && grid
+                .levels_touching(map, lo, hi)
+                .is_some_and(|(low, _)| low >= k - 1)
+    });
     let mut leaves = Vec::new();
     while let Some(l) = stack.pop() {
         let (a, b) = bbox(&l.tet);
@@ -431,12 +477,17 @@ fn window_forest(map: &LevelMap, lo: [i64; 3], hi: [i64; 3]) -> Vec<Leaf> {
             .min_level_touching(map, a.map(i64::from), b.map(i64::from))
             .unwrap_or(l.level);
         if want < l.level {
+            let level = l.level - 1;
             for tet in super::refine::red(&l.tet) {
-                if meets(bbox(&tet), lo, hi) {
-                    stack.push(Leaf {
-                        tet,
-                        level: l.level - 1,
-                    });
+                let tb = bbox(&tet);
+                let inert = inert_below.is_some_and(|k| {
+                    level < k
+                        && grid
+                            .levels_touching(map, tb.0.map(i64::from), tb.1.map(i64::from))
+                            .is_some_and(|(_, high)| high < k)
+                });
+                if !inert && meets(tb, lo, hi) {
+                    stack.push(Leaf { tet, level });
                 }
             }
         } else {
@@ -447,15 +498,16 @@ fn window_forest(map: &LevelMap, lo: [i64; 3], hi: [i64; 3]) -> Vec<Leaf> {
 }
 
 /// The final tets whose centroid is in `[own_lo, own_hi)`, from the forest in window
-/// `[lo, hi]` (closed).
+/// `[lo, hi]` (closed); `inert_below` as in [`window_forest`].
 fn window_tets(
     map: &LevelMap,
     lo: [i64; 3],
     hi: [i64; 3],
     own_lo: [i64; 3],
     own_hi: [i64; 3],
+    inert_below: Option<u8>,
 ) -> Result<Vec<MeshTet>, LodError> {
-    let mut leaves = window_forest(map, lo, hi);
+    let mut leaves = window_forest(map, lo, hi, inert_below);
     let (_, v) = closure_bits(&mut leaves);
     let mut out = Vec::new();
     let mut kids = Vec::new();
@@ -697,6 +749,55 @@ mod tests {
         assert!(fast_beside_coarser > 0 && fast_on_faces > 0 && windows > 0);
     }
 
+    /// A chunk's window leaves out the inert tets (finer than the chunk, touching finer chunks
+    /// only) on viewer and random maps with chunks of [`LOCAL_CHUNK`] cells and more, and the
+    /// chunks' tets stay the whole world's (built with every tet of the forest).
+    #[test]
+    fn windows_leave_out_inert_tets_and_keep_the_worlds_tets() {
+        let geoms = [
+            LodGeometry::new(2, LOCAL_CHUNK, [2, 1, 1]).unwrap(),
+            LodGeometry::new(2, 16, [1, 1, 1]).unwrap(),
+        ];
+        let (mut windows, mut left_out) = (0, 0);
+        for seed in 0..cases(6, 400) {
+            let g = geoms[(seed % 2) as usize];
+            let w = g.world_size();
+            let map = if seed % 3 == 2 {
+                LevelMap::random(g, 31 + seed, 0.5)
+            } else {
+                let p: [f64; 3] = std::array::from_fn(|i| unit(seed, i as u64) * w[i] as f64);
+                LevelMap::from_viewer(g, p, 0.5 + unit(seed, 9))
+            };
+            for k in map.chunks() {
+                if is_fast_path(&map, k) {
+                    continue;
+                }
+                let (lo, hi) = k.bounds(&g);
+                let m = window_margin(&map, k.level);
+                let (a, b) = (lo.map(|v| v - m), hi.map(|v| v + m));
+                let all = window_forest(&map, a, b, None);
+                let kept = window_forest(&map, a, b, Some(k.level));
+                assert!(kept.len() <= all.len());
+                // What is left out is finer than the chunk; everything else is kept.
+                let key = |l: &Leaf| (l.tet, l.level);
+                let mut kept_keys: Vec<_> = kept.iter().map(key).collect();
+                kept_keys.sort_unstable();
+                for l in &all {
+                    if kept_keys.binary_search(&key(l)).is_err() {
+                        assert!(l.level < k.level, "seed {seed}: {l:?} left out of {k:?}");
+                    }
+                }
+                windows += 1;
+                left_out += all.len() - kept.len();
+            }
+            check_map(&map);
+        }
+        assert!(
+            windows > 0 && left_out > 0,
+            "{windows} windows, {left_out} left out"
+        );
+    }
+
     /// The worklist closure on a bit grid gives the full passes' leaves and vertices.
     #[test]
     fn the_worklist_closure_is_the_full_closure() {
@@ -712,7 +813,7 @@ mod tests {
             for k in map.chunks().iter().step_by(3) {
                 let (lo, hi) = k.bounds(&g);
                 let m = window_margin(&map, k.level);
-                let mut full = window_forest(&map, lo.map(|v| v - m), hi.map(|v| v + m));
+                let mut full = window_forest(&map, lo.map(|v| v - m), hi.map(|v| v + m), None);
                 let mut work = full.clone();
                 let r = super::super::refine::closure(&mut full);
                 let (rb, bits) = closure_bits(&mut work);

@@ -299,7 +299,10 @@ fn refines_from<S: PointSet + ?Sized>(l: &Leaf, v: &S, vfine: u8) -> bool {
 /// set, which refinement only grows, so every refinement made here is one the least fixed
 /// point makes, and the loop stops at a fixed point. A leaf's rules read only points on its
 /// closed bounding box, so after the first pass only the leaves whose box meets a cell (of a
-/// coarse grid) that received a new vertex are checked again.
+/// coarse grid) that received a new vertex are checked again. The first pass itself checks
+/// only the leaves whose box meets a cell holding a vertex of a finer leaf: the points the
+/// rules of a leaf of level `l` read are not of level `l`, so only leaves of levels `< l` have
+/// them as vertices.
 ///
 /// The vertex set is a bit grid: with `m` the finest leaf level, the closure adds vertices of
 /// level `m - 1` at the finest (the rules need a vertex of level `< l - 1` to refine a leaf of
@@ -322,15 +325,23 @@ pub fn closure_bits(leaves: &mut Vec<Leaf>) -> (usize, PointBits) {
     }
     let shift = u32::from(finest.saturating_sub(1));
     let mut v = PointBits::new(lo, hi, shift);
-    for l in leaves.iter() {
-        for p in l.tet {
-            v.insert(p);
-        }
-    }
     // Dirty cells: a coarse grid (step 2^(shift + 3)) marking where new vertices landed.
     let cshift = shift + 3;
     let cn: [usize; 3] = std::array::from_fn(|i| ((hi[i] - lo[i]) as usize >> cshift) + 1);
     let cell = |p: Point, i: usize| ((p[i] - lo[i]) >> cshift) as usize;
+    // Per coarse cell, the finest level of a leaf with a vertex there. The points a leaf of
+    // level l reads (split-edge midpoints: level l - 1 and not l; quarter points: not even
+    // l - 1) are vertices of leaves of levels < l only, and lie on its bounding box: a leaf
+    // whose box meets no cell holding a vertex of a finer leaf keeps its rules false in the
+    // first pass.
+    let mut finer = vec![u8::MAX; cn[0] * cn[1] * cn[2]];
+    for l in leaves.iter() {
+        for p in l.tet {
+            v.insert(p);
+            let c = &mut finer[(cell(p, 0) * cn[1] + cell(p, 1)) * cn[2] + cell(p, 2)];
+            *c = (*c).min(l.level);
+        }
+    }
     let mut dirty = vec![false; cn[0] * cn[1] * cn[2]];
     let mut next_dirty = dirty.clone();
     let mut reds = 0;
@@ -342,25 +353,24 @@ pub fn closure_bits(leaves: &mut Vec<Leaf>) -> (usize, PointBits) {
         let n = leaves.len();
         for i in 0..n {
             let l = leaves[i];
-            if l.level == 0 {
+            if l.level == 0 || l.level - 1 < vfine {
                 continue;
             }
-            if !first_pass {
-                let (a, b) = super::lattice::bbox(&l.tet);
-                let mut hit = false;
-                'cells: for x in cell(a, 0)..=cell(b, 0) {
-                    for y in cell(a, 1)..=cell(b, 1) {
-                        for z in cell(a, 2)..=cell(b, 2) {
-                            if dirty[(x * cn[1] + y) * cn[2] + z] {
-                                hit = true;
-                                break 'cells;
-                            }
+            let (a, b) = super::lattice::bbox(&l.tet);
+            let mut hit = false;
+            'cells: for x in cell(a, 0)..=cell(b, 0) {
+                for y in cell(a, 1)..=cell(b, 1) {
+                    for z in cell(a, 2)..=cell(b, 2) {
+                        let c = (x * cn[1] + y) * cn[2] + z;
+                        if (first_pass && finer[c] < l.level) || (!first_pass && dirty[c]) {
+                            hit = true;
+                            break 'cells;
                         }
                     }
                 }
-                if !hit {
-                    continue;
-                }
+            }
+            if !hit {
+                continue;
             }
             if refines_from(&l, &v, vfine) {
                 changed += 1;
