@@ -922,9 +922,10 @@ pub(crate) fn vertex_pass(
     buf.crossed.rank_planes(&point_starts, total_points, pool);
     // Step 2: the planes joined: their crossed points and their proposals, with the plane's
     // first id added, and their crossings' positions copied into place.
-    // Zeroed in one fill (the mesh's positions start empty: a memset costs less than a
-    // parallel fill element by element).
-    out.positions.resize(total, [0.0; 3]);
+    // Zeroed in parallel: the mesh's positions start empty, often in fresh memory, and one
+    // thread taking every first touch cost more than the fill (plain MT, 64^3 sphere, 2
+    // threads: this step 156 -> 27 us, the extraction 0.92 of its time; 1 thread unchanged).
+    overwritten(out.positions, total, [0.0; 3], pool);
     let no_candidate = Candidate {
         first: 0,
         members: 0,
