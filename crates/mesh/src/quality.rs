@@ -109,6 +109,11 @@ pub(crate) enum TriangleShape {
     },
 }
 
+/// The radius ratio R / (2r) above which a triangle counts as a sliver for the checks that
+/// guard triangle shape: the extractor's edge collapse and the level-of-detail world's
+/// clustering.
+pub const SLIVER_RATIO: f64 = 10.0;
+
 /// The radius ratio R / (2r) of the triangle with corners `p` (1 for an equilateral one;
 /// infinite for zero area): `a b c s / (8 A^2)` with `s` the half perimeter, as
 /// [`quality()`] measures it, for one triangle (the checks that guard triangle shape read it).

@@ -141,8 +141,9 @@ pub fn collapse_short_edges_tiled(
 /// and hardly any other (on the paper's post-processed objects, 0.1-0.7% fewer triangles than
 /// without the sliver rule), which is what the dissertation's post-processing means to do.
 /// Lower bounds trade triangles for quality (4: another 0.1-2.4% fewer triangles, radius-ratio
-/// means up to 0.05 lower).
-pub const SLIVER_RATIO: f64 = 10.0;
+/// means up to 0.05 lower). One value with the level-of-detail world's clustering
+/// (`rmt_mesh::quality::SLIVER_RATIO`).
+pub use rmt_mesh::quality::SLIVER_RATIO;
 
 /// At most this many rounds of [`collapse_degenerate_tiled`]; a round that collapses nothing
 /// ends it earlier (every collapse removes a vertex, so it always ends).

@@ -45,11 +45,11 @@ use rmt_mesh::quality::radius_ratio;
 use super::lattice::Point;
 use super::mt::{ChunkMesh, LodFrame};
 
-/// A merge may make fan triangles up to this radius ratio R / (2r) (the extractor's sliver
-/// bound, `SLIVER_RATIO` of `rmt_extract`'s edge collapse); above it, none worse than the worst triangle of
-/// the star it replaces. So clustering never makes a chunk's worst triangle worse than
+/// A merge may make fan triangles up to this radius ratio R / (2r) (the sliver bound the
+/// extractor's edge collapse uses too); above it, none worse than the worst triangle of the star
+/// it replaces. So clustering never makes a chunk's worst triangle worse than
 /// `max(SLIVER_RATIO, the plain surface's worst)`.
-pub const SLIVER_RATIO: f64 = 10.0;
+pub use rmt_mesh::quality::SLIVER_RATIO;
 
 /// At most this many lone crossings join one group (as in the extractor's integrated
 /// clustering): groups stay near their point, and the check's stars stay small.

@@ -480,13 +480,15 @@ fn window_forest(map: &LevelMap, lo: [i64; 3], hi: [i64; 3], inert_below: Option
             let level = l.level - 1;
             for tet in super::refine::red(&l.tet) {
                 let tb = bbox(&tet);
-                let inert = inert_below.is_some_and(|k| {
-                    level < k
-                        && grid
-                            .levels_touching(map, tb.0.map(i64::from), tb.1.map(i64::from))
-                            .is_some_and(|(_, high)| high < k)
-                });
-                if !inert && meets(tb, lo, hi) {
+                let inert = || {
+                    inert_below.is_some_and(|k| {
+                        level < k
+                            && grid
+                                .levels_touching(map, tb.0.map(i64::from), tb.1.map(i64::from))
+                                .is_some_and(|(_, high)| high < k)
+                    })
+                };
+                if meets(tb, lo, hi) && !inert() {
                     stack.push(Leaf { tet, level });
                 }
             }
